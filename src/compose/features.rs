@@ -1,0 +1,151 @@
+//! What a variant turns on in the shaders: WESL `@if` feature flags, and the numbers of the
+//! generated `constants` module.
+
+use std::fmt::Write;
+
+use crate::variant::*;
+
+/// Every feature flag the shaders may test, with its value for `v`. All flags are always
+/// set (true or false): the composer treats an unset flag as an error.
+pub fn feature_flags(v: &Variant) -> Vec<(&'static str, bool)> {
+    let p = v.pipeline;
+    let clusters = v.clusters();
+    let codec = v.normal_codec();
+    let layout = v.gbuffer().layout;
+    let deferred = p.is_deferred();
+    let toon = v.post.toon.as_ref();
+    let slicing = clusters.slicing;
+    vec![
+        (
+            "blinn_phong",
+            matches!(v.shading.model, ShadingModel::BlinnPhong { .. }),
+        ),
+        ("clustered", p.is_clustered()),
+        ("deferred", deferred),
+        ("depth_prepass", v.depth_prepass),
+        ("reversed_z", v.depth.reversed_z),
+        ("slice_linear", slicing == ZSlicing::Linear),
+        ("slice_exponential", slicing == ZSlicing::Exponential),
+        (
+            "slice_near_then_exponential",
+            matches!(slicing, ZSlicing::NearSliceThenExponential { .. }),
+        ),
+        ("slice_olsson", slicing == ZSlicing::OlssonCubic),
+        (
+            "slice_dynamic",
+            matches!(slicing, ZSlicing::DynamicRange { .. }),
+        ),
+        (
+            "capped_lists",
+            matches!(clusters.lists, LightLists::Capped { .. }),
+        ),
+        ("active_clusters", clusters.active_clusters),
+        ("gbuffer_wide", deferred && layout == GBufferLayout::Wide),
+        (
+            "gbuffer_packed",
+            deferred && layout == GBufferLayout::Packed,
+        ),
+        (
+            "gbuffer_compact",
+            deferred && layout == GBufferLayout::Compact,
+        ),
+        ("codec_xyz", deferred && codec == NormalCodec::Xyz),
+        (
+            "codec_octahedral",
+            deferred && matches!(codec, NormalCodec::Octahedral { precise: false, .. }),
+        ),
+        (
+            "codec_octahedral_precise",
+            deferred && matches!(codec, NormalCodec::Octahedral { precise: true, .. }),
+        ),
+        (
+            "codec_polar",
+            deferred && matches!(codec, NormalCodec::Polar { .. }),
+        ),
+        (
+            "codec_spheremap",
+            deferred && matches!(codec, NormalCodec::Spheremap { .. }),
+        ),
+        (
+            "toon_per_light",
+            toon.is_some_and(|t| t.mode == ToonMode::PerLight),
+        ),
+        (
+            "toon_post",
+            toon.is_some_and(|t| t.mode == ToonMode::PostProcess),
+        ),
+        ("outlines", toon.is_some_and(|t| t.outlines.is_some())),
+        (
+            "debug_cluster_index",
+            v.debug_view == DebugView::ClusterIndex,
+        ),
+        (
+            "debug_lights_per_cluster",
+            v.debug_view == DebugView::LightsPerCluster,
+        ),
+        ("debug_z_slice", v.debug_view == DebugView::ZSlice),
+        (
+            "debug_gbuffer",
+            matches!(v.debug_view, DebugView::GBuffer { .. }),
+        ),
+    ]
+}
+
+/// The numbers of a variant as WGSL constants, in a fixed order. Every constant is always
+/// present (with a neutral value when its feature is off); stripping drops unused ones.
+pub fn constants_module(v: &Variant) -> String {
+    let clusters = v.clusters();
+    let (shininess, specular) = match v.shading.model {
+        ShadingModel::Lambert => (1.0, 0.0),
+        ShadingModel::BlinnPhong {
+            shininess,
+            specular,
+        } => (shininess, specular),
+    };
+    let near_slice_end = match clusters.slicing {
+        ZSlicing::NearSliceThenExponential { near_slice_end } => near_slice_end,
+        _ => 0.0,
+    };
+    let cap = match clusters.lists {
+        LightLists::Exact => 0,
+        LightLists::Capped { max_per_cluster } => max_per_cluster,
+    };
+    let toon = v.post.toon.clone().unwrap_or_default();
+    let outline = toon.outlines.clone().unwrap_or_default();
+    let bloom = v.post.bloom.clone().unwrap_or_default();
+    let motion = v.post.motion_blur.clone().unwrap_or_default();
+    let gbuffer_channel = match v.debug_view {
+        DebugView::GBuffer { channel } => channel as u32,
+        _ => 0,
+    };
+
+    let u32s = [
+        ("GRID_X", clusters.grid.0),
+        ("GRID_Y", clusters.grid.1),
+        ("GRID_Z", clusters.grid.2),
+        ("LIGHT_CAP", cap),
+        ("NORMAL_BITS", v.normal_codec().bits() / 2),
+        ("TOON_BANDS", toon.bands),
+        ("BLOOM_RADIUS", bloom.radius),
+        ("MOTION_BLUR_SAMPLES", motion.samples),
+        ("GBUFFER_CHANNEL", gbuffer_channel),
+    ];
+    let f32s = [
+        ("SHININESS", shininess),
+        ("SPECULAR", specular),
+        ("AMBIENT", v.shading.ambient),
+        ("EXPOSURE", 1.0),
+        ("NEAR_SLICE_END", near_slice_end),
+        ("OUTLINE_THRESHOLD", outline.depth_threshold),
+        ("BLOOM_THRESHOLD", bloom.threshold),
+    ];
+    let mut text = String::new();
+    for (name, value) in u32s {
+        let _ = writeln!(text, "const {name}: u32 = {value}u;");
+    }
+    for (name, value) in f32s {
+        // `{:?}` prints the shortest text that reads back as the same f32.
+        let _ = writeln!(text, "const {name}: f32 = {value:?};");
+    }
+    text
+}

@@ -1,0 +1,266 @@
+//! Composition: a variant and a pass become one naga-validated WGSL module.
+//!
+//! Each pass has a root module under `shaders/passes/`. wesl resolves its imports, keeps
+//! only the `@if` branches the variant's features select, strips what the entry points do
+//! not reach, and reads the variant's numbers from a generated `constants` module. naga then
+//! parses and validates the result with every validation flag.
+
+mod diagnostics;
+mod features;
+mod passes;
+mod resolver;
+
+pub use diagnostics::SourceLocation;
+pub use features::{constants_module, feature_flags};
+pub use passes::{Pass, PassKind, passes};
+pub use resolver::ShaderResolver;
+
+use std::fmt;
+use std::path::{Path, PathBuf};
+
+use wesl::{Feature, ModulePath, Wesl};
+
+use crate::variant::Variant;
+
+/// A composed and validated pass.
+#[derive(Debug)]
+pub struct ComposedPass {
+    pub name: String,
+    /// The WGSL fed to naga and wgpu.
+    pub wgsl: String,
+    pub module: naga::Module,
+    pub info: naga::valid::ModuleInfo,
+}
+
+/// Why a pass did not compose.
+#[derive(Debug)]
+pub enum ShaderError {
+    /// wesl could not read, parse, import or select (its own message names the module).
+    Wesl { pass: String, message: String },
+    /// naga rejected the composed WGSL.
+    Naga {
+        pass: String,
+        message: String,
+        /// Where the error is in the module's own file, when it could be traced back.
+        location: Option<Box<SourceLocation>>,
+        /// Line of the error in the composed WGSL (see `clusterlab wgsl`).
+        composed_line: Option<usize>,
+    },
+}
+
+impl fmt::Display for ShaderError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            ShaderError::Wesl { pass, message } => {
+                write!(f, "pass `{pass}`: shader composition failed:\n{message}")
+            }
+            ShaderError::Naga {
+                pass,
+                message,
+                location,
+                composed_line,
+            } => {
+                match location {
+                    Some(l) => write!(f, "{}:{}:{}: ", l.file, l.line, l.column)?,
+                    None => write!(f, "pass `{pass}`: ")?,
+                }
+                write!(f, "{message}")?;
+                if let Some(l) = location {
+                    write!(f, "\n{}", l.snippet)?;
+                }
+                if let Some(line) = composed_line {
+                    write!(
+                        f,
+                        "\n(in pass `{pass}`, line {line} of its composed WGSL: `clusterlab wgsl VARIANT --pass {pass}`)"
+                    )?;
+                }
+                Ok(())
+            }
+        }
+    }
+}
+
+impl std::error::Error for ShaderError {}
+
+/// Composes passes from one shader folder.
+#[derive(Clone, Debug)]
+pub struct Composer {
+    shader_root: PathBuf,
+    display_base: PathBuf,
+}
+
+impl Default for Composer {
+    /// The shader folder named by `CLUSTERLAB_SHADERS`, or this crate's `shaders/`.
+    fn default() -> Self {
+        match std::env::var_os("CLUSTERLAB_SHADERS") {
+            Some(dir) => Self::new(Path::new(&dir)),
+            None => Self::new(&Path::new(env!("CARGO_MANIFEST_DIR")).join("shaders")),
+        }
+    }
+}
+
+impl Composer {
+    /// Compose from `shader_root`; messages name files relative to the current folder when
+    /// they are under it.
+    pub fn new(shader_root: &Path) -> Self {
+        let cwd = std::env::current_dir().unwrap_or_default();
+        Self {
+            shader_root: cwd.join(shader_root),
+            display_base: cwd,
+        }
+    }
+
+    pub fn shader_root(&self) -> &Path {
+        &self.shader_root
+    }
+
+    /// Compose and validate one pass of a variant.
+    pub fn compose(&self, variant: &Variant, pass: &Pass) -> Result<ComposedPass, ShaderError> {
+        self.compose_root(
+            pass.name,
+            pass.root,
+            &feature_flags(variant),
+            &constants_module(variant),
+        )
+    }
+
+    /// Compose and validate every pass of a variant, stopping at the first error.
+    pub fn compose_all(&self, variant: &Variant) -> Result<Vec<ComposedPass>, ShaderError> {
+        passes(variant)
+            .iter()
+            .map(|p| self.compose(variant, p))
+            .collect()
+    }
+
+    /// Compose root module `root` (a path like `passes::forward`) with these feature flags
+    /// and constants module text. Every flag a shader tests must be in `features`.
+    pub fn compose_root(
+        &self,
+        name: &str,
+        root: &str,
+        features: &[(&str, bool)],
+        constants: &str,
+    ) -> Result<ComposedPass, ShaderError> {
+        let wesl_error = |message: String| ShaderError::Wesl {
+            pass: name.to_string(),
+            message,
+        };
+        let root_path: ModulePath = format!("package::{root}")
+            .parse()
+            .map_err(|e| wesl_error(format!("bad root module path `{root}`: {e}")))?;
+        let resolver =
+            ShaderResolver::new(&self.shader_root, &self.display_base, constants.to_string());
+        let mut compiler = Wesl::new(&self.shader_root).set_custom_resolver(resolver);
+        compiler
+            .use_sourcemap(true)
+            .use_stripping(true)
+            // A flag the Rust side forgot is an error, not a silently dropped branch.
+            .set_missing_feature_behavior(Feature::Error)
+            .set_features(features.iter().map(|&(k, v)| (k, v)));
+        let result = compiler.compile(&root_path).map_err(|e| {
+            let text = strip_ansi(&e.to_string());
+            // Show file names relative to the display base, as everywhere else.
+            let base = format!("{}/", self.display_base.display());
+            wesl_error(text.replace(&base, ""))
+        })?;
+        let wgsl = result.to_string();
+        let sourcemap = result.sourcemap.unwrap_or_default();
+
+        let naga_error = |message: String, span: Option<std::ops::Range<usize>>| {
+            let (location, composed_line) = match span {
+                Some(r) => (
+                    diagnostics::locate(&wgsl, r.start, r.len(), &sourcemap, &root_path).map(Box::new),
+                    Some(diagnostics::line_column(&wgsl, r.start).0),
+                ),
+                None => (None, None),
+            };
+            ShaderError::Naga {
+                pass: name.to_string(),
+                message,
+                location,
+                composed_line,
+            }
+        };
+        let module = naga::front::wgsl::parse_str(&wgsl).map_err(|e| {
+            let span = e.labels().next().and_then(|(s, _)| s.to_range());
+            let label = e.labels().next().map(|(_, l)| l.to_string());
+            let message = match label {
+                Some(l) if !l.is_empty() => format!("{}: {l}", e.message()),
+                _ => e.message().to_string(),
+            };
+            naga_error(unmangle_names(&message, &sourcemap), span)
+        })?;
+        let mut validator = naga::valid::Validator::new(
+            naga::valid::ValidationFlags::all(),
+            naga::valid::Capabilities::default(),
+        );
+        let info = validator.validate(&module).map_err(|e| {
+            // naga lists spans from the outside in (function, then expression): the last is
+            // the most precise.
+            let span = e.spans().last().and_then(|(s, _)| s.to_range());
+            naga_error(unmangle_names(&error_chain(e.as_inner()), &sourcemap), span)
+        })?;
+        Ok(ComposedPass {
+            name: name.to_string(),
+            wgsl,
+            module,
+            info,
+        })
+    }
+}
+
+/// `text` with every mangled declaration name replaced by `module::name`.
+fn unmangle_names(text: &str, sourcemap: &wesl::BasicSourceMap) -> String {
+    use wesl::SourceMap;
+    let mut out = String::with_capacity(text.len());
+    let mut word = String::new();
+    let flush = |word: &mut String, out: &mut String| {
+        match sourcemap.get_decl(word) {
+            Some((module, name)) => out.push_str(&format!("{module}::{name}")),
+            None => out.push_str(word),
+        }
+        word.clear();
+    };
+    for c in text.chars() {
+        if c.is_alphanumeric() || c == '_' {
+            word.push(c);
+        } else {
+            flush(&mut word, &mut out);
+            out.push(c);
+        }
+    }
+    flush(&mut word, &mut out);
+    out
+}
+
+/// An error and its sources, joined with ": ".
+fn error_chain(e: &dyn std::error::Error) -> String {
+    let mut s = e.to_string();
+    let mut source = e.source();
+    while let Some(inner) = source {
+        s.push_str(": ");
+        s.push_str(&inner.to_string());
+        source = inner.source();
+    }
+    s
+}
+
+/// `text` without ANSI colour sequences (wesl always colours its diagnostics).
+fn strip_ansi(text: &str) -> String {
+    let mut out = String::with_capacity(text.len());
+    let mut chars = text.chars().peekable();
+    while let Some(c) = chars.next() {
+        if c == '\u{1b}' && chars.peek() == Some(&'[') {
+            chars.next();
+            // Parameters and intermediates, then one final byte in '@'..='~'.
+            for c in chars.by_ref() {
+                if ('@'..='~').contains(&c) {
+                    break;
+                }
+            }
+        } else {
+            out.push(c);
+        }
+    }
+    out
+}

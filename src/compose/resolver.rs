@@ -1,0 +1,71 @@
+//! Where WESL modules come from: files under the shader folder, plus a `constants` module
+//! generated from the variant's numbers.
+
+use std::borrow::Cow;
+use std::path::{Path, PathBuf};
+
+use wesl::syntax::PathOrigin;
+use wesl::{FileResolver, ModulePath, ResolveError, Resolver};
+
+/// Resolves `package::...` to files under the shader folder and `constants::...` to the
+/// generated constants module. Unlike wesl's own constants module (a `HashMap`), the text here
+/// is in a fixed order, so composed WGSL is the same bits on every run.
+pub struct ShaderResolver {
+    files: FileResolver,
+    root: PathBuf,
+    display_base: PathBuf,
+    constants: String,
+}
+
+impl ShaderResolver {
+    /// `root` is the shader folder; file names in messages are shown relative to
+    /// `display_base` (the repository root).
+    pub fn new(root: &Path, display_base: &Path, constants: String) -> Self {
+        Self {
+            files: FileResolver::new(root),
+            root: root.to_path_buf(),
+            display_base: display_base.to_path_buf(),
+            constants,
+        }
+    }
+
+    fn is_constants(path: &ModulePath) -> bool {
+        matches!(&path.origin, PathOrigin::Package(name) if name == "constants")
+    }
+}
+
+impl Resolver for ShaderResolver {
+    fn resolve_source<'a>(&'a self, path: &ModulePath) -> Result<Cow<'a, str>, ResolveError> {
+        if Self::is_constants(path) {
+            Ok(Cow::Borrowed(&self.constants))
+        } else {
+            self.files.resolve_source(path)
+        }
+    }
+
+    fn display_name(&self, path: &ModulePath) -> Option<String> {
+        if Self::is_constants(path) {
+            return Some("<constants generated from the variant>".into());
+        }
+        let fs = self.files.fs_path(path)?;
+        let shown = fs
+            .strip_prefix(&self.display_base)
+            .map(Path::to_path_buf)
+            .unwrap_or(fs);
+        Some(shown.display().to_string())
+    }
+
+    fn fs_path(&self, path: &ModulePath) -> Option<PathBuf> {
+        if Self::is_constants(path) {
+            None
+        } else {
+            self.files.fs_path(path)
+        }
+    }
+}
+
+impl ShaderResolver {
+    pub fn root(&self) -> &Path {
+        &self.root
+    }
+}

@@ -1,0 +1,291 @@
+//! Semantic checks: values in range and combinations that make sense.
+
+use super::schema::*;
+
+/// One thing wrong with a variant: the field path (as written in the file) and what would
+/// be valid.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Problem {
+    pub field: String,
+    pub message: String,
+}
+
+fn problem(field: &str, message: impl Into<String>) -> Problem {
+    Problem {
+        field: field.to_string(),
+        message: message.into(),
+    }
+}
+
+const NORMAL_BITS: [u32; 4] = [16, 20, 24, 32];
+/// Bounds that keep every buffer well inside wgpu's default limits.
+pub const MAX_GRID_XY: u32 = 128;
+pub const MAX_GRID_Z: u32 = 256;
+pub const MAX_CLUSTERS: u32 = 1 << 18;
+pub const MAX_CAP: u32 = 1024;
+
+/// Every problem of a parsed variant, in field order; empty when the variant is valid.
+pub fn check(v: &Variant) -> Vec<Problem> {
+    let mut out = Vec::new();
+    let p = v.pipeline;
+
+    if v.description.trim().is_empty() {
+        out.push(problem(
+            "description",
+            "is empty; say in one line what this variant measures",
+        ));
+    }
+    if v.depth_prepass && p.is_deferred() {
+        out.push(problem(
+            "depth_prepass",
+            format!(
+                "only forward pipelines have a depth pre-pass (pipeline is {p:?}); remove it or use NaiveForward or ClusteredForward"
+            ),
+        ));
+    }
+    match &v.clusters {
+        Some(_) if !p.is_clustered() => out.push(problem(
+            "clusters",
+            format!(
+                "pipeline {p:?} has no clusters; remove `clusters` or use ClusteredForward or ClusteredDeferred"
+            ),
+        )),
+        Some(c) => check_clusters(c, v, &mut out),
+        None => {}
+    }
+    if v.gbuffer.is_some() && !p.is_deferred() {
+        out.push(problem(
+            "gbuffer",
+            format!(
+                "only deferred pipelines have a G-buffer (pipeline is {p:?}); remove `gbuffer` or use ClusteredDeferred or DeferredScissor"
+            ),
+        ));
+    }
+    check_normals(v, &mut out);
+    check_shading(&v.shading, &mut out);
+    check_post(&v.post, v, &mut out);
+    check_debug_view(v, &mut out);
+    out
+}
+
+fn check_clusters(c: &Clusters, v: &Variant, out: &mut Vec<Problem>) {
+    let (x, y, z) = c.grid;
+    for (name, value, max) in [
+        ("x", x, MAX_GRID_XY),
+        ("y", y, MAX_GRID_XY),
+        ("z", z, MAX_GRID_Z),
+    ] {
+        if value == 0 || value > max {
+            out.push(problem(
+                "clusters.grid",
+                format!("{name} is {value}; it must be in 1..={max}"),
+            ));
+        }
+    }
+    let total = x as u64 * y as u64 * z as u64;
+    if total > MAX_CLUSTERS as u64 {
+        out.push(problem(
+            "clusters.grid",
+            format!("{x}x{y}x{z} = {total} clusters; at most {MAX_CLUSTERS} are allowed"),
+        ));
+    }
+    match c.slicing {
+        ZSlicing::NearSliceThenExponential { near_slice_end } => {
+            if !(near_slice_end.is_finite() && near_slice_end > 0.0) {
+                out.push(problem(
+                    "clusters.slicing.near_slice_end",
+                    format!("is {near_slice_end}; it must be a positive view depth"),
+                ));
+            }
+            if z < 2 {
+                out.push(problem(
+                    "clusters.grid",
+                    "NearSliceThenExponential needs z >= 2 (a near slice and at least one more)",
+                ));
+            }
+        }
+        ZSlicing::DynamicRange {
+            source: DepthRangeSource::CurrentFrame,
+        } if v.pipeline == Pipeline::ClusteredForward && !v.depth_prepass => {
+            out.push(problem(
+                "clusters.slicing.source",
+                "CurrentFrame needs this frame's depth before shading: set `depth_prepass: true`, use PreviousFrame, or use ClusteredDeferred",
+            ));
+        }
+        _ => {}
+    }
+    if let LightLists::Capped { max_per_cluster } = c.lists
+        && (max_per_cluster == 0 || max_per_cluster > MAX_CAP)
+    {
+        out.push(problem(
+            "clusters.lists.max_per_cluster",
+            format!("is {max_per_cluster}; it must be in 1..={MAX_CAP}"),
+        ));
+    }
+    if c.active_clusters && v.pipeline == Pipeline::ClusteredForward && !v.depth_prepass {
+        out.push(problem(
+            "clusters.active_clusters",
+            "marking active clusters needs depth before shading: set `depth_prepass: true` or use ClusteredDeferred",
+        ));
+    }
+}
+
+fn check_normals(v: &Variant, out: &mut Vec<Problem>) {
+    let Some(codec) = v.normals else { return };
+    let bits = codec.bits();
+    if codec != NormalCodec::Xyz && !NORMAL_BITS.contains(&bits) {
+        out.push(problem(
+            "normals.bits",
+            format!("is {bits}; it must be one of 16, 20, 24 or 32"),
+        ));
+    }
+    if !v.pipeline.is_deferred() {
+        out.push(problem(
+            "normals",
+            format!(
+                "only a G-buffer stores normals (pipeline is {:?}); remove `normals` or use a deferred pipeline",
+                v.pipeline
+            ),
+        ));
+        return;
+    }
+    let layout = v.gbuffer().layout;
+    match (layout, codec) {
+        (GBufferLayout::Wide, NormalCodec::Xyz) => {}
+        (GBufferLayout::Wide, _) => out.push(problem(
+            "normals",
+            "the Wide layout stores normals as xyz floats; use `normals: Xyz`, or a Packed or Compact layout for a packed codec",
+        )),
+        (_, NormalCodec::Xyz) => out.push(problem(
+            "normals",
+            format!(
+                "the {layout:?} layout has room for a 2-component normal; use Octahedral, Polar or Spheremap"
+            ),
+        )),
+        _ => {}
+    }
+}
+
+fn check_shading(s: &Shading, out: &mut Vec<Problem>) {
+    if !(0.0..=1.0).contains(&s.ambient) {
+        out.push(problem(
+            "shading.ambient",
+            format!("is {}; it must be in 0..=1", s.ambient),
+        ));
+    }
+    if let ShadingModel::BlinnPhong {
+        shininess,
+        specular,
+    } = s.model
+    {
+        if !(1.0..=4096.0).contains(&shininess) {
+            out.push(problem(
+                "shading.model.shininess",
+                format!("is {shininess}; it must be in 1..=4096"),
+            ));
+        }
+        if !(0.0..=1.0).contains(&specular) {
+            out.push(problem(
+                "shading.model.specular",
+                format!("is {specular}; it must be in 0..=1"),
+            ));
+        }
+    }
+}
+
+fn check_post(post: &Post, v: &Variant, out: &mut Vec<Problem>) {
+    if let Some(toon) = &post.toon {
+        if !(2..=32).contains(&toon.bands) {
+            out.push(problem(
+                "post.toon.bands",
+                format!("is {}; it must be in 2..=32", toon.bands),
+            ));
+        }
+        if let Some(o) = &toon.outlines
+            && !(o.depth_threshold > 0.0 && o.depth_threshold <= 1.0)
+        {
+            out.push(problem(
+                "post.toon.outlines.depth_threshold",
+                format!("is {}; it must be in (0, 1]", o.depth_threshold),
+            ));
+        }
+    }
+    if let Some(bloom) = &post.bloom {
+        if !(bloom.threshold.is_finite() && bloom.threshold >= 0.0) {
+            out.push(problem(
+                "post.bloom.threshold",
+                format!("is {}; it must be a finite value >= 0", bloom.threshold),
+            ));
+        }
+        if !(1..=32).contains(&bloom.radius) {
+            out.push(problem(
+                "post.bloom.radius",
+                format!("is {}; it must be in 1..=32", bloom.radius),
+            ));
+        }
+    }
+    if let Some(mb) = &post.motion_blur
+        && !(2..=64).contains(&mb.samples)
+    {
+        out.push(problem(
+            "post.motion_blur.samples",
+            format!("is {}; it must be in 2..=64", mb.samples),
+        ));
+    }
+    if post.any() && v.debug_view != DebugView::Off {
+        out.push(problem(
+            "debug_view",
+            "a debug view replaces the shaded image, so post effects would have nothing to work on; turn one of them off",
+        ));
+    }
+}
+
+fn check_debug_view(v: &Variant, out: &mut Vec<Problem>) {
+    let p = v.pipeline;
+    match v.debug_view {
+        DebugView::ClusterIndex | DebugView::LightsPerCluster | DebugView::ZSlice
+            if !p.is_clustered() =>
+        {
+            out.push(problem(
+                "debug_view",
+                format!(
+                    "{:?} shows clusters, and pipeline {p:?} has none; use a clustered pipeline",
+                    v.debug_view
+                ),
+            ))
+        }
+        DebugView::GBuffer { .. } if !p.is_deferred() => out.push(problem(
+            "debug_view",
+            format!("pipeline {p:?} has no G-buffer to show; use a deferred pipeline"),
+        )),
+        _ => {}
+    }
+}
+
+impl Post {
+    /// Whether any post effect is on.
+    pub fn any(&self) -> bool {
+        self.toon.is_some() || self.bloom.is_some() || self.motion_blur.is_some()
+    }
+}
+
+impl Variant {
+    /// The cluster settings in effect (the defaults when the file leaves them out).
+    pub fn clusters(&self) -> Clusters {
+        self.clusters.clone().unwrap_or_default()
+    }
+    /// The G-buffer settings in effect (the defaults when the file leaves them out).
+    pub fn gbuffer(&self) -> GBuffer {
+        self.gbuffer.clone().unwrap_or_default()
+    }
+    /// The normal codec in effect: the file's, or the layout's default.
+    pub fn normal_codec(&self) -> NormalCodec {
+        self.normals.unwrap_or(match self.gbuffer().layout {
+            GBufferLayout::Wide => NormalCodec::Xyz,
+            GBufferLayout::Packed | GBufferLayout::Compact => NormalCodec::Octahedral {
+                bits: 32,
+                precise: true,
+            },
+        })
+    }
+}

@@ -1,0 +1,433 @@
+//! The variant schema: what a `variants/*.ron` file may say.
+//!
+//! Every field has a default, so a minimal variant is a few lines. Doc comments here are
+//! the user-facing documentation: `clusterlab explain` prints them from the JSON schema
+//! that `schemars` derives from these types.
+
+use schemars::JsonSchema;
+use serde::{Deserialize, Serialize};
+
+/// One shading pipeline configuration: the unit that the variant matrix measures.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields, default)]
+pub struct Variant {
+    /// One line saying what this variant is and why it is worth measuring.
+    pub description: String,
+    /// Which shading pipeline renders the frame.
+    pub pipeline: Pipeline,
+    /// Forward pipelines only: render depth first, then shade with depth test `Equal`, so
+    /// every pixel is shaded once whatever the overdraw.
+    pub depth_prepass: bool,
+    /// Clustered pipelines only: how the view frustum is cut into clusters and how lights
+    /// are assigned to them. Left out, a clustered pipeline uses the defaults shown here.
+    pub clusters: Option<Clusters>,
+    /// Deferred pipelines only: the G-buffer layout. Left out, a deferred pipeline uses
+    /// the defaults shown here.
+    pub gbuffer: Option<GBuffer>,
+    /// The depth buffer every raster pass uses.
+    pub depth: Depth,
+    /// Deferred pipelines only: how the G-buffer stores normals. Left out: `Xyz` for the
+    /// Wide layout, `Octahedral(bits: 32, precise: true)` for Packed and Compact.
+    pub normals: Option<NormalCodec>,
+    /// The surface shading model.
+    pub shading: Shading,
+    /// Post-processing effects, applied in this order: toon, bloom, motion blur.
+    pub post: Post,
+    /// Replace the shaded image with a diagnostic view.
+    pub debug_view: DebugView,
+}
+
+impl Default for Variant {
+    fn default() -> Self {
+        Self {
+            description: String::new(),
+            pipeline: Pipeline::NaiveForward,
+            depth_prepass: false,
+            clusters: None,
+            gbuffer: None,
+            depth: Depth::default(),
+            normals: None,
+            shading: Shading::default(),
+            post: Post::default(),
+            debug_view: DebugView::Off,
+        }
+    }
+}
+
+/// The shading pipelines that clusterlab compares.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize, JsonSchema)]
+pub enum Pipeline {
+    /// Every fragment loops over every light: the baseline, exact and slow.
+    NaiveForward,
+    /// Forward+ with 3D clusters: each fragment loops over its cluster's lights.
+    ClusteredForward,
+    /// G-buffer pass, then a full-screen resolve that shades each pixel with its cluster's
+    /// lights.
+    ClusteredDeferred,
+    /// G-buffer pass, then each light adds its light inside its screen-space bounding
+    /// rectangle with additive blending (no clusters): the classic deferred baseline.
+    DeferredScissor,
+}
+
+impl Pipeline {
+    pub fn is_clustered(self) -> bool {
+        matches!(
+            self,
+            Pipeline::ClusteredForward | Pipeline::ClusteredDeferred
+        )
+    }
+    pub fn is_deferred(self) -> bool {
+        matches!(
+            self,
+            Pipeline::ClusteredDeferred | Pipeline::DeferredScissor
+        )
+    }
+}
+
+/// The cluster grid and how lights are assigned to it.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields, default)]
+pub struct Clusters {
+    /// Clusters along screen x, screen y and view depth: (x, y, z). x and y in 1..=128,
+    /// z in 1..=256. With `OlssonCubic` slicing, z is the most slices the grid may hold.
+    pub grid: (u32, u32, u32),
+    /// How view depth is cut into slices.
+    pub slicing: ZSlicing,
+    /// Where light lists are built.
+    pub assignment: Assignment,
+    /// How long a cluster's light list may be.
+    pub lists: LightLists,
+    /// Assign lights only to clusters that hold at least one visible sample (Olsson 2012).
+    pub active_clusters: bool,
+}
+
+impl Default for Clusters {
+    fn default() -> Self {
+        Self {
+            grid: (16, 9, 24),
+            slicing: ZSlicing::Exponential,
+            assignment: Assignment::Gpu,
+            lists: LightLists::Exact,
+            active_clusters: false,
+        }
+    }
+}
+
+/// How view depth between the camera's near and far planes is cut into slices.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
+pub enum ZSlicing {
+    /// Equal depth steps from near to far.
+    Linear,
+    /// `slice = floor(log(z/near) * Z / log(far/near))`: equal ratios from near to far.
+    Exponential,
+    /// Slice 0 covers [near, near_slice_end]; the other slices are exponential from there
+    /// to far (Persson 2015, Bevy, Filament).
+    NearSliceThenExponential {
+        /// View depth (world units) where the special near slice ends; must lie between the
+        /// camera's near and far planes.
+        near_slice_end: f32,
+    },
+    /// Olsson 2012: slices as deep as they are wide,
+    /// `k = floor(log(z/near) / log(1 + 2 tan(fov_y/2) / grid_y))`; the slice count follows
+    /// from the camera, capped at grid z (the last slice then reaches to far).
+    OlssonCubic,
+    /// Exponential slicing over the depth range the frame actually covers, found by a
+    /// min/max reduction of the depth buffer.
+    DynamicRange {
+        /// Whose depth gives the range.
+        source: DepthRangeSource,
+    },
+}
+
+/// Where a dynamic depth range comes from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
+pub enum DepthRangeSource {
+    /// Reduce this frame's depth (needs depth before shading: a pre-pass or a G-buffer).
+    CurrentFrame,
+    /// Reduce the previous frame's depth (one frame late, no extra pass before shading).
+    PreviousFrame,
+}
+
+/// Where light lists are built.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
+pub enum Assignment {
+    /// Compute passes: count, prefix sum, fill.
+    Gpu,
+    /// On the CPU, uploaded each frame (as the older write-ups did); its time is measured.
+    Cpu,
+}
+
+/// How long a cluster's light list may be.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
+pub enum LightLists {
+    /// Exact compacted lists: every light that touches a cluster is in its list.
+    Exact,
+    /// At most `max_per_cluster` lights per cluster; every light over the cap is counted
+    /// and reported as dropped.
+    Capped {
+        /// The cap, in 1..=1024.
+        max_per_cluster: u32,
+    },
+}
+
+/// The G-buffer of a deferred pipeline.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields, default)]
+pub struct GBuffer {
+    /// Which targets hold what.
+    pub layout: GBufferLayout,
+}
+
+impl Default for GBuffer {
+    fn default() -> Self {
+        Self {
+            layout: GBufferLayout::Wide,
+        }
+    }
+}
+
+/// G-buffer layouts, from exact and fat to lossy and thin.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
+pub enum GBufferLayout {
+    /// 3 x rgba32float: position, albedo, normal (xyz floats). 48 bytes a pixel.
+    Wide,
+    /// 2 x rgba32float: position and albedo, with a 2-component packed normal in the
+    /// alpha channels. 32 bytes a pixel.
+    Packed,
+    /// Position rebuilt from depth, albedo rgba8unorm, packed normal in r32uint.
+    /// 8 bytes a pixel beside depth.
+    Compact,
+}
+
+/// The depth buffer.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields, default)]
+pub struct Depth {
+    /// Storage format.
+    pub format: DepthFormat,
+    /// Reversed-Z with an infinite far plane (near maps to 1, infinity to 0).
+    pub reversed_z: bool,
+}
+
+impl Default for Depth {
+    fn default() -> Self {
+        Self {
+            format: DepthFormat::Float32,
+            reversed_z: false,
+        }
+    }
+}
+
+/// Depth buffer formats.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
+pub enum DepthFormat {
+    /// 24-bit unsigned normalised depth.
+    Unorm24,
+    /// 32-bit float depth.
+    Float32,
+}
+
+/// How a normal is stored in the G-buffer.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
+pub enum NormalCodec {
+    /// Three 32-bit floats (wide layout only).
+    Xyz,
+    /// Octahedral map (Meyer 2010, Cigolle 2014), two components of bits/2 each.
+    Octahedral {
+        /// Total bits: 16, 20, 24 or 32.
+        bits: u32,
+        /// Try the 4 neighbouring codes and keep the one whose decode is closest (default false).
+        #[serde(default)]
+        precise: bool,
+    },
+    /// Two angles: polar angle from +z and azimuth, bits/2 each.
+    Polar {
+        /// Total bits: 16, 20, 24 or 32.
+        bits: u32,
+    },
+    /// Spheremap transform (Lambert azimuthal equal-area), bits/2 each.
+    Spheremap {
+        /// Total bits: 16, 20, 24 or 32.
+        bits: u32,
+    },
+}
+
+impl NormalCodec {
+    /// Bits a packed normal takes (xyz floats: 96).
+    pub fn bits(self) -> u32 {
+        match self {
+            NormalCodec::Xyz => 96,
+            NormalCodec::Octahedral { bits, .. }
+            | NormalCodec::Polar { bits }
+            | NormalCodec::Spheremap { bits } => bits,
+        }
+    }
+}
+
+/// The surface shading model.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields, default)]
+pub struct Shading {
+    /// The BRDF.
+    pub model: ShadingModel,
+    /// Constant ambient light, as a fraction of albedo, in 0..=1.
+    pub ambient: f32,
+}
+
+impl Default for Shading {
+    fn default() -> Self {
+        Self {
+            model: ShadingModel::Lambert,
+            ambient: 0.02,
+        }
+    }
+}
+
+/// BRDFs.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
+pub enum ShadingModel {
+    /// Diffuse only: `albedo * max(n.l, 0)`.
+    Lambert,
+    /// Lambert plus a Blinn-Phong highlight `specular * max(n.h, 0)^shininess`.
+    BlinnPhong {
+        /// Exponent, in 1..=4096.
+        shininess: f32,
+        /// Strength of the white highlight, in 0..=1.
+        specular: f32,
+    },
+}
+
+/// Post-processing effects; each is off unless given.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields, default)]
+pub struct Post {
+    /// Quantised (cel) shading.
+    pub toon: Option<Toon>,
+    /// Bright parts of the image bleed into their surroundings.
+    pub bloom: Option<Bloom>,
+    /// Blur along each pixel's screen-space motion.
+    pub motion_blur: Option<MotionBlur>,
+}
+
+/// Toon shading.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields, default)]
+pub struct Toon {
+    /// Where the bands are made.
+    pub mode: ToonMode,
+    /// Number of bands, in 2..=32.
+    pub bands: u32,
+    /// Dark outlines where depth jumps; the threshold is a relative view-depth step.
+    pub outlines: Option<Outlines>,
+}
+
+impl Default for Toon {
+    fn default() -> Self {
+        Self {
+            mode: ToonMode::PerLight,
+            bands: 4,
+            outlines: None,
+        }
+    }
+}
+
+/// Where toon bands are made.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
+pub enum ToonMode {
+    /// Each light's diffuse term goes through the band ramp inside the shading pass.
+    PerLight,
+    /// A compute pass quantises the accumulated colour's luminance.
+    PostProcess,
+}
+
+/// Depth-edge outlines.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields, default)]
+pub struct Outlines {
+    /// Relative view-depth step between neighbours that makes an edge, in (0, 1].
+    pub depth_threshold: f32,
+}
+
+impl Default for Outlines {
+    fn default() -> Self {
+        Self {
+            depth_threshold: 0.1,
+        }
+    }
+}
+
+/// Bloom.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields, default)]
+pub struct Bloom {
+    /// Linear HDR luminance above which a pixel blooms, >= 0.
+    pub threshold: f32,
+    /// Blur radius in pixels, in 1..=32.
+    pub radius: u32,
+    /// How the blur is computed.
+    pub kernel: BloomKernel,
+}
+
+impl Default for Bloom {
+    fn default() -> Self {
+        Self {
+            threshold: 1.0,
+            radius: 4,
+            kernel: BloomKernel::Separable,
+        }
+    }
+}
+
+/// Bloom blur kernels.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
+pub enum BloomKernel {
+    /// One pass over a full d x d window (d = 2 radius + 1): d^2 taps a pixel.
+    Naive,
+    /// A horizontal then a vertical pass: 2 d taps a pixel.
+    Separable,
+}
+
+/// Motion blur.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields, default)]
+pub struct MotionBlur {
+    /// Samples along each pixel's motion vector, in 2..=64.
+    pub samples: u32,
+}
+
+impl Default for MotionBlur {
+    fn default() -> Self {
+        Self { samples: 8 }
+    }
+}
+
+/// Diagnostic views that replace the shaded image.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
+pub enum DebugView {
+    /// The shaded image.
+    Off,
+    /// Each cluster in its own colour (clustered pipelines).
+    ClusterIndex,
+    /// Heat map of the number of lights in each pixel's cluster (clustered pipelines).
+    LightsPerCluster,
+    /// Each z-slice in its own colour (clustered pipelines).
+    ZSlice,
+    /// One G-buffer channel (deferred pipelines).
+    GBuffer {
+        /// Which channel.
+        channel: GBufferChannel,
+    },
+}
+
+/// G-buffer channels a debug view can show.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
+pub enum GBufferChannel {
+    /// World position (fractional part of each coordinate).
+    Position,
+    /// Decoded normal, mapped from [-1, 1] to [0, 1].
+    Normal,
+    /// Albedo.
+    Albedo,
+    /// Linear view depth.
+    Depth,
+}

@@ -1,0 +1,87 @@
+//! Composition: every pass of every variant in variants/ composes and validates, and its
+//! WGSL matches the reviewed snapshot; bad input gives the reviewed error text.
+
+use std::path::Path;
+
+use clusterlab::compose::{Composer, feature_flags, passes};
+use clusterlab::variant;
+
+fn snapshot_settings(folder: &str) -> insta::Settings {
+    let mut settings = insta::Settings::clone_current();
+    settings.set_snapshot_path(Path::new("../snapshots").join(folder));
+    settings.set_prepend_module_to_snapshot(false);
+    settings
+}
+
+/// A new variant file gets its snapshots with no code change: `glob!` visits every file.
+#[test]
+fn composed_wgsl_of_every_pass_of_every_variant() {
+    let composer = Composer::default();
+    snapshot_settings("wgsl").bind(|| {
+        insta::glob!("../variants", "*.ron", |path| {
+            let loaded = variant::load(path).unwrap_or_else(|e| panic!("{e}"));
+            for pass in passes(&loaded.variant) {
+                let composed = composer
+                    .compose(&loaded.variant, &pass)
+                    .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+                insta::assert_snapshot!(pass.name, composed.wgsl);
+            }
+        });
+    });
+}
+
+#[test]
+fn bad_variant_files_give_located_errors() {
+    snapshot_settings("errors").bind(|| {
+        insta::glob!("bad_variants", "*.ron", |path| {
+            let relative = path
+                .strip_prefix(env!("CARGO_MANIFEST_DIR"))
+                .unwrap_or(path);
+            let error = variant::load(relative).expect_err("a bad variant must be rejected");
+            insta::assert_snapshot!("variant_error", error.to_string());
+        });
+    });
+}
+
+#[test]
+fn shader_errors_name_the_module_file_line_and_column() {
+    let composer = Composer::new(Path::new("tests/bad_shaders"));
+    let v = variant::Variant::default();
+    let features = feature_flags(&v);
+    snapshot_settings("errors").bind(|| {
+        for root in ["type_error", "syntax_error", "missing_import"] {
+            let error = composer
+                .compose_root(root, &format!("passes::{root}"), &features, "")
+                .expect_err("a broken shader must be rejected");
+            insta::assert_snapshot!(format!("shader_{root}"), error.to_string());
+        }
+    });
+}
+
+/// A feature that is off leaves no trace: Lambert has no Blinn-Phong code in its WGSL.
+#[test]
+fn switched_off_features_leave_no_trace() {
+    let composer = Composer::default();
+    let lambert = variant::Variant {
+        description: "lambert".into(),
+        ..Default::default()
+    };
+    let mut blinn = lambert.clone();
+    blinn.shading.model = variant::ShadingModel::BlinnPhong {
+        shininess: 16.0,
+        specular: 0.5,
+    };
+    let forward = passes(&lambert)
+        .into_iter()
+        .find(|p| p.name == "forward")
+        .expect("a forward pass");
+    let lambert_wgsl = composer.compose(&lambert, &forward).unwrap().wgsl;
+    let blinn_wgsl = composer.compose(&blinn, &forward).unwrap().wgsl;
+    for trace in ["blinn_phong", "SHININESS", "SPECULAR", "pow("] {
+        assert!(!lambert_wgsl.contains(trace), "`{trace}` in Lambert WGSL");
+        assert!(
+            blinn_wgsl.contains(trace),
+            "`{trace}` missing from Blinn-Phong WGSL"
+        );
+    }
+}
