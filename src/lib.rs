@@ -1,9 +1,15 @@
 //! clusterlab: a harness for real-time many-light shading research.
 //!
 //! Data flows one way: a [`variant`] file is parsed and checked, [`compose`]d into
-//! naga-validated WGSL per pass, and run on the GPU against seeded scenes; the frame is
-//! compared with an independent CPU reference.
+//! naga-validated WGSL per pass, and [`render`]ed on the [`gpu`] against seeded [`scene`]s;
+//! the frame is compared ([`metrics`]) with an independent [`cpu`] reference.
 
 pub mod compose;
+pub mod cpu;
 pub mod explain;
+pub mod gpu;
+pub mod metrics;
+pub mod render;
+pub mod run;
+pub mod scene;
 pub mod variant;

@@ -38,9 +38,76 @@ enum Command {
     },
     /// Explain the variant schema: every field, its meaning, allowed values and default.
     Explain,
+    /// List the built-in scenes and their default parameters.
+    Scenes,
+    /// Render one variant on one scene, measure it against the CPU f64 reference, and write
+    /// the image and its error heat map.
+    Render(RenderArgs),
+}
+
+#[derive(clap::Args)]
+struct RenderArgs {
+    /// A variant file, or the name of one in variants/.
+    #[arg(long)]
+    variant: String,
+    /// A built-in scene (see `clusterlab scenes`).
+    #[arg(long)]
+    scene: String,
+    /// Number of lights (default: the scene's).
+    #[arg(long)]
+    lights: Option<u32>,
+    /// Image size, WIDTHxHEIGHT (default: the scene's).
+    #[arg(long, value_parser = parse_size)]
+    size: Option<(u32, u32)>,
+    /// Seed of the scene generator.
+    #[arg(long)]
+    seed: Option<u64>,
+    /// Light radius range MIN,MAX in world units (default: the scene's).
+    #[arg(long, value_parser = parse_range)]
+    radius: Option<(f32, f32)>,
+    /// Time of the frame in seconds (lights and camera move with it).
+    #[arg(long)]
+    time: Option<f64>,
+    /// Frames to render; times are the median per pass.
+    #[arg(long, default_value_t = 1)]
+    frames: u32,
+    /// Folder for the PNG and its heat map.
+    #[arg(long, default_value = "out")]
+    out: PathBuf,
+    /// GPU backend: vulkan, gl, metal, dx12 (default: WGPU_BACKEND, else Vulkan first).
+    #[arg(long)]
+    backend: Option<String>,
+    /// Print one JSON object instead of a summary.
+    #[arg(long)]
+    json: bool,
+}
+
+fn parse_size(s: &str) -> Result<(u32, u32), String> {
+    let (w, h) = s
+        .split_once(['x', 'X'])
+        .ok_or_else(|| format!("`{s}` is not WIDTHxHEIGHT, e.g. 640x360"))?;
+    let n = |v: &str| {
+        v.trim()
+            .parse::<u32>()
+            .map_err(|_| format!("`{v}` in `{s}` is not a whole number"))
+    };
+    Ok((n(w)?, n(h)?))
+}
+
+fn parse_range(s: &str) -> Result<(f32, f32), String> {
+    let (a, b) = s
+        .split_once(',')
+        .ok_or_else(|| format!("`{s}` is not MIN,MAX, e.g. 1.0,3.0"))?;
+    let n = |v: &str| {
+        v.trim()
+            .parse::<f32>()
+            .map_err(|_| format!("`{v}` in `{s}` is not a number"))
+    };
+    Ok((n(a)?, n(b)?))
 }
 
 fn main() -> ExitCode {
+    quiet_mesa_wsi();
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Validate { paths } => validate(&paths),
@@ -49,6 +116,11 @@ fn main() -> ExitCode {
             print!("{}", clusterlab::explain::explain());
             Ok(true)
         }
+        Command::Scenes => {
+            scenes();
+            Ok(true)
+        }
+        Command::Render(args) => render(&args),
     };
     match result {
         Ok(true) => ExitCode::SUCCESS,
@@ -57,6 +129,16 @@ fn main() -> ExitCode {
             eprintln!("error: {message}");
             ExitCode::FAILURE
         }
+    }
+}
+
+/// Mesa's Vulkan WSI prints "error: XDG_RUNTIME_DIR is invalid" on every instance when the
+/// variable is unset (headless machines, CI). Point it at the temp folder so real errors stand
+/// out.
+fn quiet_mesa_wsi() {
+    if std::env::var_os("XDG_RUNTIME_DIR").is_none() {
+        // SAFETY: called first thing in main, before any other thread exists.
+        unsafe { std::env::set_var("XDG_RUNTIME_DIR", std::env::temp_dir()) };
     }
 }
 
@@ -137,6 +219,81 @@ fn wgsl(arg: &str, only: Option<&str>) -> Result<bool, String> {
             loaded.name, pass.name
         );
         println!("{}", composed.wgsl);
+    }
+    Ok(true)
+}
+
+fn scenes() {
+    for s in clusterlab::scene::SCENES {
+        let d = &s.defaults;
+        println!("{:<10} {}", s.name, s.description);
+        println!(
+            "           default: {}x{}, {} lights, radius {}..{}, seed {}, time {}",
+            d.width, d.height, d.lights, d.radius_range.0, d.radius_range.1, d.seed, d.time
+        );
+    }
+}
+
+fn render(args: &RenderArgs) -> Result<bool, String> {
+    let loaded = variant::load(&variant_path(&args.variant)).map_err(|e| e.to_string())?;
+    let info = clusterlab::scene::find_scene(&args.scene).ok_or_else(|| {
+        clusterlab::scene::SceneError::Unknown(args.scene.clone()).to_string()
+    })?;
+    let mut params = info.defaults;
+    if let Some((w, h)) = args.size {
+        (params.width, params.height) = (w, h);
+    }
+    params.lights = args.lights.unwrap_or(params.lights);
+    params.seed = args.seed.unwrap_or(params.seed);
+    params.radius_range = args.radius.unwrap_or(params.radius_range);
+    params.time = args.time.unwrap_or(params.time);
+    if params.width == 0 || params.height == 0 {
+        return Err(format!(
+            "size {}x{}: width and height must be at least 1",
+            params.width, params.height
+        ));
+    }
+    let gpu = clusterlab::gpu::Gpu::new(args.backend.as_deref()).map_err(|e| e.to_string())?;
+    let cell = clusterlab::run::run_cell(
+        &gpu,
+        &Composer::default(),
+        &loaded,
+        &args.scene,
+        params,
+        args.frames,
+        Some(&args.out),
+    )
+    .map_err(|e| format!("variant `{}` on scene `{}`: {e}", loaded.name, args.scene))?;
+    let r = &cell.report;
+    if args.json {
+        println!(
+            "{}",
+            serde_json::to_string_pretty(r).map_err(|e| e.to_string())?
+        );
+    } else {
+        println!(
+            "{} on {} ({}x{}, {} lights) with {} ({}, {})",
+            r.variant, r.scene, r.size[0], r.size[1], r.lights, r.adapter.name, r.adapter.backend, r.adapter.driver
+        );
+        let passes: Vec<String> = r
+            .gpu_ms
+            .iter()
+            .map(|(k, v)| format!("{k} {v} ms"))
+            .collect();
+        println!("  time ({}): {}", r.timing_source, passes.join(", "));
+        let e = &r.error;
+        println!(
+            "  error: max {} LSB, {} pixels over 1 LSB, PSNR {} dB, mean FLIP {:.5}, HDR RMSE {:.3e}, NaN pixels {}",
+            e.max_abs_8bit,
+            e.pixels_over_1lsb,
+            e.psnr_db.map_or("inf".into(), |p| format!("{p:.1}")),
+            e.flip_mean,
+            e.rmse,
+            e.nan_pixels
+        );
+        for image in &r.images {
+            println!("  wrote {}", image.display());
+        }
     }
     Ok(true)
 }

@@ -1,0 +1,104 @@
+//! Twin of `shaders/packing/normals.wesl`: normal codecs in f64. Every codec maps a unit
+//! vector to two unorm codes of `bits` bits each.
+
+use glam::{DVec2, DVec3};
+
+fn max_code(bits: u32) -> f64 {
+    ((1u64 << bits) - 1) as f64
+}
+
+fn quantize(u: DVec2, bits: u32) -> [u32; 2] {
+    let m = max_code(bits);
+    [u.x, u.y].map(|c| (c.clamp(0.0, 1.0) * m).round() as u32)
+}
+
+fn dequantize(q: [u32; 2], bits: u32) -> DVec2 {
+    DVec2::new(q[0] as f64, q[1] as f64) / max_code(bits)
+}
+
+fn sign_not_zero(v: DVec2) -> DVec2 {
+    DVec2::new(
+        if v.x >= 0.0 { 1.0 } else { -1.0 },
+        if v.y >= 0.0 { 1.0 } else { -1.0 },
+    )
+}
+
+/// Project onto the octahedron |x|+|y|+|z| = 1 and fold the lower half over the diagonals.
+pub fn oct_project(n: DVec3) -> DVec2 {
+    let p = DVec2::new(n.x, n.y) / (n.x.abs() + n.y.abs() + n.z.abs());
+    if n.z < 0.0 {
+        (DVec2::ONE - DVec2::new(p.y.abs(), p.x.abs())) * sign_not_zero(p)
+    } else {
+        p
+    }
+}
+
+pub fn oct_unproject(e: DVec2) -> DVec3 {
+    let z = 1.0 - e.x.abs() - e.y.abs();
+    let xy = if z < 0.0 {
+        (DVec2::ONE - DVec2::new(e.y.abs(), e.x.abs())) * sign_not_zero(e)
+    } else {
+        e
+    };
+    DVec3::new(xy.x, xy.y, z).normalize()
+}
+
+pub fn oct_encode(n: DVec3, bits: u32) -> [u32; 2] {
+    quantize(oct_project(n) * 0.5 + DVec2::splat(0.5), bits)
+}
+
+pub fn oct_decode(q: [u32; 2], bits: u32) -> DVec3 {
+    oct_unproject(dequantize(q, bits) * 2.0 - DVec2::ONE)
+}
+
+/// The code among the 4 around the projection whose decode is closest to `n`.
+pub fn oct_encode_precise(n: DVec3, bits: u32) -> [u32; 2] {
+    let m = max_code(bits);
+    let u = (oct_project(n) * 0.5 + DVec2::splat(0.5)).clamp(DVec2::ZERO, DVec2::ONE) * m;
+    let base = [u.x.floor() as u32, u.y.floor() as u32];
+    let top = m as u32;
+    let mut best = base;
+    let mut best_cos = oct_decode(base, bits).dot(n);
+    for i in 0..4u32 {
+        let c = [(base[0] + (i & 1)).min(top), (base[1] + (i >> 1)).min(top)];
+        let cos = oct_decode(c, bits).dot(n);
+        if cos > best_cos {
+            best = c;
+            best_cos = cos;
+        }
+    }
+    best
+}
+
+/// Polar angle from +z over pi, azimuth over 2 pi (shifted to [0, 1]).
+pub fn polar_encode(n: DVec3, bits: u32) -> [u32; 2] {
+    let theta = n.z.clamp(-1.0, 1.0).acos();
+    let phi = n.y.atan2(n.x);
+    use std::f64::consts::PI;
+    quantize(DVec2::new(theta / PI, phi / (2.0 * PI) + 0.5), bits)
+}
+
+pub fn polar_decode(q: [u32; 2], bits: u32) -> DVec3 {
+    use std::f64::consts::PI;
+    let u = dequantize(q, bits);
+    let (theta, phi) = (u.x * PI, (u.y - 0.5) * 2.0 * PI);
+    DVec3::new(theta.sin() * phi.cos(), theta.sin() * phi.sin(), theta.cos())
+}
+
+/// Lambert azimuthal equal-area projection about +z; n = -z (singular) encodes as +z.
+pub fn spheremap_encode(n: DVec3, bits: u32) -> [u32; 2] {
+    let f = (8.0 * n.z + 8.0).max(1e-20).sqrt();
+    quantize(DVec2::new(n.x, n.y) / f + DVec2::splat(0.5), bits)
+}
+
+pub fn spheremap_decode(q: [u32; 2], bits: u32) -> DVec3 {
+    let e = dequantize(q, bits) * 4.0 - DVec2::splat(2.0);
+    let f = e.dot(e);
+    let g = (1.0 - f / 4.0).max(0.0).sqrt();
+    DVec3::new(e.x * g, e.y * g, 1.0 - f / 2.0).normalize()
+}
+
+/// Angle in degrees between two unit vectors.
+pub fn angle_degrees(a: DVec3, b: DVec3) -> f64 {
+    a.dot(b).clamp(-1.0, 1.0).acos().to_degrees()
+}

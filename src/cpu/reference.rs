@@ -1,0 +1,75 @@
+//! The CPU reference frame: every covered pixel of the raster truth shaded with every light
+//! in f64. Every variant's image is measured against this.
+
+use glam::DVec3;
+use rayon::prelude::*;
+
+use super::color::display8;
+use super::shading::{ShadingParams, Surface, shade};
+use crate::scene::Light;
+
+/// The rasteriser's coverage and attributes at full precision, read back from the GPU.
+#[derive(Clone, Debug, Default)]
+pub struct RasterTruth {
+    pub width: u32,
+    pub height: u32,
+    /// World position; w = 1 where covered, 0 where background.
+    pub position: Vec<[f32; 4]>,
+    /// Unit world normal (xyz).
+    pub normal: Vec<[f32; 4]>,
+    /// Linear albedo (rgb).
+    pub albedo: Vec<[f32; 4]>,
+}
+
+impl RasterTruth {
+    pub fn covered(&self, i: usize) -> bool {
+        self.position[i][3] > 0.5
+    }
+
+    pub fn surface(&self, i: usize) -> Surface {
+        let p = self.position[i];
+        let n = self.normal[i];
+        let a = self.albedo[i];
+        Surface {
+            position: DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64),
+            normal: DVec3::new(n[0] as f64, n[1] as f64, n[2] as f64).normalize_or_zero(),
+            albedo: DVec3::new(a[0] as f64, a[1] as f64, a[2] as f64),
+        }
+    }
+}
+
+/// A reference frame: linear HDR and 8-bit display values per pixel, row-major.
+#[derive(Clone, Debug)]
+pub struct ReferenceFrame {
+    pub width: u32,
+    pub height: u32,
+    pub hdr: Vec<[f64; 3]>,
+    pub ldr: Vec<[u8; 3]>,
+}
+
+/// Shade every covered pixel of `truth` with all `lights`; background stays black.
+pub fn shade_reference(
+    truth: &RasterTruth,
+    lights: &[Light],
+    eye: DVec3,
+    params: &ShadingParams,
+    exposure: f64,
+) -> ReferenceFrame {
+    let hdr: Vec<[f64; 3]> = (0..truth.position.len())
+        .into_par_iter()
+        .map(|i| {
+            if truth.covered(i) {
+                shade(&truth.surface(i), eye, lights, params).to_array()
+            } else {
+                [0.0; 3]
+            }
+        })
+        .collect();
+    let ldr = hdr.iter().map(|&c| display8(c, exposure)).collect();
+    ReferenceFrame {
+        width: truth.width,
+        height: truth.height,
+        hdr,
+        ldr,
+    }
+}

@@ -1,0 +1,98 @@
+//! Error of a frame against the CPU reference, and an error heat map.
+
+use serde::Serialize;
+
+use crate::cpu::reference::ReferenceFrame;
+use crate::render::FrameOutput;
+
+/// How far a frame is from the reference. HDR figures are in linear radiance; 8-bit figures
+/// in display code values (LSB).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct ErrorMetrics {
+    /// Largest per-channel difference of the displayed 8-bit images.
+    pub max_abs_8bit: u32,
+    /// Root mean square per-channel difference of the linear HDR images.
+    pub rmse: f64,
+    pub rmse_8bit: f64,
+    pub max_abs_hdr: f64,
+    /// PSNR of the 8-bit image in dB; null when the images are identical (infinite).
+    pub psnr_db: Option<f64>,
+    /// Mean FLIP (NVIDIA's perceptual difference, 0 = identical, 1 = maximal).
+    pub flip_mean: f64,
+    /// Pixels whose displayed value differs by more than 1 LSB in some channel.
+    pub pixels_over_1lsb: u64,
+    /// Pixels whose HDR value is NaN or infinite in some channel.
+    pub nan_pixels: u64,
+}
+
+/// Compare `frame` with `reference` (same size).
+pub fn compare(frame: &FrameOutput, reference: &ReferenceFrame) -> ErrorMetrics {
+    let n = frame.ldr.len().min(reference.ldr.len());
+    let (mut max8, mut sq8, mut over1, mut nan) = (0u32, 0f64, 0u64, 0u64);
+    let (mut max_hdr, mut sq_hdr) = (0f64, 0f64);
+    for i in 0..n {
+        let mut pixel_max = 0;
+        for c in 0..3 {
+            let d = (frame.ldr[i][c] as i32 - reference.ldr[i][c] as i32).unsigned_abs();
+            pixel_max = pixel_max.max(d);
+            sq8 += (d * d) as f64;
+        }
+        max8 = max8.max(pixel_max);
+        if pixel_max > 1 {
+            over1 += 1;
+        }
+        let hdr = &frame.hdr[i];
+        if hdr[..3].iter().any(|v| !v.is_finite()) {
+            nan += 1;
+            continue;
+        }
+        for c in 0..3 {
+            let d = (hdr[c] as f64 - reference.hdr[i][c]).abs();
+            max_hdr = max_hdr.max(d);
+            sq_hdr += d * d;
+        }
+    }
+    let samples = (3 * n.max(1)) as f64;
+    let mse8 = sq8 / samples;
+    ErrorMetrics {
+        max_abs_8bit: max8,
+        rmse: (sq_hdr / samples).sqrt(),
+        rmse_8bit: mse8.sqrt(),
+        max_abs_hdr: max_hdr,
+        psnr_db: (mse8 > 0.0).then(|| 10.0 * (255.0 * 255.0 / mse8).log10()),
+        flip_mean: flip_mean(frame, reference),
+        pixels_over_1lsb: over1,
+        nan_pixels: nan,
+    }
+}
+
+fn rgb8(pixels: impl Iterator<Item = [u8; 3]>) -> Vec<u8> {
+    pixels.flat_map(|p| p).collect()
+}
+
+fn flip_mean(frame: &FrameOutput, reference: &ReferenceFrame) -> f64 {
+    let (w, h) = (frame.width, frame.height);
+    let test = nv_flip::FlipImageRgb8::with_data(w, h, &rgb8(frame.ldr.iter().map(|p| [p[0], p[1], p[2]])));
+    let refr = nv_flip::FlipImageRgb8::with_data(w, h, &rgb8(reference.ldr.iter().copied()));
+    let map = nv_flip::flip(refr, test, nv_flip::DEFAULT_PIXELS_PER_DEGREE);
+    nv_flip::FlipPool::from_image(&map).mean() as f64
+}
+
+/// Per-pixel error as an RGB8 heat map (magma): the largest 8-bit channel difference d
+/// maps to log2(1 + d) / 8, so 1 LSB is faint and 255 LSB is white.
+pub fn heat_map(frame: &FrameOutput, reference: &ReferenceFrame) -> Vec<u8> {
+    let values: Vec<f32> = frame
+        .ldr
+        .iter()
+        .zip(&reference.ldr)
+        .map(|(a, b)| {
+            let d = (0..3)
+                .map(|c| (a[c] as i32 - b[c] as i32).unsigned_abs())
+                .max()
+                .unwrap_or(0);
+            ((1.0 + d as f32).log2() / 8.0).min(1.0)
+        })
+        .collect();
+    let map = nv_flip::FlipImageFloat::with_data(frame.width, frame.height, &values);
+    map.apply_color_lut(&nv_flip::magma_lut()).to_vec()
+}

@@ -1,0 +1,185 @@
+//! Running a frame's passes with timing, and building pipelines from composed passes.
+
+use std::time::Instant;
+
+use crate::compose::ComposedPass;
+use crate::gpu::{Gpu, GpuError, PassTimer, Timings};
+
+/// Where a pass writes its timestamps (when the adapter has them).
+pub struct TimestampSlot<'a> {
+    query_set: &'a wgpu::QuerySet,
+    index: u32,
+}
+
+impl<'a> TimestampSlot<'a> {
+    pub fn render(slot: Option<Self>) -> Option<wgpu::RenderPassTimestampWrites<'a>> {
+        slot.map(|s| wgpu::RenderPassTimestampWrites {
+            query_set: s.query_set,
+            beginning_of_pass_write_index: Some(s.index * 2),
+            end_of_pass_write_index: Some(s.index * 2 + 1),
+        })
+    }
+    pub fn compute(slot: Option<Self>) -> Option<wgpu::ComputePassTimestampWrites<'a>> {
+        slot.map(|s| wgpu::ComputePassTimestampWrites {
+            query_set: s.query_set,
+            beginning_of_pass_write_index: Some(s.index * 2),
+            end_of_pass_write_index: Some(s.index * 2 + 1),
+        })
+    }
+}
+
+/// Encodes a frame pass by pass. With timestamps, all passes go into one submission; without,
+/// each pass is submitted and waited for, and timed by the wall clock.
+pub struct PassRunner<'g> {
+    gpu: &'g Gpu,
+    timer: PassTimer,
+    encoder: Option<wgpu::CommandEncoder>,
+}
+
+impl<'g> PassRunner<'g> {
+    pub fn new(gpu: &'g Gpu, max_passes: u32) -> Self {
+        Self {
+            gpu,
+            timer: PassTimer::new(gpu, max_passes),
+            encoder: None,
+        }
+    }
+
+    /// Encode one pass named `name`; `f` records it into the encoder, using the slot for
+    /// its timestamp writes.
+    pub fn pass(
+        &mut self,
+        name: &str,
+        f: impl FnOnce(&mut wgpu::CommandEncoder, Option<TimestampSlot<'_>>),
+    ) -> Result<(), GpuError> {
+        let gpu = self.gpu;
+        let encoder = self.encoder.get_or_insert_with(|| {
+            gpu.device
+                .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some(name) })
+        });
+        if self.timer.wall_clock() {
+            let start = Instant::now();
+            f(encoder, None);
+            let encoder = self.encoder.take().expect("encoder was just made");
+            gpu.queue.submit([encoder.finish()]);
+            gpu.wait()?;
+            self.timer
+                .record_wall(name, start.elapsed().as_secs_f64() * 1e3);
+        } else {
+            let slot = self.timer.claim_slot(name);
+            f(encoder, slot);
+        }
+        Ok(())
+    }
+
+    /// Submit what is left, wait, and return the pass times.
+    pub fn finish(mut self) -> Result<Timings, GpuError> {
+        if let Some(encoder) = self.encoder.take() {
+            self.gpu.queue.submit([encoder.finish()]);
+        }
+        self.gpu.wait()?;
+        self.timer.finish(self.gpu)
+    }
+}
+
+impl PassTimer {
+    /// A timestamp slot for the next pass named `name`.
+    pub fn claim_slot(&mut self, name: &str) -> Option<TimestampSlot<'_>> {
+        let index = self.claim(name)?;
+        self.query_set().map(|query_set| TimestampSlot { query_set, index })
+    }
+}
+
+pub fn shader_module(gpu: &Gpu, pass: &ComposedPass) -> wgpu::ShaderModule {
+    gpu.device
+        .create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some(&pass.name),
+            source: wgpu::ShaderSource::Wgsl(pass.wgsl.as_str().into()),
+        })
+}
+
+pub fn pipeline_layout(gpu: &Gpu, groups: &[&wgpu::BindGroupLayout]) -> wgpu::PipelineLayout {
+    let groups: Vec<Option<&wgpu::BindGroupLayout>> = groups.iter().map(|g| Some(*g)).collect();
+    gpu.device
+        .create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: None,
+            bind_group_layouts: &groups,
+            immediate_size: 0,
+        })
+}
+
+/// A render pipeline of a composed pass with entry points `vs_main` and (when `targets` is
+/// not empty) `fs_main`.
+pub fn render_pipeline(
+    gpu: &Gpu,
+    pass: &ComposedPass,
+    layout: &wgpu::PipelineLayout,
+    vertex_buffers: &[Option<wgpu::VertexBufferLayout<'_>>],
+    targets: &[Option<wgpu::ColorTargetState>],
+    depth: Option<wgpu::DepthStencilState>,
+) -> wgpu::RenderPipeline {
+    let module = shader_module(gpu, pass);
+    gpu.device
+        .create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some(&pass.name),
+            layout: Some(layout),
+            vertex: wgpu::VertexState {
+                module: &module,
+                entry_point: Some("vs_main"),
+                compilation_options: Default::default(),
+                buffers: vertex_buffers,
+            },
+            primitive: wgpu::PrimitiveState::default(),
+            depth_stencil: depth,
+            multisample: wgpu::MultisampleState::default(),
+            fragment: (!targets.is_empty()).then(|| wgpu::FragmentState {
+                module: &module,
+                entry_point: Some("fs_main"),
+                compilation_options: Default::default(),
+                targets,
+            }),
+            multiview_mask: None,
+            cache: None,
+        })
+}
+
+/// A compute pipeline for entry point `entry` of a composed pass.
+pub fn compute_pipeline(
+    gpu: &Gpu,
+    module: &wgpu::ShaderModule,
+    label: &str,
+    layout: &wgpu::PipelineLayout,
+    entry: &str,
+) -> wgpu::ComputePipeline {
+    gpu.device
+        .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some(label),
+            layout: Some(layout),
+            module,
+            entry_point: Some(entry),
+            compilation_options: Default::default(),
+            cache: None,
+        })
+}
+
+/// A colour target without blending.
+pub fn color_target(format: wgpu::TextureFormat) -> Option<wgpu::ColorTargetState> {
+    Some(wgpu::ColorTargetState {
+        format,
+        blend: None,
+        write_mask: wgpu::ColorWrites::ALL,
+    })
+}
+
+/// A colour attachment cleared to zero and stored.
+pub fn clear_attachment(view: &wgpu::TextureView) -> Option<wgpu::RenderPassColorAttachment<'_>> {
+    Some(wgpu::RenderPassColorAttachment {
+        view,
+        depth_slice: None,
+        resolve_target: None,
+        ops: wgpu::Operations {
+            load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+            store: wgpu::StoreOp::Store,
+        },
+    })
+}

@@ -1,0 +1,98 @@
+//! The raster truth pass: the same rasterisation as the variant (same vertex transform,
+//! depth format and test), written as 32-bit floats for the CPU reference.
+
+use super::passes::{clear_attachment, color_target, pipeline_layout, render_pipeline};
+use super::resources::{DepthSetup, SceneBuffers, frame_bind_group, frame_layout, target};
+use super::RenderError;
+use crate::compose::Composer;
+use crate::cpu::reference::RasterTruth;
+use crate::gpu::{Gpu, read_texture};
+use crate::scene::Scene;
+use crate::variant::Variant;
+
+use super::resources::F32_BITS_FORMAT as TRUTH_FORMAT;
+
+/// Rasterise `scene` with `variant`'s depth set-up and read back position, normal, albedo.
+pub fn raster_truth(
+    gpu: &Gpu,
+    composer: &Composer,
+    variant: &Variant,
+    scene: &Scene,
+) -> Result<RasterTruth, RenderError> {
+    let (w, h) = (scene.params.width, scene.params.height);
+    gpu.check_size(w, h)?;
+    let pass = composer.compose_root(
+        "truth",
+        "passes::truth",
+        &crate::compose::feature_flags(variant),
+        &crate::compose::constants_module(variant),
+    )?;
+    let depth = DepthSetup::of(variant);
+    let textures = gpu.scoped("raster truth", || {
+        let buffers = SceneBuffers::upload(gpu, scene, depth.reversed);
+        let layout = frame_layout(gpu);
+        let group = frame_bind_group(gpu, &layout, &buffers);
+        let pipeline = render_pipeline(
+            gpu,
+            &pass,
+            &pipeline_layout(gpu, &[&layout]),
+            &[Some(SceneBuffers::vertex_layout())],
+            &[color_target(TRUTH_FORMAT), color_target(TRUTH_FORMAT), color_target(TRUTH_FORMAT)],
+            Some(depth.state(depth.compare(), true)),
+        );
+        let textures: Vec<wgpu::Texture> = ["truth position", "truth normal", "truth albedo"]
+            .iter()
+            .map(|label| target(gpu, label, w, h, TRUTH_FORMAT))
+            .collect();
+        let depth_texture = target(gpu, "truth depth", w, h, depth.format);
+        let views: Vec<wgpu::TextureView> = textures
+            .iter()
+            .map(|t| t.create_view(&Default::default()))
+            .collect();
+        let depth_view = depth_texture.create_view(&Default::default());
+        let mut encoder = gpu
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
+        {
+            let attachments: Vec<_> = views.iter().map(clear_attachment).collect();
+            let mut rp = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("truth"),
+                color_attachments: &attachments,
+                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                    view: &depth_view,
+                    depth_ops: Some(wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(depth.clear()),
+                        store: wgpu::StoreOp::Store,
+                    }),
+                    stencil_ops: None,
+                }),
+                timestamp_writes: None,
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            rp.set_pipeline(&pipeline);
+            rp.set_bind_group(0, &group, &[]);
+            rp.set_vertex_buffer(0, buffers.vertices.slice(..));
+            rp.set_index_buffer(buffers.indices.slice(..), wgpu::IndexFormat::Uint32);
+            rp.draw_indexed(0..buffers.index_count, 0, 0..1);
+        }
+        gpu.queue.submit([encoder.finish()]);
+        textures
+    })?;
+    let mut planes = Vec::with_capacity(3);
+    for t in &textures {
+        let bytes = read_texture(gpu, t, 16)?;
+        // The targets hold f32 bit patterns: read them back as f32.
+        planes.push(bytemuck::cast_slice::<u8, [f32; 4]>(&bytes).to_vec());
+    }
+    let albedo = planes.pop().unwrap_or_default();
+    let normal = planes.pop().unwrap_or_default();
+    let position = planes.pop().unwrap_or_default();
+    Ok(RasterTruth {
+        width: w,
+        height: h,
+        position,
+        normal,
+        albedo,
+    })
+}

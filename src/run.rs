@@ -1,0 +1,233 @@
+//! One cell of work: a variant on a scene, rendered, measured against the CPU reference,
+//! reported and written out.
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use serde::Serialize;
+use serde_json::{Map, Value};
+
+use crate::compose::Composer;
+use crate::cpu::reference::{ReferenceFrame, shade_reference};
+use crate::cpu::shading::ShadingParams;
+use crate::gpu::{AdapterSummary, Gpu, Timings};
+use crate::metrics::{self, ErrorMetrics};
+use crate::render::{FrameOutput, RenderError, Renderer, raster_truth};
+use crate::scene::{Scene, SceneError, SceneParams};
+use crate::variant::LoadedVariant;
+
+/// Exposure of the tonemap (fixed: images of different variants are comparable).
+pub const EXPOSURE: f64 = 1.0;
+
+/// What `clusterlab render --json` prints.
+#[derive(Clone, Debug, Serialize)]
+pub struct RenderReport {
+    pub variant: String,
+    pub scene: String,
+    pub adapter: AdapterSummary,
+    pub size: [u32; 2],
+    pub lights: u32,
+    pub seed: u64,
+    /// Milliseconds per pass (median over the timed frames), with their sum as `total`.
+    pub gpu_ms: Map<String, Value>,
+    /// "gpu timestamps", or "wall clock" where the adapter has no timestamp queries.
+    pub timing_source: &'static str,
+    pub frames: u32,
+    /// Format of the HDR colour target (rgba32float, or rgba16float where not renderable).
+    pub hdr_format: String,
+    /// Wall-clock milliseconds of one frame, submission to completion (median).
+    pub wall_ms: f64,
+    /// Wall-clock milliseconds of the CPU f64 reference.
+    pub reference_ms: f64,
+    pub error: ErrorMetrics,
+    /// Files written, when an output folder was given.
+    pub images: Vec<PathBuf>,
+}
+
+/// Why a cell could not run.
+#[derive(Debug)]
+pub enum RunError {
+    Scene(SceneError),
+    Render(RenderError),
+    Io(String),
+}
+
+impl std::fmt::Display for RunError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            RunError::Scene(e) => write!(f, "{e}"),
+            RunError::Render(e) => write!(f, "{e}"),
+            RunError::Io(e) => write!(f, "{e}"),
+        }
+    }
+}
+
+impl std::error::Error for RunError {}
+
+impl From<RenderError> for RunError {
+    fn from(e: RenderError) -> Self {
+        RunError::Render(e)
+    }
+}
+
+impl From<crate::gpu::GpuError> for RunError {
+    fn from(e: crate::gpu::GpuError) -> Self {
+        RunError::Render(RenderError::Gpu(e))
+    }
+}
+
+/// Everything a cell produced.
+pub struct CellResult {
+    pub report: RenderReport,
+    pub frame: FrameOutput,
+    pub reference: ReferenceFrame,
+}
+
+/// Render `variant` on scene `scene_name` `frames` times, compare the last frame with the
+/// CPU reference, and write its images into `out` (if given).
+pub fn run_cell(
+    gpu: &Gpu,
+    composer: &Composer,
+    variant: &LoadedVariant,
+    scene_name: &str,
+    params: SceneParams,
+    frames: u32,
+    out: Option<&Path>,
+) -> Result<CellResult, RunError> {
+    gpu.check_size(params.width, params.height)?;
+    let scene = crate::scene::generate(scene_name, params).map_err(RunError::Scene)?;
+    let mut renderer = Renderer::new(gpu, composer, &variant.variant, &scene)?;
+    let mut runs = Vec::new();
+    for _ in 0..frames.max(1) {
+        runs.push(renderer.render()?);
+    }
+    let wall_ms = median(runs.iter().map(|f| f.wall_ms).collect());
+    let timings = median_timings(&runs);
+    let frame = runs.pop().expect("at least one frame");
+
+    let (reference, reference_ms) = reference_frame(gpu, composer, variant, &scene)?;
+    let error = metrics::compare(&frame, &reference);
+    let images = match out {
+        Some(dir) => write_images(dir, &variant.name, &scene, &frame, &reference)?,
+        None => Vec::new(),
+    };
+
+    let mut gpu_ms = Map::new();
+    gpu_ms.insert("total".into(), round3(timings.total_ms()).into());
+    for (name, ms) in &timings.passes {
+        gpu_ms.insert(name.clone(), round3(*ms).into());
+    }
+    let report = RenderReport {
+        variant: variant.name.clone(),
+        scene: scene.name.clone(),
+        adapter: gpu.adapter.clone(),
+        size: [params.width, params.height],
+        lights: scene.lights.len() as u32,
+        seed: params.seed,
+        gpu_ms,
+        timing_source: if timings.gpu_timestamps {
+            "gpu timestamps"
+        } else {
+            "wall clock"
+        },
+        frames: frames.max(1),
+        hdr_format: format!("{:?}", gpu.hdr_format).to_lowercase(),
+        wall_ms: round3(wall_ms),
+        reference_ms: round3(reference_ms),
+        error,
+        images,
+    };
+    Ok(CellResult {
+        report,
+        frame,
+        reference,
+    })
+}
+
+/// The raster truth of the variant's rasterisation, shaded on the CPU in f64.
+pub fn reference_frame(
+    gpu: &Gpu,
+    composer: &Composer,
+    variant: &LoadedVariant,
+    scene: &Scene,
+) -> Result<(ReferenceFrame, f64), RunError> {
+    let truth = raster_truth(gpu, composer, &variant.variant, scene)?;
+    let start = Instant::now();
+    let reference = shade_reference(
+        &truth,
+        &scene.lights,
+        scene.camera.eye,
+        &ShadingParams::of(&variant.variant),
+        EXPOSURE,
+    );
+    Ok((reference, start.elapsed().as_secs_f64() * 1e3))
+}
+
+fn round3(x: f64) -> f64 {
+    (x * 1000.0).round() / 1000.0
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v.get(v.len() / 2).copied().unwrap_or(0.0)
+}
+
+/// Per-pass medians over several frames of the same pass list.
+fn median_timings(runs: &[FrameOutput]) -> Timings {
+    let first = &runs[0].timings;
+    let passes = first
+        .passes
+        .iter()
+        .enumerate()
+        .map(|(i, (name, _))| {
+            let samples = runs
+                .iter()
+                .filter_map(|r| r.timings.passes.get(i).map(|p| p.1))
+                .collect();
+            (name.clone(), median(samples))
+        })
+        .collect();
+    Timings {
+        passes,
+        gpu_timestamps: first.gpu_timestamps,
+    }
+}
+
+/// Write `name@scene.png` (the image) and `name@scene.heat.png` (its error heat map).
+fn write_images(
+    dir: &Path,
+    name: &str,
+    scene: &Scene,
+    frame: &FrameOutput,
+    reference: &ReferenceFrame,
+) -> Result<Vec<PathBuf>, RunError> {
+    std::fs::create_dir_all(dir)
+        .map_err(|e| RunError::Io(format!("{}: cannot create folder: {e}", dir.display())))?;
+    let stem = format!("{name}@{}", scene.name);
+    let rgb: Vec<u8> = frame.ldr.iter().flat_map(|p| [p[0], p[1], p[2]]).collect();
+    let image_path = dir.join(format!("{stem}.png"));
+    let heat_path = dir.join(format!("{stem}.heat.png"));
+    write_png(&image_path, frame.width, frame.height, &rgb)?;
+    write_png(
+        &heat_path,
+        frame.width,
+        frame.height,
+        &metrics::heat_map(frame, reference),
+    )?;
+    Ok(vec![image_path, heat_path])
+}
+
+/// Write an RGB8 PNG through a temporary file, so a failed write never leaves half a file.
+pub fn write_png(path: &Path, width: u32, height: u32, rgb: &[u8]) -> Result<(), RunError> {
+    let tmp = path.with_extension("png.tmp");
+    image::save_buffer_with_format(
+        &tmp,
+        rgb,
+        width,
+        height,
+        image::ColorType::Rgb8,
+        image::ImageFormat::Png,
+    )
+        .and_then(|()| std::fs::rename(&tmp, path).map_err(image::ImageError::IoError))
+        .map_err(|e| RunError::Io(format!("{}: cannot write: {e}", path.display())))
+}

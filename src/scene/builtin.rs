@@ -1,0 +1,358 @@
+//! The built-in scenes.
+
+use glam::DVec3;
+use rand::{Rng, SeedableRng};
+use rand_pcg::Pcg64Mcg;
+
+use super::{Camera, FRAME_DT, Light, MeshBuilder, Scene, SceneParams};
+
+/// A built-in scene: its name, what it is for, and its default parameters.
+pub struct SceneInfo {
+    pub name: &'static str,
+    pub description: &'static str,
+    pub defaults: SceneParams,
+    pub generate: fn(SceneParams) -> Scene,
+}
+
+const fn defaults(lights: u32, radius_range: (f32, f32)) -> SceneParams {
+    SceneParams {
+        width: 640,
+        height: 360,
+        lights,
+        radius_range,
+        seed: 1,
+        time: 1.0,
+    }
+}
+
+pub static SCENES: &[SceneInfo] = &[
+    SceneInfo {
+        name: "atrium",
+        description: "a procedural hall after the Sponza atrium: tiled floor, walls, two rows of columns, beams, galleries, curtains, spheres; real overdraw",
+        defaults: defaults(1024, (1.0, 3.0)),
+        generate: atrium,
+    },
+    SceneInfo {
+        name: "spheres",
+        description: "spheres on a plane, normals over the whole sphere (for normal-packing error)",
+        defaults: defaults(128, (1.5, 4.0)),
+        generate: spheres,
+    },
+    SceneInfo {
+        name: "empty",
+        description: "a plane with no lights: ambient only",
+        defaults: defaults(0, (1.0, 3.0)),
+        generate: empty,
+    },
+    SceneInfo {
+        name: "one_light",
+        description: "a plane with one light above its centre",
+        defaults: defaults(1, (6.0, 6.0)),
+        generate: one_light,
+    },
+];
+
+pub fn find_scene(name: &str) -> Option<&'static SceneInfo> {
+    SCENES.iter().find(|s| s.name == name)
+}
+
+const SANDSTONE: [f32; 3] = [0.72, 0.62, 0.48];
+const PALE_STONE: [f32; 3] = [0.80, 0.76, 0.68];
+const DARK_TILE: [f32; 3] = [0.35, 0.30, 0.26];
+const WOOD: [f32; 3] = [0.45, 0.30, 0.18];
+const CURTAINS: [[f32; 3]; 3] = [[0.65, 0.10, 0.08], [0.12, 0.45, 0.15], [0.10, 0.18, 0.60]];
+const SPHERE_COLORS: [[f32; 3]; 4] = [
+    [0.85, 0.85, 0.85],
+    [0.80, 0.55, 0.15],
+    [0.25, 0.50, 0.80],
+    [0.60, 0.20, 0.55],
+];
+
+/// A light that drifts around `base` on a small Lissajous path.
+struct LightMotion {
+    base: DVec3,
+    amplitude: DVec3,
+    frequency: DVec3,
+    phase: DVec3,
+    radius: f32,
+    color: [f32; 3],
+    intensity: f32,
+}
+
+impl LightMotion {
+    fn at(&self, t: f64) -> Light {
+        let wave = DVec3::new(
+            (self.frequency.x * t + self.phase.x).sin(),
+            (self.frequency.y * t + self.phase.y).sin(),
+            (self.frequency.z * t + self.phase.z).sin(),
+        );
+        Light {
+            position: (self.base + self.amplitude * wave).as_vec3().to_array(),
+            radius: self.radius,
+            color: self.color,
+            intensity: self.intensity,
+        }
+    }
+}
+
+/// `count` lights spread uniformly over the box `lo..hi`, with saturated random colours.
+/// The total intensity stays the same whatever the count (each light gets
+/// `power / count`), so light-count sweeps keep a comparable exposure.
+fn random_lights(
+    rng: &mut Pcg64Mcg,
+    p: &SceneParams,
+    lo: DVec3,
+    hi: DVec3,
+    power: f32,
+) -> Vec<Light> {
+    let n = p.lights;
+    let (rmin, rmax) = p.radius_range;
+    (0..n)
+        .map(|_| {
+            let base = DVec3::new(
+                rng.random_range(lo.x..=hi.x),
+                rng.random_range(lo.y..=hi.y),
+                rng.random_range(lo.z..=hi.z),
+            );
+            let hue: f32 = rng.random_range(0.0..1.0);
+            let motion = LightMotion {
+                base,
+                amplitude: DVec3::splat(rng.random_range(0.1..0.6)),
+                frequency: DVec3::new(
+                    rng.random_range(0.5..2.0),
+                    rng.random_range(0.5..2.0),
+                    rng.random_range(0.5..2.0),
+                ),
+                phase: DVec3::new(
+                    rng.random_range(0.0..std::f64::consts::TAU),
+                    rng.random_range(0.0..std::f64::consts::TAU),
+                    rng.random_range(0.0..std::f64::consts::TAU),
+                ),
+                radius: if rmin == rmax {
+                    rmin
+                } else {
+                    rng.random_range(rmin..=rmax)
+                },
+                color: hue_to_rgb(hue),
+                intensity: power / n.max(1) as f32 * rng.random_range(0.5..1.5),
+            };
+            motion.at(p.time)
+        })
+        .collect()
+}
+
+/// A saturated colour of hue `h` in [0, 1), mixed a little towards white.
+fn hue_to_rgb(h: f32) -> [f32; 3] {
+    let channel = |offset: f32| {
+        let x = ((h + offset).fract() * 6.0 - 3.0).abs() - 1.0;
+        0.25 + 0.75 * x.clamp(0.0, 1.0)
+    };
+    [channel(0.0), channel(2.0 / 3.0), channel(1.0 / 3.0)]
+}
+
+fn camera_pair(
+    mesh: &MeshBuilder,
+    eye: DVec3,
+    target: DVec3,
+    velocity: DVec3,
+    t: f64,
+) -> (Camera, Camera) {
+    let at = |time: f64| {
+        let offset = velocity * time;
+        Camera {
+            eye: eye + offset,
+            target: target + offset,
+            up: DVec3::Y,
+            fov_y: 60f64.to_radians(),
+            near: 0.1,
+            far: 0.0,
+        }
+    };
+    let (mut now, mut prev) = (at(t), at(t - FRAME_DT));
+    let far = Scene::far_plane_for(&mesh.vertices, now.eye).max(Scene::far_plane_for(
+        &mesh.vertices,
+        prev.eye,
+    ));
+    now.far = far;
+    prev.far = far;
+    (now, prev)
+}
+
+fn finish(name: &str, p: SceneParams, mesh: MeshBuilder, lights: Vec<Light>, cams: (Camera, Camera)) -> Scene {
+    Scene {
+        name: name.to_string(),
+        params: p,
+        vertices: mesh.vertices,
+        indices: mesh.indices,
+        lights,
+        camera: cams.0,
+        prev_camera: cams.1,
+    }
+}
+
+fn atrium(p: SceneParams) -> Scene {
+    let mut rng = Pcg64Mcg::seed_from_u64(p.seed);
+    let mut m = MeshBuilder::default();
+    let (hx, hz, height) = (16.0, 7.0, 12.0);
+
+    // Floor of 2 m tiles in two shades.
+    let tile = 2.0;
+    let (nx, nz) = ((2.0 * hx / tile) as i32, (2.0 * hz / tile) as i32);
+    for i in 0..nx {
+        for k in 0..nz {
+            let (x0, z0) = (-hx + i as f64 * tile, -hz + k as f64 * tile);
+            let albedo = if (i + k) % 2 == 0 { SANDSTONE } else { DARK_TILE };
+            m.axis_rect(1, 0.0, [z0, x0], [z0 + tile, x0 + tile], true, albedo);
+        }
+    }
+    // Walls facing in.
+    m.axis_rect(2, -hz, [-hx, 0.0], [hx, height], true, PALE_STONE);
+    m.axis_rect(2, hz, [-hx, 0.0], [hx, height], false, PALE_STONE);
+    m.axis_rect(0, -hx, [0.0, -hz], [height, hz], true, SANDSTONE);
+    m.axis_rect(0, hx, [0.0, -hz], [height, hz], false, SANDSTONE);
+
+    for side in [-1.0, 1.0] {
+        // Gallery slab over the aisle, then ground-floor and gallery columns, and a beam on
+        // each row of columns.
+        let slab_z = if side < 0.0 { (-hz, -4.2) } else { (4.2, hz) };
+        m.cuboid(
+            DVec3::new(-hx, 5.0, slab_z.0),
+            DVec3::new(hx, 5.4, slab_z.1),
+            SANDSTONE,
+        );
+        for i in 0..9 {
+            let x = -12.0 + 3.0 * i as f64;
+            m.cylinder(DVec3::new(x, 0.0, side * 3.6), 0.35, 5.0, 16, PALE_STONE);
+            m.cylinder(DVec3::new(x, 5.4, side * 4.5), 0.25, 4.6, 12, PALE_STONE);
+        }
+        m.cuboid(
+            DVec3::new(-13.0, 4.4, side * 3.6 - 0.35),
+            DVec3::new(13.0, 5.0, side * 3.6 + 0.35),
+            SANDSTONE,
+        );
+        m.cuboid(
+            DVec3::new(-13.0, 10.0, side * 4.5 - 0.3),
+            DVec3::new(13.0, 10.5, side * 4.5 + 0.3),
+            SANDSTONE,
+        );
+        // Curtains hanging in some gallery bays, behind the gallery columns.
+        for bay in 0..8 {
+            if rng.random_range(0.0..1.0) < 0.35 {
+                continue;
+            }
+            let x0 = -12.0 + 3.0 * bay as f64 + 0.4;
+            let color = CURTAINS[rng.random_range(0..CURTAINS.len())];
+            let z = side * 4.9;
+            m.axis_rect(2, z, [x0, 6.0], [x0 + 2.2, 9.8], side < 0.0, color);
+        }
+    }
+    // Roof beams across the hall.
+    for i in 0..6 {
+        let x = -12.5 + 5.0 * i as f64;
+        m.cuboid(
+            DVec3::new(x - 0.3, 10.5, -hz),
+            DVec3::new(x + 0.3, 11.2, hz),
+            WOOD,
+        );
+    }
+    // A few spheres on the floor.
+    for (i, color) in SPHERE_COLORS.iter().enumerate() {
+        let r = rng.random_range(0.5..1.0);
+        let x = -8.0 + 5.0 * i as f64 + rng.random_range(-1.0..1.0);
+        let z = rng.random_range(-1.5..1.5);
+        m.sphere(DVec3::new(x, r, z), r, 16, 32, *color);
+    }
+
+    let lights = random_lights(
+        &mut rng,
+        &p,
+        DVec3::new(-hx + 0.5, 0.2, -hz + 0.2),
+        DVec3::new(hx - 0.5, height - 0.5, hz - 0.2),
+        180.0,
+    );
+    let cams = camera_pair(
+        &m,
+        DVec3::new(-14.5, 1.8, 0.8),
+        DVec3::new(5.0, 3.6, -0.4),
+        DVec3::new(0.5, 0.0, 0.0),
+        p.time,
+    );
+    finish("atrium", p, m, lights, cams)
+}
+
+fn spheres(p: SceneParams) -> Scene {
+    let mut rng = Pcg64Mcg::seed_from_u64(p.seed);
+    let mut m = MeshBuilder::default();
+    m.axis_rect(1, 0.0, [-10.0, -10.0], [10.0, 10.0], true, PALE_STONE);
+    for i in 0..4 {
+        for k in 0..3 {
+            let r = rng.random_range(0.5..1.2);
+            let center = DVec3::new(-4.5 + 3.0 * i as f64, r, -3.0 + 3.0 * k as f64);
+            m.sphere(center, r, 24, 48, SPHERE_COLORS[(i + k) % 4]);
+        }
+    }
+    let lights = random_lights(
+        &mut rng,
+        &p,
+        DVec3::new(-7.0, 0.2, -6.0),
+        DVec3::new(7.0, 3.5, 5.0),
+        12.0,
+    );
+    let cams = camera_pair(
+        &m,
+        DVec3::new(0.0, 6.0, 9.0),
+        DVec3::new(0.0, 0.3, -0.5),
+        DVec3::new(0.2, 0.0, 0.0),
+        p.time,
+    );
+    finish("spheres", p, m, lights, cams)
+}
+
+fn plane() -> MeshBuilder {
+    let mut m = MeshBuilder::default();
+    m.axis_rect(1, 0.0, [-20.0, -20.0], [20.0, 20.0], true, PALE_STONE);
+    m
+}
+
+fn plane_camera(m: &MeshBuilder, t: f64) -> (Camera, Camera) {
+    camera_pair(
+        m,
+        DVec3::new(0.0, 3.0, 8.0),
+        DVec3::ZERO,
+        DVec3::new(0.1, 0.0, 0.0),
+        t,
+    )
+}
+
+fn empty(p: SceneParams) -> Scene {
+    let mut rng = Pcg64Mcg::seed_from_u64(p.seed);
+    let m = plane();
+    let lights = random_lights(
+        &mut rng,
+        &p,
+        DVec3::new(-8.0, 0.2, -8.0),
+        DVec3::new(8.0, 3.0, 4.0),
+        4.0,
+    );
+    let cams = plane_camera(&m, p.time);
+    finish("empty", p, m, lights, cams)
+}
+
+fn one_light(p: SceneParams) -> Scene {
+    let mut rng = Pcg64Mcg::seed_from_u64(p.seed);
+    let m = plane();
+    let mut lights = random_lights(
+        &mut rng,
+        &p,
+        DVec3::new(-3.0, 0.5, -3.0),
+        DVec3::new(3.0, 2.0, 3.0),
+        4.0,
+    );
+    if let Some(first) = lights.first_mut() {
+        // The one light sits above the centre; more lights (--lights) scatter around it.
+        first.position = [0.0, 1.5, 0.0];
+        first.color = [1.0, 0.95, 0.85];
+    }
+    let cams = plane_camera(&m, p.time);
+    finish("one_light", p, m, lights, cams)
+}

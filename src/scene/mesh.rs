@@ -1,0 +1,157 @@
+//! Procedural geometry: quads, boxes, cylinders and spheres with exact normals.
+
+use glam::{DVec3, Vec3};
+
+use super::Vertex;
+
+/// Collects triangles into one indexed mesh.
+#[derive(Default)]
+pub struct MeshBuilder {
+    pub vertices: Vec<Vertex>,
+    pub indices: Vec<u32>,
+}
+
+fn vertex(p: DVec3, n: DVec3, albedo: [f32; 3]) -> Vertex {
+    Vertex {
+        position: p.as_vec3().to_array(),
+        normal: n.normalize().as_vec3().to_array(),
+        albedo,
+    }
+}
+
+impl MeshBuilder {
+    /// A flat quad `a b c d` (counter-clockwise seen from the side `normal` points to).
+    pub fn quad(&mut self, corners: [DVec3; 4], normal: DVec3, albedo: [f32; 3]) {
+        let base = self.vertices.len() as u32;
+        for c in corners {
+            self.vertices.push(vertex(c, normal, albedo));
+        }
+        self.indices
+            .extend([base, base + 1, base + 2, base, base + 2, base + 3]);
+    }
+
+    /// An axis-aligned rectangle in the plane `axis = offset`, spanning `min..max` on the
+    /// other two axes, facing `+axis` if `positive` else `-axis`.
+    pub fn axis_rect(
+        &mut self,
+        axis: usize,
+        offset: f64,
+        min: [f64; 2],
+        max: [f64; 2],
+        positive: bool,
+        albedo: [f32; 3],
+    ) {
+        let (u, v) = ((axis + 1) % 3, (axis + 2) % 3);
+        let point = |a: f64, b: f64| {
+            let mut p = [0.0; 3];
+            p[axis] = offset;
+            p[u] = a;
+            p[v] = b;
+            DVec3::from(p)
+        };
+        let mut n = [0.0; 3];
+        n[axis] = if positive { 1.0 } else { -1.0 };
+        let corners = [
+            point(min[0], min[1]),
+            point(max[0], min[1]),
+            point(max[0], max[1]),
+            point(min[0], max[1]),
+        ];
+        let corners = if positive {
+            corners
+        } else {
+            [corners[0], corners[3], corners[2], corners[1]]
+        };
+        self.quad(corners, DVec3::from(n), albedo);
+    }
+
+    /// An axis-aligned box from `min` to `max`, faces pointing out.
+    pub fn cuboid(&mut self, min: DVec3, max: DVec3, albedo: [f32; 3]) {
+        let (lo, hi) = (min.to_array(), max.to_array());
+        for axis in 0..3 {
+            let (u, v) = ((axis + 1) % 3, (axis + 2) % 3);
+            let span_min = [lo[u], lo[v]];
+            let span_max = [hi[u], hi[v]];
+            self.axis_rect(axis, hi[axis], span_min, span_max, true, albedo);
+            self.axis_rect(axis, lo[axis], span_min, span_max, false, albedo);
+        }
+    }
+
+    /// A vertical cylinder standing on `base`, smooth sides and flat caps.
+    pub fn cylinder(
+        &mut self,
+        base: DVec3,
+        radius: f64,
+        height: f64,
+        segments: u32,
+        albedo: [f32; 3],
+    ) {
+        let around = |i: u32| {
+            let a = std::f64::consts::TAU * i as f64 / segments as f64;
+            DVec3::new(a.cos(), 0.0, -a.sin())
+        };
+        let up = DVec3::Y * height;
+        let start = self.vertices.len() as u32;
+        for i in 0..=segments {
+            let d = around(i);
+            self.vertices.push(vertex(base + d * radius, d, albedo));
+            self.vertices.push(vertex(base + d * radius + up, d, albedo));
+        }
+        for i in 0..segments {
+            let (a, b) = (start + 2 * i, start + 2 * i + 2);
+            self.indices.extend([a, b, b + 1, a, b + 1, a + 1]);
+        }
+        for (y, normal) in [(height, DVec3::Y), (0.0, DVec3::NEG_Y)] {
+            let center = self.vertices.len() as u32;
+            self.vertices.push(vertex(base + DVec3::Y * y, normal, albedo));
+            for i in 0..=segments {
+                self.vertices
+                    .push(vertex(base + around(i) * radius + DVec3::Y * y, normal, albedo));
+            }
+            for i in 0..segments {
+                let (a, b) = (center + 1 + i, center + 2 + i);
+                if normal.y > 0.0 {
+                    self.indices.extend([center, a, b]);
+                } else {
+                    self.indices.extend([center, b, a]);
+                }
+            }
+        }
+    }
+
+    /// A UV sphere with exact (radial) normals over the whole sphere.
+    pub fn sphere(&mut self, center: DVec3, radius: f64, stacks: u32, slices: u32, albedo: [f32; 3]) {
+        let start = self.vertices.len() as u32;
+        for i in 0..=stacks {
+            let polar = std::f64::consts::PI * i as f64 / stacks as f64;
+            for j in 0..=slices {
+                let azimuth = std::f64::consts::TAU * j as f64 / slices as f64;
+                let n = DVec3::new(
+                    polar.sin() * azimuth.cos(),
+                    polar.cos(),
+                    -polar.sin() * azimuth.sin(),
+                );
+                self.vertices.push(vertex(center + n * radius, n, albedo));
+            }
+        }
+        let row = slices + 1;
+        for i in 0..stacks {
+            for j in 0..slices {
+                let a = start + i * row + j;
+                let b = a + row;
+                self.indices.extend([a, b, b + 1, a, b + 1, a + 1]);
+            }
+        }
+    }
+
+    /// Bounding box of everything built so far.
+    pub fn bounds(&self) -> (Vec3, Vec3) {
+        self.vertices.iter().fold(
+            (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)),
+            |(lo, hi), v| {
+                let p = Vec3::from(v.position);
+                (lo.min(p), hi.max(p))
+            },
+        )
+    }
+}

@@ -1,0 +1,156 @@
+//! Seeded synthetic scenes: geometry, materials (per-vertex albedo), point lights and a
+//! camera, all deterministic functions of their parameters.
+
+mod builtin;
+mod mesh;
+
+pub use builtin::{SCENES, SceneInfo, find_scene};
+pub use mesh::MeshBuilder;
+
+use bytemuck::{Pod, Zeroable};
+use glam::{DMat4, DVec3};
+
+/// One vertex as the raster passes read it. Mirrors `shaders/common/mesh.wesl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct Vertex {
+    pub position: [f32; 3],
+    pub normal: [f32; 3],
+    pub albedo: [f32; 3],
+}
+
+/// A point light. Mirrors `shaders/common/lights.wesl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct Light {
+    pub position: [f32; 3],
+    pub radius: f32,
+    pub color: [f32; 3],
+    pub intensity: f32,
+}
+
+/// A perspective camera, right-handed, looking from `eye` at `target`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Camera {
+    pub eye: DVec3,
+    pub target: DVec3,
+    pub up: DVec3,
+    /// Vertical field of view, radians.
+    pub fov_y: f64,
+    pub near: f64,
+    /// The far plane: beyond every piece of geometry (also with reversed-Z, where the
+    /// projection's far plane is at infinity and this bounds clustering).
+    pub far: f64,
+}
+
+impl Camera {
+    pub fn view(&self) -> DMat4 {
+        DMat4::look_at_rh(self.eye, self.target, self.up)
+    }
+
+    /// Projection to wgpu clip space (depth 0..1): standard (near 0, far 1) or reversed-Z
+    /// with an infinite far plane (near 1, infinity 0).
+    pub fn projection(&self, aspect: f64, reversed_z: bool) -> DMat4 {
+        if reversed_z {
+            DMat4::perspective_infinite_reverse_rh(self.fov_y, aspect, self.near)
+        } else {
+            DMat4::perspective_rh(self.fov_y, aspect, self.near, self.far)
+        }
+    }
+}
+
+/// What a scene generator is asked for.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SceneParams {
+    pub width: u32,
+    pub height: u32,
+    pub lights: u32,
+    /// Light radii are drawn uniformly from this range (world units).
+    pub radius_range: (f32, f32),
+    pub seed: u64,
+    /// Time of the frame in seconds: lights and camera move with it.
+    pub time: f64,
+}
+
+/// Time between the previous frame and this one (motion vectors, previous-frame depth).
+pub const FRAME_DT: f64 = 1.0 / 30.0;
+/// Most lights a scene may have.
+pub const MAX_LIGHTS: u32 = 1 << 20;
+
+/// A generated scene, ready to upload.
+#[derive(Clone, Debug)]
+pub struct Scene {
+    pub name: String,
+    pub params: SceneParams,
+    pub vertices: Vec<Vertex>,
+    pub indices: Vec<u32>,
+    /// Lights at `params.time`.
+    pub lights: Vec<Light>,
+    pub camera: Camera,
+    /// The camera one frame earlier (`time - FRAME_DT`).
+    pub prev_camera: Camera,
+}
+
+impl Scene {
+    pub fn aspect(&self) -> f64 {
+        self.params.width as f64 / self.params.height as f64
+    }
+
+    /// The far plane that encloses every vertex as seen from `eye`, with a margin.
+    pub fn far_plane_for(vertices: &[Vertex], eye: DVec3) -> f64 {
+        let furthest = vertices
+            .iter()
+            .map(|v| DVec3::from(v.position.map(f64::from)).distance(eye))
+            .fold(1.0, f64::max);
+        furthest * 1.05
+    }
+}
+
+/// Why a scene could not be made.
+#[derive(Debug, PartialEq)]
+pub enum SceneError {
+    Unknown(String),
+    BadParam(String),
+}
+
+impl std::fmt::Display for SceneError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            SceneError::Unknown(name) => {
+                let names: Vec<&str> = SCENES.iter().map(|s| s.name).collect();
+                write!(
+                    f,
+                    "unknown scene `{name}`; the built-in scenes are: {} (see `clusterlab scenes`)",
+                    names.join(", ")
+                )
+            }
+            SceneError::BadParam(m) => write!(f, "{m}"),
+        }
+    }
+}
+
+impl std::error::Error for SceneError {}
+
+/// Generate built-in scene `name` with `params`.
+pub fn generate(name: &str, params: SceneParams) -> Result<Scene, SceneError> {
+    let info = find_scene(name).ok_or_else(|| SceneError::Unknown(name.to_string()))?;
+    if params.width == 0 || params.height == 0 {
+        return Err(SceneError::BadParam(format!(
+            "size {}x{}: width and height must be at least 1",
+            params.width, params.height
+        )));
+    }
+    if params.lights > MAX_LIGHTS {
+        return Err(SceneError::BadParam(format!(
+            "{} lights: at most {MAX_LIGHTS}",
+            params.lights
+        )));
+    }
+    let (lo, hi) = params.radius_range;
+    if !(lo.is_finite() && hi.is_finite() && lo > 0.0 && lo <= hi) {
+        return Err(SceneError::BadParam(format!(
+            "light radius range {lo}..{hi}: both ends must be positive and min <= max"
+        )));
+    }
+    Ok((info.generate)(params))
+}
