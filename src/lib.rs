@@ -12,4 +12,5 @@ pub mod metrics;
 pub mod render;
 pub mod run;
 pub mod scene;
+pub mod twins;
 pub mod variant;

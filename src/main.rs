@@ -236,9 +236,8 @@ fn scenes() {
 
 fn render(args: &RenderArgs) -> Result<bool, String> {
     let loaded = variant::load(&variant_path(&args.variant)).map_err(|e| e.to_string())?;
-    let info = clusterlab::scene::find_scene(&args.scene).ok_or_else(|| {
-        clusterlab::scene::SceneError::Unknown(args.scene.clone()).to_string()
-    })?;
+    let info = clusterlab::scene::find_scene(&args.scene)
+        .ok_or_else(|| clusterlab::scene::SceneError::Unknown(args.scene.clone()).to_string())?;
     let mut params = info.defaults;
     if let Some((w, h)) = args.size {
         (params.width, params.height) = (w, h);
@@ -273,7 +272,14 @@ fn render(args: &RenderArgs) -> Result<bool, String> {
     } else {
         println!(
             "{} on {} ({}x{}, {} lights) with {} ({}, {})",
-            r.variant, r.scene, r.size[0], r.size[1], r.lights, r.adapter.name, r.adapter.backend, r.adapter.driver
+            r.variant,
+            r.scene,
+            r.size[0],
+            r.size[1],
+            r.lights,
+            r.adapter.name,
+            r.adapter.backend,
+            r.adapter.driver
         );
         let passes: Vec<String> = r
             .gpu_ms

@@ -46,8 +46,8 @@ pub fn compare(frame: &FrameOutput, reference: &ReferenceFrame) -> ErrorMetrics 
             nan += 1;
             continue;
         }
-        for c in 0..3 {
-            let d = (hdr[c] as f64 - reference.hdr[i][c]).abs();
+        for (h, r) in hdr[..3].iter().zip(reference.hdr[i]) {
+            let d = (*h as f64 - r).abs();
             max_hdr = max_hdr.max(d);
             sq_hdr += d * d;
         }
@@ -67,12 +67,16 @@ pub fn compare(frame: &FrameOutput, reference: &ReferenceFrame) -> ErrorMetrics 
 }
 
 fn rgb8(pixels: impl Iterator<Item = [u8; 3]>) -> Vec<u8> {
-    pixels.flat_map(|p| p).collect()
+    pixels.flatten().collect()
 }
 
 fn flip_mean(frame: &FrameOutput, reference: &ReferenceFrame) -> f64 {
     let (w, h) = (frame.width, frame.height);
-    let test = nv_flip::FlipImageRgb8::with_data(w, h, &rgb8(frame.ldr.iter().map(|p| [p[0], p[1], p[2]])));
+    let test = nv_flip::FlipImageRgb8::with_data(
+        w,
+        h,
+        &rgb8(frame.ldr.iter().map(|p| [p[0], p[1], p[2]])),
+    );
     let refr = nv_flip::FlipImageRgb8::with_data(w, h, &rgb8(reference.ldr.iter().copied()));
     let map = nv_flip::flip(refr, test, nv_flip::DEFAULT_PIXELS_PER_DEGREE);
     nv_flip::FlipPool::from_image(&map).mean() as f64

@@ -228,6 +228,6 @@ pub fn write_png(path: &Path, width: u32, height: u32, rgb: &[u8]) -> Result<(),
         image::ColorType::Rgb8,
         image::ImageFormat::Png,
     )
-        .and_then(|()| std::fs::rename(&tmp, path).map_err(image::ImageError::IoError))
-        .map_err(|e| RunError::Io(format!("{}: cannot write: {e}", path.display())))
+    .and_then(|()| std::fs::rename(&tmp, path).map_err(image::ImageError::IoError))
+    .map_err(|e| RunError::Io(format!("{}: cannot write: {e}", path.display())))
 }

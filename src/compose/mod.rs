@@ -169,7 +169,8 @@ impl Composer {
         let naga_error = |message: String, span: Option<std::ops::Range<usize>>| {
             let (location, composed_line) = match span {
                 Some(r) => (
-                    diagnostics::locate(&wgsl, r.start, r.len(), &sourcemap, &root_path).map(Box::new),
+                    diagnostics::locate(&wgsl, r.start, r.len(), &sourcemap, &root_path)
+                        .map(Box::new),
                     Some(diagnostics::line_column(&wgsl, r.start).0),
                 ),
                 None => (None, None),

@@ -51,20 +51,21 @@ pub fn oct_decode(q: [u32; 2], bits: u32) -> DVec3 {
     oct_unproject(dequantize(q, bits) * 2.0 - DVec2::ONE)
 }
 
-/// The code among the 4 around the projection whose decode is closest to `n`.
+/// The code among the 4 around the projection whose decode is closest to `n` (smallest
+/// squared distance; the first wins a tie).
 pub fn oct_encode_precise(n: DVec3, bits: u32) -> [u32; 2] {
     let m = max_code(bits);
     let u = (oct_project(n) * 0.5 + DVec2::splat(0.5)).clamp(DVec2::ZERO, DVec2::ONE) * m;
     let base = [u.x.floor() as u32, u.y.floor() as u32];
     let top = m as u32;
     let mut best = base;
-    let mut best_cos = oct_decode(base, bits).dot(n);
-    for i in 0..4u32 {
+    let mut best_d2 = oct_decode(base, bits).distance_squared(n);
+    for i in 1..4u32 {
         let c = [(base[0] + (i & 1)).min(top), (base[1] + (i >> 1)).min(top)];
-        let cos = oct_decode(c, bits).dot(n);
-        if cos > best_cos {
+        let d2 = oct_decode(c, bits).distance_squared(n);
+        if d2 < best_d2 {
             best = c;
-            best_cos = cos;
+            best_d2 = d2;
         }
     }
     best
@@ -82,7 +83,11 @@ pub fn polar_decode(q: [u32; 2], bits: u32) -> DVec3 {
     use std::f64::consts::PI;
     let u = dequantize(q, bits);
     let (theta, phi) = (u.x * PI, (u.y - 0.5) * 2.0 * PI);
-    DVec3::new(theta.sin() * phi.cos(), theta.sin() * phi.sin(), theta.cos())
+    DVec3::new(
+        theta.sin() * phi.cos(),
+        theta.sin() * phi.sin(),
+        theta.cos(),
+    )
 }
 
 /// Lambert azimuthal equal-area projection about +z; n = -z (singular) encodes as +z.

@@ -39,11 +39,10 @@ pub fn slice(scheme: Scheme, z: f64, near: f64, far: f64, slices: u32) -> u32 {
     }
 }
 
-/// View depth where slice `k` begins (slice `slices` begins at far).
+/// View depth where slice `k` begins under the scheme's formula. For `k = slices` this is
+/// far for every scheme but Olsson's, whose slice count follows from the camera; see
+/// [`slice_bounds`] for the bounds a capped grid uses.
 pub fn slice_start(scheme: Scheme, k: u32, near: f64, far: f64, slices: u32) -> f64 {
-    if k >= slices {
-        return far;
-    }
     let t = k as f64 / slices as f64;
     match scheme {
         Scheme::Linear => near + (far - near) * t,
@@ -60,4 +59,15 @@ pub fn slice_start(scheme: Scheme, k: u32, near: f64, far: f64, slices: u32) -> 
             tiles_y,
         } => near * (1.0 + 2.0 * tan_half_fov_y / tiles_y as f64).powi(k as i32),
     }
+}
+
+/// The view-depth range of slice `k` in a grid of `slices`: the first slice starts at near
+/// and the last ends at far (Olsson's slicing, capped at the grid, reaches to far).
+pub fn slice_bounds(scheme: Scheme, k: u32, near: f64, far: f64, slices: u32) -> (f64, f64) {
+    let end = if k + 1 >= slices {
+        far
+    } else {
+        slice_start(scheme, k + 1, near, far, slices)
+    };
+    (slice_start(scheme, k, near, far, slices), end)
 }

@@ -21,7 +21,9 @@ pub struct AdapterSummary {
 /// Why the GPU could not be used.
 #[derive(Debug)]
 pub enum GpuError {
-    NoAdapter { backends: String },
+    NoAdapter {
+        backends: String,
+    },
     UnknownBackend(String),
     Device(String),
     /// A wgpu validation or out-of-memory error captured while running a pass.
@@ -99,10 +101,7 @@ impl Gpu {
                 return Self::open(adapter);
             }
         }
-        let backends = tries
-            .last()
-            .map(|b| format!("{b:?}"))
-            .unwrap_or_default();
+        let backends = tries.last().map(|b| format!("{b:?}")).unwrap_or_default();
         Err(GpuError::NoAdapter { backends })
     }
 

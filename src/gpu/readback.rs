@@ -31,7 +31,8 @@ pub fn read_texture(
 ) -> Result<Vec<u8>, GpuError> {
     let (width, height) = (texture.width(), texture.height());
     let row = width * bytes_per_pixel;
-    let padded = row.div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT) * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
+    let padded =
+        row.div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT) * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
     let size = padded as u64 * height as u64;
     let staging = gpu.device.create_buffer(&wgpu::BufferDescriptor {
         label: Some("texture read-back"),

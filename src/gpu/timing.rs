@@ -57,9 +57,7 @@ impl PassTimer {
 
     /// The next free slot, recorded under `name` (None without timestamps or when full).
     pub(crate) fn claim(&mut self, name: &str) -> Option<u32> {
-        if self.query_set.is_none() {
-            return None;
-        }
+        self.query_set.as_ref()?;
         let index = self.names.len() as u32;
         if index >= self.capacity {
             return None;

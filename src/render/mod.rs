@@ -4,7 +4,7 @@ mod passes;
 mod resources;
 mod truth;
 
-pub use passes::{PassRunner, TimestampSlot};
+pub use passes::{PassRunner, TimestampSlot, shader_module};
 pub use resources::{DepthSetup, F32_BITS_FORMAT, LDR_FORMAT, SceneBuffers, ViewUniform};
 pub use truth::raster_truth;
 
@@ -122,15 +122,15 @@ impl<'g> Renderer<'g> {
                 ldr: target(gpu, "ldr", width, height, LDR_FORMAT),
             };
             let scene_layout = pipeline_layout(gpu, &[&frame]);
-            let tonemap_layout = gpu
-                .device
-                .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-                    label: Some("tonemap"),
-                    entries: &[texture_entry(
-                        0,
-                        wgpu::TextureSampleType::Float { filterable: false },
-                    )],
-                });
+            let tonemap_layout =
+                gpu.device
+                    .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                        label: Some("tonemap"),
+                        entries: &[texture_entry(
+                            0,
+                            wgpu::TextureSampleType::Float { filterable: false },
+                        )],
+                    });
             let tonemap_group = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("tonemap"),
                 layout: &tonemap_layout,
@@ -204,7 +204,9 @@ impl<'g> Renderer<'g> {
         let timings = gpu.scoped("rendering a frame", || -> Result<Timings, GpuError> {
             let mut runner = PassRunner::new(gpu, self.passes.len() as u32 + 4);
             for pass in self.passes.clone() {
-                runner.pass(pass.name, |encoder, slot| self.encode(pass.name, encoder, slot))?;
+                runner.pass(pass.name, |encoder, slot| {
+                    self.encode(pass.name, encoder, slot)
+                })?;
             }
             runner.finish()
         })??;
@@ -221,7 +223,12 @@ impl<'g> Renderer<'g> {
         })
     }
 
-    fn encode(&self, name: &str, encoder: &mut wgpu::CommandEncoder, slot: Option<TimestampSlot<'_>>) {
+    fn encode(
+        &self,
+        name: &str,
+        encoder: &mut wgpu::CommandEncoder,
+        slot: Option<TimestampSlot<'_>>,
+    ) {
         match name {
             "depth_prepass" => self.draw_scene(name, encoder, slot, None, true),
             "forward" => {

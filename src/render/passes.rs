@@ -86,7 +86,8 @@ impl PassTimer {
     /// A timestamp slot for the next pass named `name`.
     pub fn claim_slot(&mut self, name: &str) -> Option<TimestampSlot<'_>> {
         let index = self.claim(name)?;
-        self.query_set().map(|query_set| TimestampSlot { query_set, index })
+        self.query_set()
+            .map(|query_set| TimestampSlot { query_set, index })
     }
 }
 

@@ -2,7 +2,7 @@
 //! and the bind group layouts shared by the passes.
 
 use bytemuck::{Pod, Zeroable};
-use glam::{DMat4, Mat4};
+use glam::DMat4;
 use wgpu::util::DeviceExt;
 
 use crate::gpu::Gpu;
@@ -31,7 +31,7 @@ pub struct ViewUniform {
 }
 
 fn mat(m: DMat4) -> [[f32; 4]; 4] {
-    Mat4::from(m.as_mat4()).to_cols_array_2d()
+    m.as_mat4().to_cols_array_2d()
 }
 
 impl ViewUniform {
@@ -175,7 +175,13 @@ impl DepthSetup {
 }
 
 /// A 2D texture usable as a render target, sampled texture and copy source.
-pub fn target(gpu: &Gpu, label: &str, w: u32, h: u32, format: wgpu::TextureFormat) -> wgpu::Texture {
+pub fn target(
+    gpu: &Gpu,
+    label: &str,
+    w: u32,
+    h: u32,
+    format: wgpu::TextureFormat,
+) -> wgpu::Texture {
     gpu.device.create_texture(&wgpu::TextureDescriptor {
         label: Some(label),
         size: wgpu::Extent3d {
@@ -236,7 +242,10 @@ pub fn storage_entry(binding: u32, read_only: bool) -> wgpu::BindGroupLayoutEntr
 }
 
 /// A non-filterable float texture entry (rgba32float targets cannot be filtered).
-pub fn texture_entry(binding: u32, sample_type: wgpu::TextureSampleType) -> wgpu::BindGroupLayoutEntry {
+pub fn texture_entry(
+    binding: u32,
+    sample_type: wgpu::TextureSampleType,
+) -> wgpu::BindGroupLayoutEntry {
     wgpu::BindGroupLayoutEntry {
         binding,
         visibility: wgpu::ShaderStages::FRAGMENT | wgpu::ShaderStages::COMPUTE,
@@ -249,7 +258,11 @@ pub fn texture_entry(binding: u32, sample_type: wgpu::TextureSampleType) -> wgpu
     }
 }
 
-pub fn frame_bind_group(gpu: &Gpu, layout: &wgpu::BindGroupLayout, s: &SceneBuffers) -> wgpu::BindGroup {
+pub fn frame_bind_group(
+    gpu: &Gpu,
+    layout: &wgpu::BindGroupLayout,
+    s: &SceneBuffers,
+) -> wgpu::BindGroup {
     gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
         label: Some("frame"),
         layout,

@@ -1,9 +1,9 @@
 //! The raster truth pass: the same rasterisation as the variant (same vertex transform,
 //! depth format and test), written as 32-bit floats for the CPU reference.
 
+use super::RenderError;
 use super::passes::{clear_attachment, color_target, pipeline_layout, render_pipeline};
 use super::resources::{DepthSetup, SceneBuffers, frame_bind_group, frame_layout, target};
-use super::RenderError;
 use crate::compose::Composer;
 use crate::cpu::reference::RasterTruth;
 use crate::gpu::{Gpu, read_texture};
@@ -37,7 +37,11 @@ pub fn raster_truth(
             &pass,
             &pipeline_layout(gpu, &[&layout]),
             &[Some(SceneBuffers::vertex_layout())],
-            &[color_target(TRUTH_FORMAT), color_target(TRUTH_FORMAT), color_target(TRUTH_FORMAT)],
+            &[
+                color_target(TRUTH_FORMAT),
+                color_target(TRUTH_FORMAT),
+                color_target(TRUTH_FORMAT),
+            ],
             Some(depth.state(depth.compare(), true)),
         );
         let textures: Vec<wgpu::Texture> = ["truth position", "truth normal", "truth albedo"]

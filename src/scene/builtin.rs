@@ -169,16 +169,20 @@ fn camera_pair(
         }
     };
     let (mut now, mut prev) = (at(t), at(t - FRAME_DT));
-    let far = Scene::far_plane_for(&mesh.vertices, now.eye).max(Scene::far_plane_for(
-        &mesh.vertices,
-        prev.eye,
-    ));
+    let far = Scene::far_plane_for(&mesh.vertices, now.eye)
+        .max(Scene::far_plane_for(&mesh.vertices, prev.eye));
     now.far = far;
     prev.far = far;
     (now, prev)
 }
 
-fn finish(name: &str, p: SceneParams, mesh: MeshBuilder, lights: Vec<Light>, cams: (Camera, Camera)) -> Scene {
+fn finish(
+    name: &str,
+    p: SceneParams,
+    mesh: MeshBuilder,
+    lights: Vec<Light>,
+    cams: (Camera, Camera),
+) -> Scene {
     Scene {
         name: name.to_string(),
         params: p,
@@ -201,7 +205,11 @@ fn atrium(p: SceneParams) -> Scene {
     for i in 0..nx {
         for k in 0..nz {
             let (x0, z0) = (-hx + i as f64 * tile, -hz + k as f64 * tile);
-            let albedo = if (i + k) % 2 == 0 { SANDSTONE } else { DARK_TILE };
+            let albedo = if (i + k) % 2 == 0 {
+                SANDSTONE
+            } else {
+                DARK_TILE
+            };
             m.axis_rect(1, 0.0, [z0, x0], [z0 + tile, x0 + tile], true, albedo);
         }
     }

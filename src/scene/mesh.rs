@@ -95,7 +95,8 @@ impl MeshBuilder {
         for i in 0..=segments {
             let d = around(i);
             self.vertices.push(vertex(base + d * radius, d, albedo));
-            self.vertices.push(vertex(base + d * radius + up, d, albedo));
+            self.vertices
+                .push(vertex(base + d * radius + up, d, albedo));
         }
         for i in 0..segments {
             let (a, b) = (start + 2 * i, start + 2 * i + 2);
@@ -103,10 +104,14 @@ impl MeshBuilder {
         }
         for (y, normal) in [(height, DVec3::Y), (0.0, DVec3::NEG_Y)] {
             let center = self.vertices.len() as u32;
-            self.vertices.push(vertex(base + DVec3::Y * y, normal, albedo));
+            self.vertices
+                .push(vertex(base + DVec3::Y * y, normal, albedo));
             for i in 0..=segments {
-                self.vertices
-                    .push(vertex(base + around(i) * radius + DVec3::Y * y, normal, albedo));
+                self.vertices.push(vertex(
+                    base + around(i) * radius + DVec3::Y * y,
+                    normal,
+                    albedo,
+                ));
             }
             for i in 0..segments {
                 let (a, b) = (center + 1 + i, center + 2 + i);
@@ -120,7 +125,14 @@ impl MeshBuilder {
     }
 
     /// A UV sphere with exact (radial) normals over the whole sphere.
-    pub fn sphere(&mut self, center: DVec3, radius: f64, stacks: u32, slices: u32, albedo: [f32; 3]) {
+    pub fn sphere(
+        &mut self,
+        center: DVec3,
+        radius: f64,
+        stacks: u32,
+        slices: u32,
+        albedo: [f32; 3],
+    ) {
         let start = self.vertices.len() as u32;
         for i in 0..=stacks {
             let polar = std::f64::consts::PI * i as f64 / stacks as f64;

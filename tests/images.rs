@@ -1,0 +1,119 @@
+//! Image snapshots: every variant in variants/ on a small scene, compared with the reviewed
+//! PNG in snapshots/images/ within the 1-2 LSB that software rasterisers may round
+//! differently, and exactly otherwise. A failing image leaves `NAME.snap.new.png` (review it
+//! with `cargo insta review`) and `NAME.diff.png` (where it differs) in snapshots/images/.
+
+mod common;
+
+use std::path::{Path, PathBuf};
+
+use clusterlab::compose::Composer;
+use clusterlab::render::RenderError;
+use clusterlab::run::{RunError, run_cell};
+use common::{gpu, small};
+
+/// Per-channel difference tolerated (software rasteriser rounding).
+const TOLERANCE: u8 = 2;
+const FOLDER: &str = "snapshots/images";
+
+fn encode_png(w: u32, h: u32, rgb: &[u8]) -> Vec<u8> {
+    let mut out = Vec::new();
+    image::codecs::png::PngEncoder::new(&mut out)
+        .write_image(rgb, w, h, image::ExtendedColorType::Rgb8)
+        .expect("PNG encodes");
+    out
+}
+
+use image::ImageEncoder;
+
+fn decode_png(path: &Path) -> Option<image::RgbImage> {
+    image::open(path).ok().map(|i| i.to_rgb8())
+}
+
+/// Compare with the stored snapshot; returns an error message when out of tolerance.
+fn check_image(name: &str, w: u32, h: u32, rgb: &[u8]) -> Result<(), String> {
+    let stored_path = PathBuf::from(FOLDER).join(format!("{name}.snap.png"));
+    let stored = decode_png(&stored_path);
+    let within = stored.as_ref().is_some_and(|old| {
+        old.dimensions() == (w, h)
+            && old
+                .as_raw()
+                .iter()
+                .zip(rgb)
+                .all(|(a, b)| a.abs_diff(*b) <= TOLERANCE)
+    });
+    // Within tolerance, assert the stored bytes themselves so insta sees no change.
+    let bytes = if within {
+        std::fs::read(&stored_path).expect("stored snapshot reads")
+    } else {
+        if let Some(old) = &stored
+            && old.dimensions() == (w, h)
+        {
+            let diff: Vec<u8> = old
+                .as_raw()
+                .chunks(3)
+                .zip(rgb.chunks(3))
+                .flat_map(|(a, b)| {
+                    let d = a
+                        .iter()
+                        .zip(b)
+                        .map(|(x, y)| x.abs_diff(*y))
+                        .max()
+                        .unwrap_or(0);
+                    if d > TOLERANCE {
+                        [255, 0, d.saturating_mul(16)]
+                    } else {
+                        [b[0] / 4, b[1] / 4, b[2] / 4]
+                    }
+                })
+                .collect();
+            let diff_path = PathBuf::from(FOLDER).join(format!("{name}.diff.png"));
+            let _ = std::fs::write(&diff_path, encode_png(w, h, &diff));
+        }
+        encode_png(w, h, rgb)
+    };
+    let mut settings = insta::Settings::clone_current();
+    settings.set_snapshot_path("../snapshots/images");
+    settings.set_prepend_module_to_snapshot(false);
+    settings.bind(|| {
+        std::panic::catch_unwind(|| {
+            insta::assert_binary_snapshot!(&format!("{name}.png"), bytes);
+        })
+    })
+    .map_err(|_| format!("{name}: differs from snapshots/images/{name}.snap.png by more than {TOLERANCE} LSB (see {name}.diff.png)"))
+}
+
+#[test]
+fn every_variant_matches_its_reviewed_image() {
+    let gpu = gpu();
+    let composer = Composer::default();
+    let params = small("atrium", 128, 72, Some(128));
+    let mut failures = Vec::new();
+    let mut not_runnable = Vec::new();
+    let files = clusterlab::variant::find_files(Path::new("variants")).expect("variants/");
+    assert!(!files.is_empty());
+    for file in files {
+        let v = clusterlab::variant::load(&file).unwrap_or_else(|e| panic!("{e}"));
+        match run_cell(&gpu, &composer, &v, "atrium", params, 1, None) {
+            Ok(cell) => {
+                let f = &cell.frame;
+                let rgb: Vec<u8> = f.ldr.iter().flat_map(|p| [p[0], p[1], p[2]]).collect();
+                if let Err(e) = check_image(&format!("{}@atrium", v.name), f.width, f.height, &rgb)
+                {
+                    failures.push(e);
+                }
+            }
+            Err(RunError::Render(RenderError::NotRunnable(why))) => {
+                not_runnable.push(format!("{}: {why}", v.name))
+            }
+            Err(e) => failures.push(format!("{}: {e}", v.name)),
+        }
+    }
+    if !not_runnable.is_empty() {
+        eprintln!(
+            "not runnable yet, so no image:\n  {}",
+            not_runnable.join("\n  ")
+        );
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}

@@ -1,0 +1,188 @@
+//! Naive forward against the CPU f64 reference, and the command line's handling of bad
+//! requests.
+
+mod common;
+
+use std::process::Command;
+
+use clusterlab::scene::SCENES;
+use common::{cell, gpu, load, small};
+
+#[test]
+fn naive_forward_is_within_one_lsb_of_the_reference_on_every_scene() {
+    let gpu = gpu();
+    for name in ["naive_forward", "naive_forward_blinn_phong"] {
+        let v = load(name);
+        for scene in SCENES {
+            let r = cell(&gpu, &v, scene.name, small(scene.name, 160, 90, None)).report;
+            let e = &r.error;
+            assert!(
+                e.max_abs_8bit <= 1 && e.nan_pixels == 0,
+                "{name} on {}: {e:?}",
+                scene.name
+            );
+        }
+    }
+}
+
+#[test]
+fn naive_forward_stays_exact_from_zero_to_many_lights() {
+    let gpu = gpu();
+    let v = load("naive_forward");
+    for lights in [0, 1, 64, 2048] {
+        let r = cell(&gpu, &v, "atrium", small("atrium", 96, 54, Some(lights))).report;
+        assert_eq!(r.lights, lights);
+        assert!(
+            r.error.max_abs_8bit <= 1 && r.error.nan_pixels == 0,
+            "{lights} lights: {:?}",
+            r.error
+        );
+    }
+}
+
+#[test]
+fn an_empty_scene_is_ambient_only_and_a_lit_one_is_not() {
+    let gpu = gpu();
+    let v = load("naive_forward");
+    let dark = cell(&gpu, &v, "empty", small("empty", 64, 64, None)).frame;
+    let lit = cell(&gpu, &v, "one_light", small("one_light", 64, 64, None)).frame;
+    let brightest = |f: &clusterlab::render::FrameOutput| {
+        f.hdr
+            .iter()
+            .map(|p| p[0].max(p[1]).max(p[2]))
+            .fold(0.0f32, f32::max)
+    };
+    // Ambient 0.02 of albedo at most 0.8: nothing brighter than 0.016.
+    assert!(brightest(&dark) <= 0.0161, "{}", brightest(&dark));
+    assert!(brightest(&lit) > 0.5, "{}", brightest(&lit));
+}
+
+fn clusterlab(args: &[&str], env: &[(&str, &str)]) -> (i32, String, String) {
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_clusterlab"));
+    cmd.args(args);
+    for (k, v) in env {
+        cmd.env(k, v);
+    }
+    let out = cmd.output().expect("the binary runs");
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+#[test]
+fn render_prints_the_json_report() {
+    let out = std::env::temp_dir().join("clusterlab-test-json");
+    let (code, stdout, stderr) = clusterlab(
+        &[
+            "render",
+            "--variant",
+            "naive_forward",
+            "--scene",
+            "one_light",
+            "--size",
+            "64x48",
+            "--json",
+            "--out",
+            out.to_str().unwrap(),
+        ],
+        &[],
+    );
+    assert_eq!(code, 0, "{stderr}");
+    let json: serde_json::Value = serde_json::from_str(&stdout).expect("one JSON object");
+    for key in [
+        "variant", "scene", "adapter", "size", "lights", "gpu_ms", "wall_ms", "error",
+    ] {
+        assert!(json.get(key).is_some(), "no `{key}` in {json}");
+    }
+    for key in ["name", "backend", "driver"] {
+        assert!(json["adapter"].get(key).is_some(), "no adapter.{key}");
+    }
+    for key in [
+        "max_abs_8bit",
+        "rmse",
+        "psnr_db",
+        "flip_mean",
+        "pixels_over_1lsb",
+        "nan_pixels",
+    ] {
+        assert!(json["error"].get(key).is_some(), "no error.{key}");
+    }
+    assert_eq!(json["size"], serde_json::json!([64, 48]));
+    assert!(json["gpu_ms"]["total"].as_f64().is_some_and(|t| t > 0.0));
+    assert!(json["gpu_ms"]["forward"].as_f64().is_some());
+    assert!(
+        json["error"]["max_abs_8bit"]
+            .as_u64()
+            .is_some_and(|e| e <= 1)
+    );
+    assert!(out.join("naive_forward@one_light.png").exists());
+    assert!(out.join("naive_forward@one_light.heat.png").exists());
+}
+
+/// The smoke test on OpenGL (llvmpipe): the same command, another backend.
+#[test]
+fn render_runs_on_opengl_too() {
+    let out = std::env::temp_dir().join("clusterlab-test-gl");
+    let (code, stdout, stderr) = clusterlab(
+        &[
+            "render",
+            "--variant",
+            "naive_forward",
+            "--scene",
+            "atrium",
+            "--size",
+            "96x54",
+            "--json",
+            "--out",
+            out.to_str().unwrap(),
+        ],
+        &[("WGPU_BACKEND", "gl")],
+    );
+    assert_eq!(code, 0, "{stderr}");
+    let json: serde_json::Value = serde_json::from_str(&stdout).expect("one JSON object");
+    assert_eq!(json["adapter"]["backend"], "gl");
+    assert!(
+        json["error"]["max_abs_8bit"]
+            .as_u64()
+            .is_some_and(|e| e <= 1),
+        "{json}"
+    );
+    assert_eq!(json["error"]["nan_pixels"], 0);
+}
+
+#[test]
+fn bad_requests_get_a_clear_message_and_exit_code_1() {
+    let cases: [(&[&str], &str); 5] = [
+        (
+            &["--scene", "atrum"],
+            "unknown scene `atrum`; the built-in scenes are: atrium",
+        ),
+        (
+            &["--scene", "atrium", "--size", "0x0"],
+            "width and height must be at least 1",
+        ),
+        (
+            &["--scene", "atrium", "--size", "100000x100000"],
+            "each side must be in 1..=",
+        ),
+        (
+            &["--scene", "atrium", "--size", "big"],
+            "is not WIDTHxHEIGHT",
+        ),
+        (
+            &["--scene", "atrium", "--backend", "vulcan"],
+            "unknown backend `vulcan`",
+        ),
+    ];
+    for (i, (args, expected)) in cases.into_iter().enumerate() {
+        let mut all = vec!["render", "--variant", "naive_forward"];
+        all.extend_from_slice(args);
+        let (code, _, stderr) = clusterlab(&all, &[]);
+        // Our own checks exit with 1; argument syntax errors are clap's (exit 2).
+        assert_eq!(code, if i < 3 { 1 } else { 2 }, "{args:?}: {stderr}");
+        assert!(stderr.contains(expected), "{args:?}: {stderr}");
+        assert!(!stderr.contains("panicked"), "{args:?} panicked: {stderr}");
+    }
+}

@@ -1,0 +1,254 @@
+//! CPU twins against their WGSL, run on the GPU over many random inputs and the edges.
+
+use clusterlab::compose::Composer;
+use clusterlab::cpu::normals as cpu;
+use clusterlab::cpu::zslice::{self, Scheme};
+use clusterlab::gpu::Gpu;
+use clusterlab::twins::{SliceParams, gpu_codecs, gpu_zslices};
+use glam::DVec3;
+use rand::{Rng, SeedableRng};
+use rand_pcg::Pcg64Mcg;
+
+fn gpu() -> Gpu {
+    Gpu::new(None).unwrap_or_else(|e| panic!("{e}"))
+}
+
+#[test]
+fn z_slices_match_on_random_depths_and_at_slice_boundaries() {
+    let gpu = gpu();
+    let composer = Composer::default();
+    let (near, far, slices, near_end, tan, tiles_y) =
+        (0.1f32, 60.0f32, 24u32, 4.0f32, 0.577_35f32, 9u32);
+    let schemes = [
+        Scheme::Linear,
+        Scheme::Exponential,
+        Scheme::NearThenExponential {
+            near_end: near_end as f64,
+        },
+        Scheme::Olsson {
+            tan_half_fov_y: tan as f64,
+            tiles_y,
+        },
+    ];
+    let mut rng = Pcg64Mcg::seed_from_u64(7);
+    let mut depths: Vec<f32> = (0..4000)
+        .map(|_| near * (far / near).powf(rng.random_range(0.0f32..1.0)))
+        .collect();
+    // Edges: near, far, and every boundary of every scheme, with its neighbours.
+    depths.extend([near, far, near_end]);
+    for &s in &schemes {
+        for k in 0..=slices {
+            let z = zslice::slice_start(s, k, near as f64, far as f64, slices) as f32;
+            if (near..=far).contains(&z) {
+                depths.extend([z, z.next_down(), z.next_up()]);
+            }
+        }
+    }
+    let params = SliceParams {
+        near,
+        far,
+        near_end,
+        tan_half_fov_y: tan,
+        slices,
+        tiles_y,
+        count: 0,
+        _pad: 0,
+    };
+    let results = gpu_zslices(&gpu, &composer, params, &depths).expect("kernel runs");
+    let (got, starts) = (results.slices, results.starts);
+    for (i, &z) in depths.iter().enumerate() {
+        for (j, &s) in schemes.iter().enumerate() {
+            let want = zslice::slice(s, z as f64, near as f64, far as f64, slices);
+            let have = got[i][j];
+            if have == want {
+                continue;
+            }
+            // f32 and f64 may round a depth on a boundary to either side of it: allowed only
+            // there, and only by one slice.
+            let boundary = zslice::slice_start(s, have.max(want), near as f64, far as f64, slices);
+            assert!(
+                have.abs_diff(want) == 1 && ((z as f64 - boundary) / boundary).abs() < 1e-5,
+                "{s:?}: depth {z}: GPU slice {have}, CPU slice {want}"
+            );
+        }
+    }
+    for k in 0..=slices {
+        for (j, &s) in schemes.iter().enumerate() {
+            let want = zslice::slice_start(s, k, near as f64, far as f64, slices);
+            let have = starts[k as usize][j] as f64;
+            assert!(
+                ((have - want) / want).abs() < 1e-5,
+                "{s:?}: start of slice {k}: GPU {have}, CPU {want}"
+            );
+        }
+    }
+}
+
+fn random_unit(rng: &mut Pcg64Mcg) -> DVec3 {
+    loop {
+        let v = DVec3::new(
+            rng.random_range(-1.0..1.0),
+            rng.random_range(-1.0..1.0),
+            rng.random_range(-1.0..1.0),
+        );
+        if v.length_squared() > 1e-6 && v.length_squared() <= 1.0 {
+            return v.normalize();
+        }
+    }
+}
+
+/// Poles, axes, zero components and the octahedron's fold edges.
+fn edge_normals() -> Vec<DVec3> {
+    let mut v = Vec::new();
+    for a in [DVec3::X, DVec3::Y, DVec3::Z] {
+        v.extend([a, -a]);
+    }
+    for (x, y, z) in [
+        (1.0, 1.0, 0.0),
+        (1.0, -1.0, 0.0),
+        (-1.0, 1.0, 0.0),
+        (-1.0, -1.0, 0.0),
+        (1.0, 0.0, 1.0),
+        (0.0, 1.0, -1.0),
+        (1.0, 1.0, 1.0),
+        (-1.0, -1.0, -1.0),
+        (1e-4, 0.0, -1.0),
+        (0.0, 1e-4, 1.0),
+    ] {
+        v.push(DVec3::new(x, y, z).normalize());
+    }
+    v
+}
+
+#[test]
+fn normal_codecs_match_on_random_normals_and_at_the_edges() {
+    let gpu = gpu();
+    let composer = Composer::default();
+    let mut rng = Pcg64Mcg::seed_from_u64(11);
+    let mut normals: Vec<DVec3> = (0..3000).map(|_| random_unit(&mut rng)).collect();
+    normals.extend(edge_normals());
+    let as_f32: Vec<[f32; 4]> = normals
+        .iter()
+        .map(|n| {
+            let n = n.as_vec3();
+            [n.x, n.y, n.z, 0.0]
+        })
+        .collect();
+    // The CPU twin works on exactly the f32 normals the GPU sees.
+    let inputs: Vec<DVec3> = as_f32
+        .iter()
+        .map(|n| DVec3::new(n[0] as f64, n[1] as f64, n[2] as f64))
+        .collect();
+
+    for bits in [8u32, 10, 12, 16] {
+        let top = (1u32 << bits) - 1;
+        let codes: Vec<[u32; 2]> = (0..inputs.len())
+            .map(|_| [rng.random_range(0..=top), rng.random_range(0..=top)])
+            .collect();
+        let results = gpu_codecs(&gpu, &composer, bits, &as_f32, &codes).expect("kernel runs");
+        let (got, decoded) = (results.codes, results.decoded);
+        let encoders: [fn(DVec3, u32) -> [u32; 2]; 4] = [
+            cpu::oct_encode,
+            cpu::oct_encode_precise,
+            cpu::polar_encode,
+            cpu::spheremap_encode,
+        ];
+        let names = ["octahedral", "octahedral precise", "polar", "spheremap"];
+        // Codes computed with arithmetic and sqrt almost always agree; polar goes through
+        // acos and atan2, whose GPU precision WGSL leaves to the implementation, so only the
+        // one-code and equal-quality rules above apply to it.
+        let min_exact_percent = [99, 98, 0, 99];
+        for (c, encode) in encoders.iter().enumerate() {
+            let mut exact = 0;
+            for (i, &n) in inputs.iter().enumerate() {
+                let want = encode(n, bits);
+                let have = got[i][c];
+                let polar_seam = c == 2 && (n.z.abs() > 1.0 - 1e-6 || (n.y == 0.0 && n.x < 0.0));
+                if have == want {
+                    exact += 1;
+                } else if !polar_seam {
+                    // A code may round the other way when f32 lands near a rounding tie, so
+                    // codes may differ by one; polar goes through acos and atan2, which WGSL
+                    // lets be off by up to 4096 ULP (about 1e-3 rad near pi).
+                    let slack = if c == 2 {
+                        1 + (1e-3 * ((1u64 << bits) - 1) as f64 / std::f64::consts::PI).ceil()
+                            as u32
+                    } else {
+                        1
+                    };
+                    assert!(
+                        have[0].abs_diff(want[0]) <= slack && have[1].abs_diff(want[1]) <= slack,
+                        "{} {bits} bits: {n:?}: GPU {have:?}, CPU {want:?}",
+                        names[c]
+                    );
+                    // And the other code must decode about as close to n.
+                    let err = |q| cpu::angle_degrees(n, decode_with(c, q, bits));
+                    assert!(
+                        (err(have) - err(want)).abs() < 2.0 * slack as f64 * step_degrees(bits),
+                        "{} {bits} bits: {n:?}",
+                        names[c]
+                    );
+                }
+            }
+            assert!(
+                exact * 100 >= inputs.len() * min_exact_percent[c],
+                "{} {bits} bits: only {exact} of {} codes equal",
+                names[c],
+                inputs.len()
+            );
+        }
+        let decoders: [fn([u32; 2], u32) -> DVec3; 3] =
+            [cpu::oct_decode, cpu::polar_decode, cpu::spheremap_decode];
+        for (c, decode) in decoders.iter().enumerate() {
+            for (i, &q) in codes.iter().enumerate() {
+                let want = decode(q, bits);
+                let h = decoded[i][c];
+                let have = DVec3::new(h[0] as f64, h[1] as f64, h[2] as f64);
+                assert!(
+                    (have - want).length() < 1e-5,
+                    "decode {c} of {q:?} at {bits} bits: GPU {have:?}, CPU {want:?}"
+                );
+            }
+        }
+    }
+}
+
+fn decode_with(codec: usize, q: [u32; 2], bits: u32) -> DVec3 {
+    match codec {
+        0 | 1 => cpu::oct_decode(q, bits),
+        2 => cpu::polar_decode(q, bits),
+        _ => cpu::spheremap_decode(q, bits),
+    }
+}
+
+/// Angle of one code step at `bits` bits, in degrees (a generous scale for comparisons).
+fn step_degrees(bits: u32) -> f64 {
+    (4.0 / ((1u64 << bits) - 1) as f64).to_degrees()
+}
+
+/// Oracle properties of the codecs themselves (CPU only): the precise octahedral encoder is
+/// never worse than the plain one, and errors shrink as bits grow.
+#[test]
+fn codec_errors_behave() {
+    let mut rng = Pcg64Mcg::seed_from_u64(3);
+    let normals: Vec<DVec3> = (0..5000).map(|_| random_unit(&mut rng)).collect();
+    let mut last = f64::MAX;
+    for bits in [8u32, 10, 12, 16] {
+        let mut worst_plain: f64 = 0.0;
+        for &n in &normals {
+            let plain = cpu::angle_degrees(n, cpu::oct_decode(cpu::oct_encode(n, bits), bits));
+            let precise =
+                cpu::angle_degrees(n, cpu::oct_decode(cpu::oct_encode_precise(n, bits), bits));
+            assert!(
+                precise <= plain + 1e-12,
+                "precise worse at {bits} bits for {n:?}"
+            );
+            worst_plain = worst_plain.max(plain);
+        }
+        assert!(worst_plain < last, "error did not shrink at {bits} bits");
+        last = worst_plain;
+    }
+    // The spheremap's one singular direction decodes to the opposite pole (documented).
+    let back = cpu::spheremap_decode(cpu::spheremap_encode(DVec3::NEG_Z, 16), 16);
+    assert!((back - DVec3::Z).length() < 1e-3, "{back:?}");
+}
