@@ -71,6 +71,12 @@ struct RenderArgs {
     /// Frames to render; times are the median per pass.
     #[arg(long, default_value_t = 1)]
     frames: u32,
+    /// Untimed frames before them (software rasterisers compile on first use).
+    #[arg(long, default_value_t = 1)]
+    warmup: u32,
+    /// Skip the instrumented frame that counts light evaluations.
+    #[arg(long)]
+    no_stats: bool,
     /// Folder for the PNG and its heat map.
     #[arg(long, default_value = "out")]
     out: PathBuf,
@@ -259,8 +265,12 @@ fn render(args: &RenderArgs) -> Result<bool, String> {
         &loaded,
         &args.scene,
         params,
-        args.frames,
-        Some(&args.out),
+        clusterlab::run::CellOptions {
+            warmup: args.warmup,
+            frames: args.frames,
+            stats: !args.no_stats,
+            out: Some(&args.out),
+        },
     )
     .map_err(|e| format!("variant `{}` on scene `{}`: {e}", loaded.name, args.scene))?;
     let r = &cell.report;
@@ -297,6 +307,18 @@ fn render(args: &RenderArgs) -> Result<bool, String> {
             e.rmse,
             e.nan_pixels
         );
+        if let Some(s) = &r.stats {
+            println!(
+                "  stats: {} light evaluations, {} useful ({:.1}%), {} dropped, {} of {} clusters active, longest list {}",
+                s.light_evals,
+                s.useful_light_evals,
+                100.0 * s.useful_light_evals as f64 / s.light_evals.max(1) as f64,
+                s.dropped_lights,
+                s.active_clusters,
+                s.clusters,
+                s.max_lights_per_cluster
+            );
+        }
         for image in &r.images {
             println!("  wrote {}", image.display());
         }

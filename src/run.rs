@@ -12,7 +12,7 @@ use crate::cpu::reference::{ReferenceFrame, shade_reference};
 use crate::cpu::shading::ShadingParams;
 use crate::gpu::{AdapterSummary, Gpu, Timings};
 use crate::metrics::{self, ErrorMetrics};
-use crate::render::{FrameOutput, RenderError, Renderer, raster_truth};
+use crate::render::{FrameOutput, FrameStats, RenderError, Renderer, raster_truth};
 use crate::scene::{Scene, SceneError, SceneParams};
 use crate::variant::LoadedVariant;
 
@@ -40,6 +40,10 @@ pub struct RenderReport {
     /// Wall-clock milliseconds of the CPU f64 reference.
     pub reference_ms: f64,
     pub error: ErrorMetrics,
+    /// Exact counters from an instrumented run of the frame (absent with `stats: false`).
+    pub stats: Option<FrameStats>,
+    /// CPU milliseconds spent in the frame outside the GPU (light assignment on the CPU).
+    pub cpu_ms: Map<String, Value>,
     /// Files written, when an output folder was given.
     pub images: Vec<PathBuf>,
 }
@@ -83,20 +87,47 @@ pub struct CellResult {
     pub reference: ReferenceFrame,
 }
 
-/// Render `variant` on scene `scene_name` `frames` times, compare the last frame with the
-/// CPU reference, and write its images into `out` (if given).
+/// How to run a cell.
+#[derive(Clone, Copy, Debug)]
+pub struct CellOptions<'a> {
+    /// Untimed frames first: software rasterisers compile shader variants on first use.
+    pub warmup: u32,
+    /// Timed frames; pass times are medians over them.
+    pub frames: u32,
+    /// Also run an instrumented frame for the exact counters.
+    pub stats: bool,
+    /// Folder for the image and its heat map.
+    pub out: Option<&'a Path>,
+}
+
+impl Default for CellOptions<'_> {
+    fn default() -> Self {
+        Self {
+            warmup: 1,
+            frames: 1,
+            stats: true,
+            out: None,
+        }
+    }
+}
+
+/// Render `variant` on scene `scene_name`, compare the last frame with the CPU reference,
+/// count, and write its images.
 pub fn run_cell(
     gpu: &Gpu,
     composer: &Composer,
     variant: &LoadedVariant,
     scene_name: &str,
     params: SceneParams,
-    frames: u32,
-    out: Option<&Path>,
+    options: CellOptions<'_>,
 ) -> Result<CellResult, RunError> {
+    let CellOptions { frames, out, .. } = options;
     gpu.check_size(params.width, params.height)?;
     let scene = crate::scene::generate(scene_name, params).map_err(RunError::Scene)?;
     let mut renderer = Renderer::new(gpu, composer, &variant.variant, &scene)?;
+    for _ in 0..options.warmup {
+        renderer.render()?;
+    }
     let mut runs = Vec::new();
     for _ in 0..frames.max(1) {
         runs.push(renderer.render()?);
@@ -104,6 +135,15 @@ pub fn run_cell(
     let wall_ms = median(runs.iter().map(|f| f.wall_ms).collect());
     let timings = median_timings(&runs);
     let frame = runs.pop().expect("at least one frame");
+    let stats = if options.stats {
+        Some(renderer.stats()?)
+    } else {
+        None
+    };
+    let mut cpu_ms = Map::new();
+    if let Some(ms) = frame.cpu_assign_ms {
+        cpu_ms.insert("light_assign".into(), round3(ms).into());
+    }
 
     let (reference, reference_ms) = reference_frame(gpu, composer, variant, &scene)?;
     let error = metrics::compare(&frame, &reference);
@@ -135,6 +175,8 @@ pub fn run_cell(
         wall_ms: round3(wall_ms),
         reference_ms: round3(reference_ms),
         error,
+        stats,
+        cpu_ms,
         images,
     };
     Ok(CellResult {

@@ -75,6 +75,8 @@ pub fn feature_flags(v: &Variant) -> Vec<(&'static str, bool)> {
             toon.is_some_and(|t| t.mode == ToonMode::PostProcess),
         ),
         ("outlines", toon.is_some_and(|t| t.outlines.is_some())),
+        // On only in instrumented compositions (`Composer::compose_instrumented`).
+        ("stats", false),
         (
             "debug_cluster_index",
             v.debug_view == DebugView::ClusterIndex,

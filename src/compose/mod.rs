@@ -82,6 +82,11 @@ impl fmt::Display for ShaderError {
 
 impl std::error::Error for ShaderError {}
 
+/// Shader capabilities beyond the WebGPU baseline that passes may use: forced early depth
+/// testing, so instrumented passes count only the fragments a GPU with early-Z shades
+/// (wgpu feature SHADER_EARLY_DEPTH_TEST, which lavapipe and llvmpipe have).
+pub const CAPABILITIES: naga::valid::Capabilities = naga::valid::Capabilities::EARLY_DEPTH_TEST;
+
 /// Composes passes from one shader folder.
 #[derive(Clone, Debug)]
 pub struct Composer {
@@ -122,6 +127,22 @@ impl Composer {
             &feature_flags(variant),
             &constants_module(variant),
         )
+    }
+
+    /// The instrumented twin of a pass: feature `stats` on, so shading passes count their
+    /// light evaluations per pixel. Used for a frame's counters, never for its timings.
+    pub fn compose_instrumented(
+        &self,
+        variant: &Variant,
+        pass: &Pass,
+    ) -> Result<ComposedPass, ShaderError> {
+        let mut features = feature_flags(variant);
+        for (name, on) in &mut features {
+            if *name == "stats" {
+                *on = true;
+            }
+        }
+        self.compose_root(pass.name, pass.root, &features, &constants_module(variant))
     }
 
     /// Compose and validate every pass of a variant, stopping at the first error.
@@ -191,10 +212,8 @@ impl Composer {
             };
             naga_error(unmangle_names(&message, &sourcemap), span)
         })?;
-        let mut validator = naga::valid::Validator::new(
-            naga::valid::ValidationFlags::all(),
-            naga::valid::Capabilities::default(),
-        );
+        let mut validator =
+            naga::valid::Validator::new(naga::valid::ValidationFlags::all(), CAPABILITIES);
         let info = validator.validate(&module).map_err(|e| {
             // naga lists spans from the outside in (function, then expression): the last is
             // the most precise.

@@ -1,6 +1,7 @@
 //! CPU twins of the GPU modules, in f64, written from the math (see DESIGN.md). They are the
 //! oracles that the WGSL is tested against, and `reference` shades whole frames with them.
 
+pub mod clusters;
 pub mod color;
 pub mod normals;
 pub mod reference;

@@ -109,7 +109,9 @@ impl Gpu {
         let info = adapter.get_info();
         let available = adapter.features();
         // Adapter-specific format features: OpenGL reports rgba32float as renderable only here.
+        // Forced early depth tests let instrumented passes count what early-Z shades.
         let wanted = wgpu::Features::TIMESTAMP_QUERY
+            | wgpu::Features::SHADER_EARLY_DEPTH_TEST
             | wgpu::Features::FLOAT32_BLENDABLE
             | wgpu::Features::TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES;
         let features = available & wanted;

@@ -1,9 +1,13 @@
-//! Running a variant on the GPU: one frame of a scene, pass by pass, timed.
+//! Running a variant on the GPU: one frame of a scene, pass by pass, timed; and an
+//! instrumented frame for the exact counters.
 
+mod clusters;
+mod gbuffer;
 mod passes;
 mod resources;
 mod truth;
 
+pub use clusters::{ClusterBuffers, ClusterRange, ClusterStats};
 pub use passes::{PassRunner, TimestampSlot, shader_module};
 pub use resources::{DepthSetup, F32_BITS_FORMAT, LDR_FORMAT, SceneBuffers, ViewUniform};
 pub use truth::raster_truth;
@@ -12,12 +16,16 @@ use std::collections::HashMap;
 use std::fmt;
 use std::time::Instant;
 
-use crate::compose::{self, ComposedPass, Composer, ShaderError};
-use crate::gpu::{Gpu, GpuError, Timings, read_texture};
-use crate::scene::Scene;
-use crate::variant::Variant;
-use passes::{clear_attachment, color_target, pipeline_layout, render_pipeline};
-use resources::{frame_bind_group, frame_layout, target, texture_entry};
+use serde::Serialize;
+
+use crate::compose::{self, ComposedPass, Composer, Pass, ShaderError};
+use crate::cpu::clusters::{self as cpu_clusters, ClusterLists, Grid};
+use crate::cpu::zslice::Scheme;
+use crate::gpu::{Gpu, GpuError, Timings, read_buffer, read_texture};
+use crate::scene::{Light, Scene};
+use crate::variant::{Assignment, LightLists, Variant, ZSlicing};
+use passes::{clear_attachment, color_target, render_pipeline};
+use resources::{frame_bind_group, frame_layout, storage_entry, target, texture_entry};
 
 /// Why a frame could not be rendered.
 #[derive(Debug)]
@@ -57,35 +65,159 @@ impl From<GpuError> for RenderError {
 pub struct FrameOutput {
     pub width: u32,
     pub height: u32,
-    /// Linear HDR colour before tonemapping (rgba32float), row-major.
+    /// Linear HDR colour before tonemapping, row-major.
     pub hdr: Vec<[f32; 4]>,
     /// The displayed 8-bit image (tonemapped, sRGB), row-major.
     pub ldr: Vec<[u8; 4]>,
     pub timings: Timings,
-    /// Wall-clock time from the first encode to the frame's completion.
+    /// Wall-clock time from the first encode to the frame's completion (with CPU light
+    /// assignment, when the variant has it).
     pub wall_ms: f64,
+    /// CPU light assignment time, for variants with `assignment: Cpu`.
+    pub cpu_assign_ms: Option<f64>,
 }
 
-/// The targets every frame draws into.
+/// Exact counters of a frame, from an instrumented run of it.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct FrameStats {
+    /// Light evaluations performed by the shading pass.
+    pub light_evals: u64,
+    /// Those with the surface closer to the light than its radius.
+    pub useful_light_evals: u64,
+    /// Light-cluster pairs left out by a per-cluster cap.
+    pub dropped_lights: u64,
+    /// Clusters that hold at least one visible sample.
+    pub active_clusters: u64,
+    /// Clusters that took part in light assignment (all, unless active clusters are on).
+    pub assigned_clusters: u64,
+    pub clusters: u64,
+    pub max_lights_per_cluster: u32,
+    /// Entries in all light lists together.
+    pub light_list_entries: u64,
+    /// Bytes of cluster data on the GPU (bounds, counts, offsets, indices, ...).
+    pub cluster_bytes: u64,
+    /// G-buffer bytes per pixel, depth included (0 for forward pipelines).
+    pub gbuffer_bytes_per_pixel: u32,
+    /// Times the light index buffer was too small and the frame was run again larger.
+    pub list_reallocations: u32,
+    /// The clustered depth range of the frame [near, far].
+    pub z_range: Option<[f32; 2]>,
+}
+
+/// Bind group layouts of every group a pass may use.
+struct Layouts {
+    frame: wgpu::BindGroupLayout,
+    cluster_build: wgpu::BindGroupLayout,
+    cluster_lookup: wgpu::BindGroupLayout,
+    depth_read: wgpu::BindGroupLayout,
+    gbuffer_read: Option<wgpu::BindGroupLayout>,
+    stats: wgpu::BindGroupLayout,
+    tonemap: wgpu::BindGroupLayout,
+}
+
+/// Bind groups; the cluster ones are remade when the index buffer grows.
+struct Groups {
+    frame: wgpu::BindGroup,
+    cluster_build: Option<wgpu::BindGroup>,
+    cluster_lookup: Option<wgpu::BindGroup>,
+    depth_read: wgpu::BindGroup,
+    gbuffer_read: Option<wgpu::BindGroup>,
+    stats: wgpu::BindGroup,
+    tonemap: wgpu::BindGroup,
+}
+
+/// Pipelines of one pass.
+enum PassPipelines {
+    /// Render pipelines, drawn in order.
+    Render(Vec<wgpu::RenderPipeline>),
+    /// Compute pipelines by entry point.
+    Compute(HashMap<&'static str, wgpu::ComputePipeline>),
+}
+
+/// Compute entry points of each compute pass, in dispatch order.
+fn compute_entries(pass: &str) -> &'static [&'static str] {
+    match pass {
+        "cluster_bounds" => &["build_bounds"],
+        "light_assign" => &[
+            "transform_lights",
+            "count_lights",
+            "scan_local",
+            "scan_blocks",
+            "fill_lists",
+            "finish_lists",
+        ],
+        "mark_active" => &["mark_active", "mark_visible"],
+        "depth_range" => &["reduce", "finalize"],
+        _ => &[],
+    }
+}
+
+/// Passes this version can run.
+fn runnable(name: &str) -> bool {
+    matches!(
+        name,
+        "depth_prepass"
+            | "gbuffer"
+            | "depth_range"
+            | "cluster_bounds"
+            | "mark_active"
+            | "light_assign"
+            | "forward"
+            | "resolve"
+            | "scissor_lights"
+            | "debug_view"
+            | "tonemap"
+    )
+}
+
+/// Shading passes, which have an instrumented twin for the counters.
+fn is_shading(name: &str) -> bool {
+    matches!(name, "forward" | "resolve" | "scissor_lights")
+}
+
 struct Targets {
     depth: wgpu::Texture,
     hdr: wgpu::Texture,
     ldr: wgpu::Texture,
+    gbuffer: Vec<wgpu::Texture>,
+}
+
+/// CPU light assignment state: the grid and its boxes (built once), the view-space lights.
+struct CpuAssignment {
+    grid: Grid,
+    bounds: Vec<Option<cpu_clusters::Aabb>>,
+    lights: Vec<(glam::DVec3, f64)>,
+    cap: Option<u32>,
 }
 
 /// A variant ready to render a scene: composed passes, pipelines and resources.
 pub struct Renderer<'g> {
     gpu: &'g Gpu,
     variant: Variant,
-    passes: Vec<compose::Pass>,
+    passes: Vec<Pass>,
     width: u32,
     height: u32,
     depth: DepthSetup,
     scene: SceneBuffers,
-    frame_group: wgpu::BindGroup,
     targets: Targets,
-    render_pipelines: HashMap<&'static str, wgpu::RenderPipeline>,
-    tonemap_group: wgpu::BindGroup,
+    clusters: Option<ClusterBuffers>,
+    pixel_evals: wgpu::Buffer,
+    pixel_useful: wgpu::Buffer,
+    layouts: Layouts,
+    groups: Groups,
+    timed: HashMap<&'static str, PassPipelines>,
+    instrumented: HashMap<&'static str, PassPipelines>,
+    /// Cluster bounds are valid for the projection, size and a static z-range.
+    bounds_built: bool,
+    cpu_assignment: Option<CpuAssignment>,
+    reallocations: u32,
+}
+
+/// Lights per row of the per-light dispatches (`LIGHTS_PER_ROW` in light_assign.wesl).
+const LIGHTS_PER_ROW: u32 = 32768;
+
+fn dispatch_size(n: u32, per_group: u32) -> u32 {
+    n.div_ceil(per_group).max(1)
 }
 
 impl<'g> Renderer<'g> {
@@ -106,82 +238,125 @@ impl<'g> Renderer<'g> {
                 p.name
             )));
         }
-        let composed: HashMap<&str, ComposedPass> = passes
-            .iter()
-            .map(|p| Ok((p.name, composer.compose(variant, p)?)))
-            .collect::<Result<_, ShaderError>>()?;
-        let depth = DepthSetup::of(variant);
+        let clustered = variant.pipeline.is_clustered();
+        let mut composed: Vec<(Pass, ComposedPass, Option<ComposedPass>)> = Vec::new();
+        for p in &passes {
+            if composed.iter().any(|(q, _, _)| q.name == p.name) {
+                continue; // depth_range may run twice; one pipeline serves both.
+            }
+            let instrumented = if is_shading(p.name) {
+                Some(composer.compose_instrumented(variant, p)?)
+            } else {
+                None
+            };
+            composed.push((*p, composer.compose(variant, p)?, instrumented));
+        }
+        // The active-cluster count needs mark_visible even when assignment does not mark.
+        if clustered && !passes.iter().any(|p| p.name == "mark_active") {
+            let p = Pass {
+                name: "mark_active",
+                root: "passes::mark_active",
+                kind: compose::PassKind::Compute,
+            };
+            composed.push((p, composer.compose(variant, &p)?, None));
+        }
 
-        gpu.scoped("creating pipelines and resources", || {
+        let depth = DepthSetup::of(variant);
+        let gbuffer_layout = variant.pipeline.is_deferred().then(|| variant.gbuffer().layout);
+        let cluster_count = {
+            let c = variant.clusters();
+            c.grid.0 * c.grid.1 * c.grid.2
+        };
+        let light_count = scene.lights.len() as u32;
+
+        let mut renderer = gpu.scoped("creating pipelines and resources", || {
             let scene_buffers = SceneBuffers::upload(gpu, scene, depth.reversed);
-            let frame = frame_layout(gpu);
-            let frame_group = frame_bind_group(gpu, &frame, &scene_buffers);
             let targets = Targets {
                 depth: target(gpu, "depth", width, height, depth.format),
                 hdr: target(gpu, "hdr", width, height, gpu.hdr_format),
                 ldr: target(gpu, "ldr", width, height, LDR_FORMAT),
+                gbuffer: gbuffer_layout
+                    .map(|l| gbuffer::targets(gpu, l, width, height))
+                    .unwrap_or_default(),
             };
-            let scene_layout = pipeline_layout(gpu, &[&frame]);
-            let tonemap_layout =
-                gpu.device
+            let clusters = clustered.then(|| {
+                let capacity = (cluster_count * light_count.clamp(1, 32)).max(1024);
+                let range = ClusterRange::new(scene.camera.near as f32, scene.camera.far as f32);
+                ClusterBuffers::new(gpu, cluster_count, light_count, capacity, range)
+            });
+            let pixels = width as u64 * height as u64 * 4;
+            let pixel_buffer = |label| {
+                gpu.device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some(label),
+                    size: pixels,
+                    usage: wgpu::BufferUsages::STORAGE
+                        | wgpu::BufferUsages::COPY_SRC
+                        | wgpu::BufferUsages::COPY_DST,
+                    mapped_at_creation: false,
+                })
+            };
+            let pixel_evals = pixel_buffer("pixel light evaluations");
+            let pixel_useful = pixel_buffer("pixel useful evaluations");
+            let layouts = Layouts {
+                frame: frame_layout(gpu),
+                cluster_build: ClusterBuffers::build_layout(gpu),
+                cluster_lookup: ClusterBuffers::lookup_layout(gpu),
+                depth_read: gbuffer::read_layout(gpu, None),
+                gbuffer_read: gbuffer_layout.map(|l| gbuffer::read_layout(gpu, Some(l))),
+                stats: gpu
+                    .device
+                    .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                        label: Some("stats"),
+                        entries: &[0, 1].map(|b| wgpu::BindGroupLayoutEntry {
+                            visibility: wgpu::ShaderStages::FRAGMENT,
+                            ..storage_entry(b, false)
+                        }),
+                    }),
+                tonemap: gpu
+                    .device
                     .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
                         label: Some("tonemap"),
                         entries: &[texture_entry(
                             0,
                             wgpu::TextureSampleType::Float { filterable: false },
                         )],
-                    });
-            let tonemap_group = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("tonemap"),
-                layout: &tonemap_layout,
-                entries: &[wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: wgpu::BindingResource::TextureView(
-                        &targets.hdr.create_view(&Default::default()),
-                    ),
-                }],
-            });
-
-            let mut render_pipelines = HashMap::new();
-            let vertex = [Some(SceneBuffers::vertex_layout())];
-            for (name, pass) in &composed {
-                let pipeline = match *name {
-                    "depth_prepass" => render_pipeline(
-                        gpu,
-                        pass,
-                        &scene_layout,
-                        &vertex,
-                        &[],
-                        Some(depth.state(depth.compare(), true)),
-                    ),
-                    "forward" => {
-                        let state = if variant.depth_prepass {
-                            depth.state(wgpu::CompareFunction::Equal, false)
-                        } else {
-                            depth.state(depth.compare(), true)
-                        };
-                        render_pipeline(
-                            gpu,
-                            pass,
-                            &scene_layout,
-                            &vertex,
-                            &[color_target(gpu.hdr_format)],
-                            Some(state),
-                        )
-                    }
-                    "tonemap" => render_pipeline(
-                        gpu,
-                        pass,
-                        &pipeline_layout(gpu, &[&tonemap_layout]),
-                        &[],
-                        &[color_target(LDR_FORMAT)],
-                        None,
-                    ),
-                    _ => continue,
-                };
-                render_pipelines.insert(*name, pipeline);
-            }
-            Ok(Renderer {
+                    }),
+            };
+            let groups = Groups {
+                frame: frame_bind_group(gpu, &layouts.frame, &scene_buffers),
+                cluster_build: None,
+                cluster_lookup: None,
+                depth_read: gbuffer::read_group(gpu, &layouts.depth_read, &targets.depth, &[]),
+                gbuffer_read: layouts
+                    .gbuffer_read
+                    .as_ref()
+                    .map(|l| gbuffer::read_group(gpu, l, &targets.depth, &targets.gbuffer)),
+                stats: gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                    label: Some("stats"),
+                    layout: &layouts.stats,
+                    entries: &[
+                        wgpu::BindGroupEntry {
+                            binding: 0,
+                            resource: pixel_evals.as_entire_binding(),
+                        },
+                        wgpu::BindGroupEntry {
+                            binding: 1,
+                            resource: pixel_useful.as_entire_binding(),
+                        },
+                    ],
+                }),
+                tonemap: gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                    label: Some("tonemap"),
+                    layout: &layouts.tonemap,
+                    entries: &[wgpu::BindGroupEntry {
+                        binding: 0,
+                        resource: wgpu::BindingResource::TextureView(
+                            &targets.hdr.create_view(&Default::default()),
+                        ),
+                    }],
+                }),
+            };
+            Renderer {
                 gpu,
                 variant: variant.clone(),
                 passes,
@@ -189,30 +364,153 @@ impl<'g> Renderer<'g> {
                 height,
                 depth,
                 scene: scene_buffers,
-                frame_group,
                 targets,
-                render_pipelines,
-                tonemap_group,
-            })
-        })?
+                clusters,
+                pixel_evals,
+                pixel_useful,
+                layouts,
+                groups,
+                timed: HashMap::new(),
+                instrumented: HashMap::new(),
+                bounds_built: false,
+                cpu_assignment: None,
+                reallocations: 0,
+            }
+        })?;
+        renderer.remake_cluster_groups();
+        gpu.scoped("creating pipelines", || {
+            for (pass, timed, instrumented) in &composed {
+                let p = renderer.pipelines(pass, timed, false);
+                renderer.timed.insert(pass.name, p);
+                if let Some(i) = instrumented {
+                    let p = renderer.pipelines(pass, i, true);
+                    renderer.instrumented.insert(pass.name, p);
+                }
+            }
+        })?;
+        if clustered && variant.clusters().assignment == Assignment::Cpu {
+            renderer.cpu_assignment = Some(cpu_assignment(variant, scene));
+        }
+        Ok(renderer)
     }
 
-    /// Render one frame and read back its images.
-    pub fn render(&mut self) -> Result<FrameOutput, RenderError> {
+    fn remake_cluster_groups(&mut self) {
+        if let Some(c) = &self.clusters {
+            self.groups.cluster_build = Some(c.build_group(self.gpu, &self.layouts.cluster_build));
+            self.groups.cluster_lookup = Some(c.lookup_group(self.gpu, &self.layouts.cluster_lookup));
+        }
+    }
+
+    /// The pipeline layout of a pass: its groups, with gaps where it uses none.
+    fn pass_layout(&self, name: &str, instrumented: bool) -> wgpu::PipelineLayout {
+        let l = &self.layouts;
+        let clustered = self.variant.pipeline.is_clustered();
+        let lookup = clustered.then_some(&l.cluster_lookup);
+        let stats = instrumented.then_some(&l.stats);
+        let surface = l.gbuffer_read.as_ref().unwrap_or(&l.depth_read);
+        let groups: Vec<Option<&wgpu::BindGroupLayout>> = match name {
+            "depth_prepass" | "gbuffer" => vec![Some(&l.frame)],
+            "forward" => vec![Some(&l.frame), lookup, None, stats],
+            "resolve" => vec![Some(&l.frame), lookup, Some(surface), stats],
+            "scissor_lights" => vec![Some(&l.frame), None, Some(surface), stats],
+            "debug_view" => vec![Some(&l.frame), lookup, Some(surface)],
+            "tonemap" => vec![Some(&l.tonemap)],
+            "cluster_bounds" | "light_assign" => vec![Some(&l.frame), Some(&l.cluster_build)],
+            _ => vec![Some(&l.frame), Some(&l.cluster_build), Some(&l.depth_read)],
+        };
+        self.gpu
+            .device
+            .create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some(name),
+                bind_group_layouts: &groups,
+                immediate_size: 0,
+            })
+    }
+
+    fn pipelines(&self, pass: &Pass, composed: &ComposedPass, instrumented: bool) -> PassPipelines {
         let gpu = self.gpu;
-        let start = Instant::now();
-        let timings = gpu.scoped("rendering a frame", || -> Result<Timings, GpuError> {
-            let mut runner = PassRunner::new(gpu, self.passes.len() as u32 + 4);
-            for pass in self.passes.clone() {
-                runner.pass(pass.name, |encoder, slot| {
-                    self.encode(pass.name, encoder, slot)
-                })?;
+        let layout = self.pass_layout(pass.name, instrumented);
+        if pass.kind == compose::PassKind::Compute {
+            let module = shader_module(gpu, composed);
+            let map = compute_entries(pass.name)
+                .iter()
+                .map(|&entry| {
+                    (
+                        entry,
+                        passes::compute_pipeline(gpu, &module, entry, &layout, entry),
+                    )
+                })
+                .collect();
+            return PassPipelines::Compute(map);
+        }
+        let vertex = [Some(SceneBuffers::vertex_layout())];
+        let d = self.depth;
+        let hdr = color_target(gpu.hdr_format);
+        let additive = Some(wgpu::ColorTargetState {
+            format: gpu.hdr_format,
+            blend: Some(wgpu::BlendState {
+                color: wgpu::BlendComponent {
+                    src_factor: wgpu::BlendFactor::One,
+                    dst_factor: wgpu::BlendFactor::One,
+                    operation: wgpu::BlendOperation::Add,
+                },
+                alpha: wgpu::BlendComponent::OVER,
+            }),
+            write_mask: wgpu::ColorWrites::ALL,
+        });
+        let fs = if instrumented && pass.name == "forward" {
+            "fs_stats"
+        } else {
+            "fs_main"
+        };
+        let build = |vs: &str, fs: Option<&str>, buffers: &[Option<wgpu::VertexBufferLayout<'_>>], targets: &[Option<wgpu::ColorTargetState>], depth| {
+            render_pipeline(gpu, composed, &layout, (vs, fs), buffers, targets, depth)
+        };
+        let pipelines = match pass.name {
+            "depth_prepass" => vec![build("vs_main", None, &vertex, &[], Some(d.state(d.compare(), true)))],
+            "gbuffer" => {
+                let formats = gbuffer::formats(self.variant.gbuffer().layout);
+                let targets: Vec<_> = formats.into_iter().map(color_target).collect();
+                vec![build("vs_main", Some("fs_main"), &vertex, &targets, Some(d.state(d.compare(), true)))]
             }
-            runner.finish()
-        })??;
+            "forward" => {
+                let state = if self.variant.depth_prepass {
+                    d.state(wgpu::CompareFunction::Equal, false)
+                } else {
+                    d.state(d.compare(), true)
+                };
+                vec![build("vs_main", Some(fs), &vertex, &[hdr], Some(state))]
+            }
+            "resolve" => vec![build("vs_main", Some("fs_main"), &[], &[hdr], None)],
+            "scissor_lights" => vec![
+                build("vs_ambient", Some("fs_ambient"), &[], std::slice::from_ref(&additive), None),
+                build("vs_light", Some("fs_light"), &[], std::slice::from_ref(&additive), None),
+            ],
+            "debug_view" | "tonemap" => {
+                vec![build("vs_main", Some("fs_main"), &[], &[color_target(LDR_FORMAT)], None)]
+            }
+            other => unreachable!("no render pipelines for pass `{other}`"),
+        };
+        PassPipelines::Render(pipelines)
+    }
+
+    /// Render one frame (timed) and read back its images.
+    pub fn render(&mut self) -> Result<FrameOutput, RenderError> {
+        let start = Instant::now();
+        let mut attempt = 0;
+        let (timings, cpu_assign_ms) = loop {
+            let (timings, cpu_ms) = self.run_frame(false)?;
+            if self.grow_lists_if_needed()? {
+                attempt += 1;
+                if attempt < 3 {
+                    continue;
+                }
+            }
+            break (timings, cpu_ms);
+        };
         let wall_ms = start.elapsed().as_secs_f64() * 1e3;
-        let hdr = read_hdr(gpu, &self.targets.hdr)?;
-        let ldr = read_texture(gpu, &self.targets.ldr, 4)?;
+        let hdr = read_hdr(self.gpu, &self.targets.hdr)?;
+        let ldr = read_texture(self.gpu, &self.targets.ldr, 4)?;
         Ok(FrameOutput {
             width: self.width,
             height: self.height,
@@ -220,7 +518,161 @@ impl<'g> Renderer<'g> {
             ldr: bytemuck::cast_slice(&ldr).to_vec(),
             timings,
             wall_ms,
+            cpu_assign_ms,
         })
+    }
+
+    /// Render the frame again with instrumented shading and return its exact counters.
+    pub fn stats(&mut self) -> Result<FrameStats, RenderError> {
+        let gpu = self.gpu;
+        gpu.scoped("clearing counters", || {
+            let mut e = gpu.device.create_command_encoder(&Default::default());
+            e.clear_buffer(&self.pixel_evals, 0, None);
+            e.clear_buffer(&self.pixel_useful, 0, None);
+            gpu.queue.submit([e.finish()]);
+        })?;
+        self.run_frame(true)?;
+        let sum = |b: &wgpu::Buffer| -> Result<u64, GpuError> {
+            let bytes = read_buffer(gpu, b, 0, b.size())?;
+            Ok(bytemuck::cast_slice::<u8, u32>(&bytes).iter().map(|&v| v as u64).sum())
+        };
+        let mut stats = FrameStats {
+            light_evals: sum(&self.pixel_evals)?,
+            useful_light_evals: sum(&self.pixel_useful)?,
+            gbuffer_bytes_per_pixel: if self.variant.pipeline.is_deferred() {
+                gbuffer::bytes_per_pixel(self.variant.gbuffer().layout)
+            } else {
+                0
+            },
+            list_reallocations: self.reallocations,
+            ..Default::default()
+        };
+        if let Some(c) = &self.clusters {
+            let s = c.read_stats(gpu)?;
+            let range = c.read_range(gpu)?;
+            stats.clusters = c.clusters as u64;
+            stats.dropped_lights = s.dropped as u64;
+            stats.max_lights_per_cluster = s.max_per_cluster;
+            stats.light_list_entries = s.total as u64;
+            stats.cluster_bytes = c.bytes();
+            stats.z_range = Some([range.near, range.far]);
+            stats.assigned_clusters = if self.variant.clusters().active_clusters {
+                s.active_clusters as u64
+            } else {
+                c.clusters as u64
+            };
+            stats.active_clusters = self.count_visible_clusters()? as u64;
+        }
+        Ok(stats)
+    }
+
+    /// Clusters holding a visible sample of the last frame's depth (exact marking).
+    fn count_visible_clusters(&self) -> Result<u32, RenderError> {
+        let gpu = self.gpu;
+        let c = self.clusters.as_ref().expect("clustered");
+        let Some(PassPipelines::Compute(p)) = self.timed.get("mark_active") else {
+            return Ok(0);
+        };
+        gpu.scoped("counting visible clusters", || {
+            let mut e = gpu.device.create_command_encoder(&Default::default());
+            e.clear_buffer(&c.active, 0, None);
+            // Zero the `active_clusters` counter (third u32 of the stats).
+            e.clear_buffer(&c.stats, 8, Some(4));
+            {
+                let mut pass = e.begin_compute_pass(&Default::default());
+                pass.set_pipeline(&p["mark_visible"]);
+                self.set_compute_groups(&mut pass, true);
+                pass.dispatch_workgroups(dispatch_size(self.width, 8), dispatch_size(self.height, 8), 1);
+            }
+            gpu.queue.submit([e.finish()]);
+        })?;
+        Ok(c.read_stats(gpu)?.active_clusters)
+    }
+
+    /// After a frame: if the light lists overflowed the index buffer, grow it to fit and
+    /// say so (the caller runs the frame again).
+    fn grow_lists_if_needed(&mut self) -> Result<bool, RenderError> {
+        let gpu = self.gpu;
+        let Some(c) = &mut self.clusters else {
+            return Ok(false);
+        };
+        let s = c.read_stats(gpu)?;
+        if s.overflow == 0 {
+            return Ok(false);
+        }
+        let needed = s.total as u64 + s.total as u64 / 4 + 1024;
+        let limit = gpu.limits.max_storage_buffer_binding_size / 4;
+        if needed > limit {
+            return Err(RenderError::Gpu(GpuError::TooLarge(format!(
+                "the light lists need {} entries, more than adapter `{}` can bind ({limit}); use fewer lights, a coarser grid or a per-cluster cap",
+                s.total, gpu.adapter.name
+            ))));
+        }
+        c.grow_indices(gpu, needed as u32);
+        self.reallocations += 1;
+        self.remake_cluster_groups();
+        Ok(true)
+    }
+
+    /// Encode and run every pass of the frame; returns pass timings and the CPU assignment
+    /// time.
+    fn run_frame(&mut self, instrumented: bool) -> Result<(Timings, Option<f64>), RenderError> {
+        let gpu = self.gpu;
+        if let Some(c) = &self.clusters {
+            gpu.scoped("clearing cluster counters", || {
+                let mut e = gpu.device.create_command_encoder(&Default::default());
+                e.clear_buffer(&c.stats, 0, None);
+                gpu.queue.submit([e.finish()]);
+            })?;
+        }
+        let cpu_ms = self.assign_on_cpu()?;
+        let static_range = !matches!(
+            self.variant.clusters().slicing,
+            ZSlicing::DynamicRange { .. }
+        );
+        let skip_bounds = self.bounds_built && static_range;
+        let passes = self.passes.clone();
+        let timings = gpu.scoped("rendering a frame", || -> Result<Timings, GpuError> {
+            let mut runner = PassRunner::new(gpu, passes.len() as u32 + 2);
+            for pass in &passes {
+                if pass.name == "cluster_bounds" && skip_bounds {
+                    continue;
+                }
+                runner.pass(pass.name, |encoder, slot| {
+                    self.encode(pass.name, encoder, slot, instrumented)
+                })?;
+            }
+            runner.finish()
+        })??;
+        self.bounds_built = true;
+        Ok((timings, cpu_ms))
+    }
+
+    /// Build and upload the light lists on the CPU (variants with `assignment: Cpu`).
+    fn assign_on_cpu(&mut self) -> Result<Option<f64>, RenderError> {
+        let Some(cpu) = &self.cpu_assignment else {
+            return Ok(None);
+        };
+        let start = Instant::now();
+        let lists = cpu_clusters::assign(&cpu.grid, &cpu.bounds, &cpu.lights, cpu.cap, None);
+        let ms = start.elapsed().as_secs_f64() * 1e3;
+        let c = self.clusters.as_mut().expect("clustered");
+        if !c.upload_lists(self.gpu, &lists) {
+            c.grow_indices(self.gpu, lists.indices.len() as u32 + 1024);
+            self.reallocations += 1;
+            self.remake_cluster_groups();
+            let c = self.clusters.as_ref().expect("clustered");
+            c.upload_lists(self.gpu, &lists);
+        }
+        Ok(Some(ms))
+    }
+
+    fn set_compute_groups(&self, pass: &mut wgpu::ComputePass<'_>, depth: bool) {
+        pass.set_bind_group(0, &self.groups.frame, &[]);
+        pass.set_bind_group(1, self.groups.cluster_build.as_ref(), &[]);
+        if depth {
+            pass.set_bind_group(2, &self.groups.depth_read, &[]);
+        }
     }
 
     fn encode(
@@ -228,50 +680,98 @@ impl<'g> Renderer<'g> {
         name: &str,
         encoder: &mut wgpu::CommandEncoder,
         slot: Option<TimestampSlot<'_>>,
+        instrumented: bool,
     ) {
-        match name {
-            "depth_prepass" => self.draw_scene(name, encoder, slot, None, true),
-            "forward" => {
-                let hdr = self.targets.hdr.create_view(&Default::default());
-                self.draw_scene(name, encoder, slot, Some(&hdr), !self.variant.depth_prepass);
-            }
-            "tonemap" => {
-                let ldr = self.targets.ldr.create_view(&Default::default());
-                let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                    label: Some(name),
-                    color_attachments: &[clear_attachment(&ldr)],
-                    depth_stencil_attachment: None,
-                    timestamp_writes: TimestampSlot::render(slot),
-                    occlusion_query_set: None,
-                    multiview_mask: None,
-                });
-                pass.set_pipeline(&self.render_pipelines[name]);
-                pass.set_bind_group(0, &self.tonemap_group, &[]);
-                pass.draw(0..3, 0..1);
-            }
-            _ => unreachable!("Renderer::new refuses passes it cannot run"),
+        let pipelines = if instrumented && is_shading(name) {
+            &self.instrumented[name]
+        } else {
+            &self.timed[name]
+        };
+        match pipelines {
+            PassPipelines::Compute(p) => self.encode_compute(name, p, encoder, slot),
+            PassPipelines::Render(p) => self.encode_render(name, p, encoder, slot, instrumented),
         }
     }
 
-    /// Draw the scene geometry with pipeline `name` into `color` (if any), clearing or
-    /// keeping depth.
-    fn draw_scene(
+    fn encode_compute(
         &self,
         name: &str,
+        p: &HashMap<&'static str, wgpu::ComputePipeline>,
         encoder: &mut wgpu::CommandEncoder,
         slot: Option<TimestampSlot<'_>>,
-        color: Option<&wgpu::TextureView>,
-        clear_depth: bool,
     ) {
-        let depth_view = self.targets.depth.create_view(&Default::default());
-        let colors = [color.and_then(clear_attachment)];
-        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+        let c = self.clusters.as_ref().expect("compute passes are clustered");
+        match name {
+            "mark_active" => encoder.clear_buffer(&c.active, 0, None),
+            "light_assign" => {
+                encoder.clear_buffer(&c.counts, 0, None);
+                encoder.clear_buffer(&c.fill_cursors, 0, None);
+            }
+            _ => {}
+        }
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some(name),
-            color_attachments: if color.is_some() { &colors } else { &[] },
-            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+            timestamp_writes: TimestampSlot::compute(slot),
+        });
+        let pixels = (dispatch_size(self.width, 8), dispatch_size(self.height, 8));
+        let clusters = dispatch_size(c.clusters, 64);
+        match name {
+            "cluster_bounds" => {
+                self.set_compute_groups(&mut pass, false);
+                pass.set_pipeline(&p["build_bounds"]);
+                pass.dispatch_workgroups(clusters, 1, 1);
+            }
+            "mark_active" => {
+                self.set_compute_groups(&mut pass, true);
+                pass.set_pipeline(&p["mark_active"]);
+                pass.dispatch_workgroups(pixels.0, pixels.1, 1);
+            }
+            "depth_range" => {
+                self.set_compute_groups(&mut pass, true);
+                pass.set_pipeline(&p["reduce"]);
+                pass.dispatch_workgroups(pixels.0, pixels.1, 1);
+                pass.set_pipeline(&p["finalize"]);
+                pass.dispatch_workgroups(1, 1, 1);
+            }
+            "light_assign" => {
+                let l = self.scene.light_count;
+                // One workgroup per light, in rows of LIGHTS_PER_ROW (light_assign.wesl).
+                let per_light = (l.clamp(1, LIGHTS_PER_ROW), l.div_ceil(LIGHTS_PER_ROW).max(1));
+                self.set_compute_groups(&mut pass, false);
+                for (entry, groups) in [
+                    ("transform_lights", (dispatch_size(l, 64), 1)),
+                    ("count_lights", per_light),
+                    ("scan_local", (dispatch_size(c.clusters, clusters::SCAN_BLOCK), 1)),
+                    ("scan_blocks", (1, 1)),
+                    ("fill_lists", per_light),
+                    ("finish_lists", (clusters, 1)),
+                ] {
+                    pass.set_pipeline(&p[entry]);
+                    pass.dispatch_workgroups(groups.0, groups.1, 1);
+                }
+            }
+            other => unreachable!("no compute encoding for `{other}`"),
+        }
+    }
+
+    fn encode_render(
+        &self,
+        name: &str,
+        p: &[wgpu::RenderPipeline],
+        encoder: &mut wgpu::CommandEncoder,
+        slot: Option<TimestampSlot<'_>>,
+        instrumented: bool,
+    ) {
+        let view_of = |t: &wgpu::Texture| t.create_view(&Default::default());
+        let hdr = view_of(&self.targets.hdr);
+        let ldr = view_of(&self.targets.ldr);
+        let depth_view = view_of(&self.targets.depth);
+        let gbuffer_views: Vec<_> = self.targets.gbuffer.iter().map(view_of).collect();
+        let depth_attachment = |clear: bool| {
+            Some(wgpu::RenderPassDepthStencilAttachment {
                 view: &depth_view,
                 depth_ops: Some(wgpu::Operations {
-                    load: if clear_depth {
+                    load: if clear {
                         wgpu::LoadOp::Clear(self.depth.clear())
                     } else {
                         wgpu::LoadOp::Load
@@ -279,16 +779,118 @@ impl<'g> Renderer<'g> {
                     store: wgpu::StoreOp::Store,
                 }),
                 stencil_ops: None,
-            }),
+            })
+        };
+        let (colors, depth): (Vec<_>, _) = match name {
+            "depth_prepass" => (vec![], depth_attachment(true)),
+            "gbuffer" => (gbuffer_views.iter().map(clear_attachment).collect(), depth_attachment(true)),
+            "forward" => (vec![clear_attachment(&hdr)], depth_attachment(!self.variant.depth_prepass)),
+            "resolve" | "scissor_lights" => (vec![clear_attachment(&hdr)], None),
+            _ => (vec![clear_attachment(&ldr)], None),
+        };
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some(name),
+            color_attachments: &colors,
+            depth_stencil_attachment: depth,
             timestamp_writes: TimestampSlot::render(slot),
             occlusion_query_set: None,
             multiview_mask: None,
         });
-        pass.set_pipeline(&self.render_pipelines[name]);
-        pass.set_bind_group(0, &self.frame_group, &[]);
-        pass.set_vertex_buffer(0, self.scene.vertices.slice(..));
-        pass.set_index_buffer(self.scene.indices.slice(..), wgpu::IndexFormat::Uint32);
-        pass.draw_indexed(0..self.scene.index_count, 0, 0..1);
+        let g = &self.groups;
+        let surface = g.gbuffer_read.as_ref().unwrap_or(&g.depth_read);
+        match name {
+            "tonemap" => pass.set_bind_group(0, &g.tonemap, &[]),
+            _ => pass.set_bind_group(0, &g.frame, &[]),
+        }
+        if matches!(name, "forward" | "resolve" | "debug_view") && self.clusters.is_some() {
+            pass.set_bind_group(1, g.cluster_lookup.as_ref(), &[]);
+        }
+        if matches!(name, "resolve" | "scissor_lights" | "debug_view") {
+            pass.set_bind_group(2, surface, &[]);
+        }
+        if instrumented && is_shading(name) {
+            pass.set_bind_group(3, &g.stats, &[]);
+        }
+        match name {
+            "depth_prepass" | "gbuffer" | "forward" => {
+                pass.set_pipeline(&p[0]);
+                pass.set_vertex_buffer(0, self.scene.vertices.slice(..));
+                pass.set_index_buffer(self.scene.indices.slice(..), wgpu::IndexFormat::Uint32);
+                pass.draw_indexed(0..self.scene.index_count, 0, 0..1);
+            }
+            "scissor_lights" => {
+                pass.set_pipeline(&p[0]);
+                pass.draw(0..3, 0..1);
+                pass.set_pipeline(&p[1]);
+                pass.draw(0..6, 0..self.scene.light_count);
+            }
+            _ => {
+                pass.set_pipeline(&p[0]);
+                pass.draw(0..3, 0..1);
+            }
+        }
+    }
+
+    /// The light lists as the GPU holds them after the last frame (clustered variants).
+    pub fn cluster_lists(&self) -> Result<Option<ClusterLists>, RenderError> {
+        match &self.clusters {
+            Some(c) => Ok(Some(c.read_lists(self.gpu)?)),
+            None => Ok(None),
+        }
+    }
+
+    /// The clustered depth range after the last frame (clustered variants).
+    pub fn cluster_range(&self) -> Result<Option<ClusterRange>, RenderError> {
+        match &self.clusters {
+            Some(c) => Ok(Some(c.read_range(self.gpu)?)),
+            None => Ok(None),
+        }
+    }
+}
+
+/// The CPU twin of a variant's grid over a scene's camera (static z-range).
+pub fn cpu_grid(variant: &Variant, scene: &Scene) -> Grid {
+    let c = variant.clusters();
+    let cam = &scene.camera;
+    let tan_half_fov_y = (cam.fov_y / 2.0).tan();
+    let scheme = match c.slicing {
+        ZSlicing::Linear => Scheme::Linear,
+        ZSlicing::Exponential | ZSlicing::DynamicRange { .. } => Scheme::Exponential,
+        ZSlicing::NearSliceThenExponential { near_slice_end } => Scheme::NearThenExponential {
+            near_end: near_slice_end as f64,
+        },
+        ZSlicing::OlssonCubic => Scheme::Olsson {
+            tan_half_fov_y,
+            tiles_y: c.grid.1,
+        },
+    };
+    // The GPU sees the camera's planes as f32; so does the twin.
+    let near = cam.near as f32 as f64;
+    let far = cam.far as f32 as f64;
+    Grid {
+        x: c.grid.0,
+        y: c.grid.1,
+        z: c.grid.2,
+        scheme,
+        range: (near, far),
+        near,
+        far,
+        tan_half_fov_y,
+        aspect: scene.aspect(),
+    }
+}
+
+fn cpu_assignment(variant: &Variant, scene: &Scene) -> CpuAssignment {
+    let grid = cpu_grid(variant, scene);
+    let lights: &[Light] = &scene.lights;
+    CpuAssignment {
+        bounds: cpu_clusters::cluster_bounds(&grid),
+        grid,
+        lights: cpu_clusters::view_lights(lights, scene.camera.view()),
+        cap: match variant.clusters().lists {
+            LightLists::Exact => None,
+            LightLists::Capped { max_per_cluster } => Some(max_per_cluster),
+        },
     }
 }
 
@@ -304,9 +906,4 @@ fn read_hdr(gpu: &Gpu, texture: &wgpu::Texture) -> Result<Vec<[f32; 4]>, GpuErro
         }
         _ => bytemuck::cast_slice(&read_texture(gpu, texture, 16)?).to_vec(),
     })
-}
-
-/// Passes this version can run.
-fn runnable(name: &str) -> bool {
-    matches!(name, "depth_prepass" | "forward" | "tonemap")
 }

@@ -109,12 +109,12 @@ pub fn pipeline_layout(gpu: &Gpu, groups: &[&wgpu::BindGroupLayout]) -> wgpu::Pi
         })
 }
 
-/// A render pipeline of a composed pass with entry points `vs_main` and (when `targets` is
-/// not empty) `fs_main`.
+/// A render pipeline of a composed pass with vertex and (optional) fragment entry points.
 pub fn render_pipeline(
     gpu: &Gpu,
     pass: &ComposedPass,
     layout: &wgpu::PipelineLayout,
+    (vs, fs): (&str, Option<&str>),
     vertex_buffers: &[Option<wgpu::VertexBufferLayout<'_>>],
     targets: &[Option<wgpu::ColorTargetState>],
     depth: Option<wgpu::DepthStencilState>,
@@ -126,16 +126,16 @@ pub fn render_pipeline(
             layout: Some(layout),
             vertex: wgpu::VertexState {
                 module: &module,
-                entry_point: Some("vs_main"),
+                entry_point: Some(vs),
                 compilation_options: Default::default(),
                 buffers: vertex_buffers,
             },
             primitive: wgpu::PrimitiveState::default(),
             depth_stencil: depth,
             multisample: wgpu::MultisampleState::default(),
-            fragment: (!targets.is_empty()).then(|| wgpu::FragmentState {
+            fragment: fs.map(|fs| wgpu::FragmentState {
                 module: &module,
-                entry_point: Some("fs_main"),
+                entry_point: Some(fs),
                 compilation_options: Default::default(),
                 targets,
             }),

@@ -1,5 +1,10 @@
 //! The raster truth pass: the same rasterisation as the variant (same vertex transform,
-//! depth format and test), written as 32-bit floats for the CPU reference.
+//! depth format and test, and a depth pre-pass when the variant has one), written as
+//! 32-bit floats for the CPU reference.
+//!
+//! The pre-pass matters: with it, shading keeps every fragment whose depth *equals* the
+//! nearest, so where two surfaces tie exactly (along a shared edge) the last one drawn
+//! wins, where a plain `Less` test keeps the first.
 
 use super::RenderError;
 use super::passes::{clear_attachment, color_target, pipeline_layout, render_pipeline};
@@ -27,23 +32,52 @@ pub fn raster_truth(
         &crate::compose::feature_flags(variant),
         &crate::compose::constants_module(variant),
     )?;
+    let prepass = if variant.depth_prepass {
+        Some(composer.compose_root(
+            "truth depth pre-pass",
+            "passes::depth_prepass",
+            &crate::compose::feature_flags(variant),
+            &crate::compose::constants_module(variant),
+        )?)
+    } else {
+        None
+    };
     let depth = DepthSetup::of(variant);
     let textures = gpu.scoped("raster truth", || {
         let buffers = SceneBuffers::upload(gpu, scene, depth.reversed);
         let layout = frame_layout(gpu);
         let group = frame_bind_group(gpu, &layout, &buffers);
+        let pipeline_layout = pipeline_layout(gpu, &[&layout]);
+        let vertex = [Some(SceneBuffers::vertex_layout())];
+        let depth_state = if prepass.is_some() {
+            depth.state(wgpu::CompareFunction::Equal, false)
+        } else {
+            depth.state(depth.compare(), true)
+        };
         let pipeline = render_pipeline(
             gpu,
             &pass,
-            &pipeline_layout(gpu, &[&layout]),
-            &[Some(SceneBuffers::vertex_layout())],
+            &pipeline_layout,
+            ("vs_main", Some("fs_main")),
+            &vertex,
             &[
                 color_target(TRUTH_FORMAT),
                 color_target(TRUTH_FORMAT),
                 color_target(TRUTH_FORMAT),
             ],
-            Some(depth.state(depth.compare(), true)),
+            Some(depth_state),
         );
+        let prepass_pipeline = prepass.as_ref().map(|p| {
+            render_pipeline(
+                gpu,
+                p,
+                &pipeline_layout,
+                ("vs_main", None),
+                &vertex,
+                &[],
+                Some(depth.state(depth.compare(), true)),
+            )
+        });
         let textures: Vec<wgpu::Texture> = ["truth position", "truth normal", "truth albedo"]
             .iter()
             .map(|label| target(gpu, label, w, h, TRUTH_FORMAT))
@@ -57,15 +91,27 @@ pub fn raster_truth(
         let mut encoder = gpu
             .device
             .create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
-        {
-            let attachments: Vec<_> = views.iter().map(clear_attachment).collect();
+        let draws = prepass_pipeline
+            .iter()
+            .map(|p| (p, false))
+            .chain([(&pipeline, true)]);
+        for (i, (pipeline, colors)) in draws.enumerate() {
+            let attachments: Vec<_> = if colors {
+                views.iter().map(clear_attachment).collect()
+            } else {
+                Vec::new()
+            };
             let mut rp = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("truth"),
                 color_attachments: &attachments,
                 depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
                     view: &depth_view,
                     depth_ops: Some(wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(depth.clear()),
+                        load: if i == 0 {
+                            wgpu::LoadOp::Clear(depth.clear())
+                        } else {
+                            wgpu::LoadOp::Load
+                        },
                         store: wgpu::StoreOp::Store,
                     }),
                     stencil_ops: None,
@@ -74,7 +120,7 @@ pub fn raster_truth(
                 occlusion_query_set: None,
                 multiview_mask: None,
             });
-            rp.set_pipeline(&pipeline);
+            rp.set_pipeline(pipeline);
             rp.set_bind_group(0, &group, &[]);
             rp.set_vertex_buffer(0, buffers.vertices.slice(..));
             rp.set_index_buffer(buffers.indices.slice(..), wgpu::IndexFormat::Uint32);

@@ -219,19 +219,28 @@ fn atrium(p: SceneParams) -> Scene {
     m.axis_rect(0, -hx, [0.0, -hz], [height, hz], true, SANDSTONE);
     m.axis_rect(0, hx, [0.0, -hz], [height, hz], false, SANDSTONE);
 
+    // No two faces are coplanar: where pieces meet, one runs into the other, so every
+    // pipeline's rasterisation agrees on which surface a pixel sees.
+    let into_wall = 0.3;
     for side in [-1.0, 1.0] {
         // Gallery slab over the aisle, then ground-floor and gallery columns, and a beam on
         // each row of columns.
-        let slab_z = if side < 0.0 { (-hz, -4.2) } else { (4.2, hz) };
+        let slab_z = if side < 0.0 {
+            (-hz - into_wall, -4.2)
+        } else {
+            (4.2, hz + into_wall)
+        };
         m.cuboid(
-            DVec3::new(-hx, 5.0, slab_z.0),
-            DVec3::new(hx, 5.4, slab_z.1),
+            DVec3::new(-hx - into_wall, 5.0, slab_z.0),
+            DVec3::new(hx + into_wall, 5.4, slab_z.1),
             SANDSTONE,
         );
         for i in 0..9 {
             let x = -12.0 + 3.0 * i as f64;
-            m.cylinder(DVec3::new(x, 0.0, side * 3.6), 0.35, 5.0, 16, PALE_STONE);
-            m.cylinder(DVec3::new(x, 5.4, side * 4.5), 0.25, 4.6, 12, PALE_STONE);
+            // Ground columns stand in the floor and end inside the beam above them; gallery
+            // columns start inside the slab and end inside the upper beam.
+            m.cylinder(DVec3::new(x, -0.1, side * 3.6), 0.35, 4.7, 16, PALE_STONE);
+            m.cylinder(DVec3::new(x, 5.3, side * 4.5), 0.25, 4.9, 12, PALE_STONE);
         }
         m.cuboid(
             DVec3::new(-13.0, 4.4, side * 3.6 - 0.35),
@@ -258,8 +267,8 @@ fn atrium(p: SceneParams) -> Scene {
     for i in 0..6 {
         let x = -12.5 + 5.0 * i as f64;
         m.cuboid(
-            DVec3::new(x - 0.3, 10.5, -hz),
-            DVec3::new(x + 0.3, 11.2, hz),
+            DVec3::new(x - 0.3, 10.45, -hz - into_wall),
+            DVec3::new(x + 0.3, 11.2, hz + into_wall),
             WOOD,
         );
     }

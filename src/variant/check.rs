@@ -114,6 +114,20 @@ fn check_clusters(c: &Clusters, v: &Variant, out: &mut Vec<Problem>) {
         }
         _ => {}
     }
+    if c.assignment == Assignment::Cpu {
+        if matches!(c.slicing, ZSlicing::DynamicRange { .. }) {
+            out.push(problem(
+                "clusters.assignment",
+                "Cpu assignment needs a z-range known before the frame; use static slicing or Gpu assignment",
+            ));
+        }
+        if c.active_clusters {
+            out.push(problem(
+                "clusters.assignment",
+                "Cpu assignment cannot see which clusters are active (that needs this frame's depth on the GPU); turn active_clusters off or use Gpu assignment",
+            ));
+        }
+    }
     if let LightLists::Capped { max_per_cluster } = c.lists
         && (max_per_cluster == 0 || max_per_cluster > MAX_CAP)
     {

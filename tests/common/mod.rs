@@ -5,7 +5,7 @@ use std::path::Path;
 
 use clusterlab::compose::Composer;
 use clusterlab::gpu::Gpu;
-use clusterlab::run::{CellResult, run_cell};
+use clusterlab::run::{CellOptions, CellResult, run_cell};
 use clusterlab::scene::{SceneParams, find_scene};
 use clusterlab::variant::{self, LoadedVariant};
 
@@ -29,6 +29,16 @@ pub fn small(scene: &str, width: u32, height: u32, lights: Option<u32>) -> Scene
 }
 
 pub fn cell(gpu: &Gpu, v: &LoadedVariant, scene: &str, p: SceneParams) -> CellResult {
-    run_cell(gpu, &Composer::default(), v, scene, p, 1, None)
+    run_cell(
+        gpu,
+        &Composer::default(),
+        v,
+        scene,
+        p,
+        CellOptions {
+            warmup: 0,
+            ..Default::default()
+        },
+    )
         .unwrap_or_else(|e| panic!("{} on {scene}: {e}", v.name))
 }

@@ -1,0 +1,274 @@
+//! Cluster buffers on the GPU: bounds, light counts, offsets and indices, the clustered
+//! depth range, and the assignment counters. Mirrors `shaders/clustering/build_bindings.wesl`.
+
+use bytemuck::{Pod, Zeroable};
+use wgpu::util::DeviceExt;
+
+use super::resources::storage_entry;
+use crate::cpu::clusters::ClusterLists;
+use crate::gpu::{Gpu, GpuError, read_buffer};
+
+/// Mirrors `ClusterRange` in `shaders/clustering/clusters.wesl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct ClusterRange {
+    pub near: f32,
+    pub far: f32,
+    pub min_bits: u32,
+    pub max_bits: u32,
+}
+
+impl ClusterRange {
+    /// A static range, with the reduction scratch reset.
+    pub fn new(near: f32, far: f32) -> Self {
+        Self {
+            near,
+            far,
+            min_bits: u32::MAX,
+            max_bits: 0,
+        }
+    }
+}
+
+/// Mirrors `ClusterStats` in `shaders/clustering/build_bindings.wesl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct ClusterStats {
+    pub total: u32,
+    pub dropped: u32,
+    pub active_clusters: u32,
+    pub max_per_cluster: u32,
+    pub overflow: u32,
+    pub _pad: [u32; 3],
+}
+
+/// Bindings of group 1 (see `build_bindings.wesl`).
+mod binding {
+    pub const RANGE: u32 = 0;
+    pub const BOUNDS: u32 = 1;
+    pub const ACTIVE: u32 = 2;
+    pub const COUNTS: u32 = 3;
+    pub const OFFSETS: u32 = 4;
+    pub const BLOCK_SUMS: u32 = 5;
+    pub const INDICES: u32 = 6;
+    pub const STATS: u32 = 7;
+    pub const LIGHT_VIEW: u32 = 8;
+    pub const LIGHT_RANGES: u32 = 9;
+    pub const FILL_CURSORS: u32 = 10;
+}
+
+/// Clusters of one scan workgroup (`SCAN_BLOCK` in light_assign.wesl).
+pub const SCAN_BLOCK: u32 = 256;
+
+pub struct ClusterBuffers {
+    pub clusters: u32,
+    pub range: wgpu::Buffer,
+    pub bounds: wgpu::Buffer,
+    pub active: wgpu::Buffer,
+    pub counts: wgpu::Buffer,
+    pub offsets: wgpu::Buffer,
+    pub block_sums: wgpu::Buffer,
+    pub indices: wgpu::Buffer,
+    pub stats: wgpu::Buffer,
+    pub light_view: wgpu::Buffer,
+    pub light_ranges: wgpu::Buffer,
+    pub fill_cursors: wgpu::Buffer,
+    /// Entries the index buffer holds.
+    pub index_capacity: u32,
+}
+
+fn storage(gpu: &Gpu, label: &str, size: u64) -> wgpu::Buffer {
+    gpu.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some(label),
+        size: size.max(16),
+        usage: wgpu::BufferUsages::STORAGE
+            | wgpu::BufferUsages::COPY_DST
+            | wgpu::BufferUsages::COPY_SRC,
+        mapped_at_creation: false,
+    })
+}
+
+impl ClusterBuffers {
+    pub fn new(gpu: &Gpu, clusters: u32, lights: u32, index_capacity: u32, range: ClusterRange) -> Self {
+        let n = clusters as u64;
+        Self {
+            clusters,
+            range: gpu
+                .device
+                .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                    label: Some("cluster range"),
+                    contents: bytemuck::bytes_of(&range),
+                    usage: wgpu::BufferUsages::STORAGE
+                        | wgpu::BufferUsages::COPY_DST
+                        | wgpu::BufferUsages::COPY_SRC,
+                }),
+            bounds: storage(gpu, "cluster bounds", n * 32),
+            active: storage(gpu, "active clusters", n * 4),
+            counts: storage(gpu, "light counts", n * 4),
+            offsets: storage(gpu, "light offsets", n * 4),
+            block_sums: storage(gpu, "block sums", n.div_ceil(SCAN_BLOCK as u64) * 4),
+            indices: storage(gpu, "light indices", index_capacity as u64 * 4),
+            stats: storage(gpu, "cluster stats", std::mem::size_of::<ClusterStats>() as u64),
+            light_view: storage(gpu, "view-space lights", lights.max(1) as u64 * 16),
+            light_ranges: storage(gpu, "light cluster ranges", lights.max(1) as u64 * 16),
+            fill_cursors: storage(gpu, "fill cursors", n * 4),
+            index_capacity,
+        }
+    }
+
+    /// Bytes of all cluster data on the GPU.
+    pub fn bytes(&self) -> u64 {
+        [
+            &self.range,
+            &self.bounds,
+            &self.active,
+            &self.counts,
+            &self.offsets,
+            &self.block_sums,
+            &self.indices,
+            &self.stats,
+            &self.light_view,
+            &self.light_ranges,
+            &self.fill_cursors,
+        ]
+        .iter()
+        .map(|b| b.size())
+        .sum()
+    }
+
+    /// Replace the index buffer with one of `capacity` entries (bind groups must be remade).
+    pub fn grow_indices(&mut self, gpu: &Gpu, capacity: u32) {
+        self.indices = storage(gpu, "light indices", capacity as u64 * 4);
+        self.index_capacity = capacity;
+    }
+
+    /// Layout of group 1 for the passes that build clusters (all read-write).
+    pub fn build_layout(gpu: &Gpu) -> wgpu::BindGroupLayout {
+        let entries: Vec<_> = (0..=binding::FILL_CURSORS)
+            .map(|b| wgpu::BindGroupLayoutEntry {
+                visibility: wgpu::ShaderStages::COMPUTE,
+                ..storage_entry(b, false)
+            })
+            .collect();
+        gpu.device
+            .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                label: Some("cluster build"),
+                entries: &entries,
+            })
+    }
+
+    /// Layout of group 1 for the passes that look lists up (read-only).
+    pub fn lookup_layout(gpu: &Gpu) -> wgpu::BindGroupLayout {
+        let entries: Vec<_> = [binding::RANGE, binding::COUNTS, binding::OFFSETS, binding::INDICES]
+            .into_iter()
+            .map(|b| wgpu::BindGroupLayoutEntry {
+                visibility: wgpu::ShaderStages::FRAGMENT | wgpu::ShaderStages::COMPUTE,
+                ..storage_entry(b, true)
+            })
+            .collect();
+        gpu.device
+            .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                label: Some("cluster lookup"),
+                entries: &entries,
+            })
+    }
+
+    fn buffer(&self, b: u32) -> &wgpu::Buffer {
+        match b {
+            binding::RANGE => &self.range,
+            binding::BOUNDS => &self.bounds,
+            binding::ACTIVE => &self.active,
+            binding::COUNTS => &self.counts,
+            binding::OFFSETS => &self.offsets,
+            binding::BLOCK_SUMS => &self.block_sums,
+            binding::INDICES => &self.indices,
+            binding::STATS => &self.stats,
+            binding::LIGHT_VIEW => &self.light_view,
+            binding::LIGHT_RANGES => &self.light_ranges,
+            _ => &self.fill_cursors,
+        }
+    }
+
+    fn group(&self, gpu: &Gpu, layout: &wgpu::BindGroupLayout, bindings: &[u32]) -> wgpu::BindGroup {
+        let entries: Vec<_> = bindings
+            .iter()
+            .map(|&b| wgpu::BindGroupEntry {
+                binding: b,
+                resource: self.buffer(b).as_entire_binding(),
+            })
+            .collect();
+        gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("clusters"),
+            layout,
+            entries: &entries,
+        })
+    }
+
+    pub fn build_group(&self, gpu: &Gpu, layout: &wgpu::BindGroupLayout) -> wgpu::BindGroup {
+        let all: Vec<u32> = (0..=binding::FILL_CURSORS).collect();
+        self.group(gpu, layout, &all)
+    }
+
+    pub fn lookup_group(&self, gpu: &Gpu, layout: &wgpu::BindGroupLayout) -> wgpu::BindGroup {
+        self.group(
+            gpu,
+            layout,
+            &[binding::RANGE, binding::COUNTS, binding::OFFSETS, binding::INDICES],
+        )
+    }
+
+    pub fn read_stats(&self, gpu: &Gpu) -> Result<ClusterStats, GpuError> {
+        let bytes = read_buffer(gpu, &self.stats, 0, self.stats.size())?;
+        Ok(bytemuck::pod_read_unaligned(&bytes[..std::mem::size_of::<ClusterStats>()]))
+    }
+
+    pub fn read_range(&self, gpu: &Gpu) -> Result<ClusterRange, GpuError> {
+        let bytes = read_buffer(gpu, &self.range, 0, 16)?;
+        Ok(bytemuck::pod_read_unaligned(&bytes))
+    }
+
+    /// The light lists as the GPU holds them.
+    pub fn read_lists(&self, gpu: &Gpu) -> Result<ClusterLists, GpuError> {
+        let n = self.clusters as u64 * 4;
+        let counts: Vec<u32> = bytemuck::cast_slice(&read_buffer(gpu, &self.counts, 0, n)?).to_vec();
+        let offsets: Vec<u32> = bytemuck::cast_slice(&read_buffer(gpu, &self.offsets, 0, n)?).to_vec();
+        let total: u64 = counts.iter().map(|&c| c as u64).sum();
+        let used = (total * 4).min(self.indices.size());
+        let indices: Vec<u32> = if used == 0 {
+            Vec::new()
+        } else {
+            bytemuck::cast_slice(&read_buffer(gpu, &self.indices, 0, used)?).to_vec()
+        };
+        let stats = self.read_stats(gpu)?;
+        Ok(ClusterLists {
+            max_per_cluster: counts.iter().copied().max().unwrap_or(0),
+            counts,
+            offsets,
+            indices,
+            dropped: stats.dropped as u64,
+        })
+    }
+
+    /// Upload lists built on the CPU; returns false when the index buffer must grow first.
+    pub fn upload_lists(&self, gpu: &Gpu, lists: &ClusterLists) -> bool {
+        if lists.indices.len() as u64 > self.index_capacity as u64 {
+            return false;
+        }
+        gpu.queue
+            .write_buffer(&self.counts, 0, bytemuck::cast_slice(&lists.counts));
+        gpu.queue
+            .write_buffer(&self.offsets, 0, bytemuck::cast_slice(&lists.offsets));
+        if !lists.indices.is_empty() {
+            gpu.queue
+                .write_buffer(&self.indices, 0, bytemuck::cast_slice(&lists.indices));
+        }
+        let stats = ClusterStats {
+            total: lists.indices.len() as u32,
+            dropped: lists.dropped as u32,
+            max_per_cluster: lists.max_per_cluster,
+            ..Default::default()
+        };
+        gpu.queue.write_buffer(&self.stats, 0, bytemuck::bytes_of(&stats));
+        true
+    }
+}
