@@ -7,7 +7,7 @@ use std::time::Instant;
 
 use clap::{Parser, Subcommand};
 use clusterlab::compose::{Composer, passes};
-use clusterlab::variant;
+use clusterlab::variant::{self, DebugView};
 
 #[derive(Parser)]
 #[command(
@@ -74,6 +74,10 @@ struct RenderArgs {
     /// Untimed frames before them (software rasterisers compile on first use).
     #[arg(long, default_value_t = 1)]
     warmup: u32,
+    /// Show a debug view instead of the shaded image: cluster-index, lights-per-cluster,
+    /// z-slice, gbuffer-position, gbuffer-normal, gbuffer-albedo or gbuffer-depth.
+    #[arg(long, value_parser = parse_debug_view)]
+    debug_view: Option<DebugView>,
     /// Skip the instrumented frame that counts light evaluations.
     #[arg(long)]
     no_stats: bool,
@@ -98,6 +102,37 @@ fn parse_size(s: &str) -> Result<(u32, u32), String> {
             .map_err(|_| format!("`{v}` in `{s}` is not a whole number"))
     };
     Ok((n(w)?, n(h)?))
+}
+
+/// Debug views by their command-line names.
+const DEBUG_VIEWS: [(&str, DebugView); 8] = {
+    use clusterlab::variant::GBufferChannel as C;
+    [
+        ("off", DebugView::Off),
+        ("cluster-index", DebugView::ClusterIndex),
+        ("lights-per-cluster", DebugView::LightsPerCluster),
+        ("z-slice", DebugView::ZSlice),
+        (
+            "gbuffer-position",
+            DebugView::GBuffer {
+                channel: C::Position,
+            },
+        ),
+        ("gbuffer-normal", DebugView::GBuffer { channel: C::Normal }),
+        ("gbuffer-albedo", DebugView::GBuffer { channel: C::Albedo }),
+        ("gbuffer-depth", DebugView::GBuffer { channel: C::Depth }),
+    ]
+};
+
+fn parse_debug_view(s: &str) -> Result<DebugView, String> {
+    DEBUG_VIEWS
+        .iter()
+        .find(|(name, _)| *name == s)
+        .map(|(_, v)| *v)
+        .ok_or_else(|| {
+            let names: Vec<&str> = DEBUG_VIEWS.iter().map(|(n, _)| *n).collect();
+            format!("`{s}` is not a debug view; use one of {}", names.join(", "))
+        })
 }
 
 fn parse_range(s: &str) -> Result<(f32, f32), String> {
@@ -241,7 +276,15 @@ fn scenes() {
 }
 
 fn render(args: &RenderArgs) -> Result<bool, String> {
-    let loaded = variant::load(&variant_path(&args.variant)).map_err(|e| e.to_string())?;
+    let mut loaded = variant::load(&variant_path(&args.variant)).map_err(|e| e.to_string())?;
+    if let Some(view) = args.debug_view {
+        loaded.variant.debug_view = view;
+        let problems = variant::check(&loaded.variant);
+        if let Some(p) = problems.first() {
+            return Err(format!("--debug-view: {} {}", p.field, p.message));
+        }
+        loaded.name = format!("{}+{}", loaded.name, debug_view_name(view));
+    }
     let info = clusterlab::scene::find_scene(&args.scene)
         .ok_or_else(|| clusterlab::scene::SceneError::Unknown(args.scene.clone()).to_string())?;
     let mut params = info.defaults;
@@ -324,4 +367,11 @@ fn render(args: &RenderArgs) -> Result<bool, String> {
         }
     }
     Ok(true)
+}
+
+fn debug_view_name(view: DebugView) -> &'static str {
+    DEBUG_VIEWS
+        .iter()
+        .find(|(_, v)| *v == view)
+        .map_or("debug", |(name, _)| *name)
 }

@@ -94,7 +94,18 @@ fn every_variant_matches_its_reviewed_image() {
     assert!(!files.is_empty());
     for file in files {
         let v = clusterlab::variant::load(&file).unwrap_or_else(|e| panic!("{e}"));
-        match run_cell(&gpu, &composer, &v, "atrium", params, CellOptions { warmup: 0, stats: false, ..Default::default() }) {
+        match run_cell(
+            &gpu,
+            &composer,
+            &v,
+            "atrium",
+            params,
+            CellOptions {
+                warmup: 0,
+                stats: false,
+                ..Default::default()
+            },
+        ) {
             Ok(cell) => {
                 let f = &cell.frame;
                 let rgb: Vec<u8> = f.ldr.iter().flat_map(|p| [p[0], p[1], p[2]]).collect();

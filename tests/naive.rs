@@ -154,34 +154,44 @@ fn render_runs_on_opengl_too() {
 
 #[test]
 fn bad_requests_get_a_clear_message_and_exit_code_1() {
-    let cases: [(&[&str], &str); 5] = [
+    // Our own checks exit with 1; argument syntax errors are clap's (exit 2).
+    let cases: [(&[&str], &str, i32); 6] = [
         (
             &["--scene", "atrum"],
             "unknown scene `atrum`; the built-in scenes are: atrium",
+            1,
         ),
         (
             &["--scene", "atrium", "--size", "0x0"],
             "width and height must be at least 1",
+            1,
         ),
         (
             &["--scene", "atrium", "--size", "100000x100000"],
             "each side must be in 1..=",
-        ),
-        (
-            &["--scene", "atrium", "--size", "big"],
-            "is not WIDTHxHEIGHT",
+            1,
         ),
         (
             &["--scene", "atrium", "--backend", "vulcan"],
             "unknown backend `vulcan`",
+            1,
+        ),
+        (
+            &["--scene", "atrium", "--debug-view", "z-slice"],
+            "pipeline NaiveForward has none",
+            1,
+        ),
+        (
+            &["--scene", "atrium", "--size", "big"],
+            "is not WIDTHxHEIGHT",
+            2,
         ),
     ];
-    for (i, (args, expected)) in cases.into_iter().enumerate() {
+    for (args, expected, exit_code) in cases {
         let mut all = vec!["render", "--variant", "naive_forward"];
         all.extend_from_slice(args);
         let (code, _, stderr) = clusterlab(&all, &[]);
-        // Our own checks exit with 1; argument syntax errors are clap's (exit 2).
-        assert_eq!(code, if i < 3 { 1 } else { 2 }, "{args:?}: {stderr}");
+        assert_eq!(code, exit_code, "{args:?}: {stderr}");
         assert!(stderr.contains(expected), "{args:?}: {stderr}");
         assert!(!stderr.contains("panicked"), "{args:?} panicked: {stderr}");
     }

@@ -40,6 +40,7 @@ pub fn feature_flags(v: &Variant) -> Vec<(&'static str, bool)> {
             matches!(clusters.lists, LightLists::Capped { .. }),
         ),
         ("active_clusters", clusters.active_clusters),
+        ("sample_bounds", clusters.sample_bounds),
         ("gbuffer_wide", deferred && layout == GBufferLayout::Wide),
         (
             "gbuffer_packed",

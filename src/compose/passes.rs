@@ -62,10 +62,11 @@ pub fn passes(v: &Variant) -> Vec<Pass> {
         if current_frame_range {
             out.push(compute("depth_range", "passes::depth_range"));
         }
-        out.push(compute("cluster_bounds", "passes::cluster_bounds"));
+        // Marking reads the slices, not the boxes; with sample bounds the boxes need it.
         if clusters.active_clusters {
             out.push(compute("mark_active", "passes::mark_active"));
         }
+        out.push(compute("cluster_bounds", "passes::cluster_bounds"));
         if clusters.assignment == Assignment::Gpu {
             out.push(compute("light_assign", "passes::light_assign"));
         }

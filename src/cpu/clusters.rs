@@ -122,7 +122,14 @@ pub const PLANE_SLACK: f64 = 1e-4;
 
 /// The box test and the four side planes of tile (x, y)'s frustum piece: a light passes
 /// when its sphere reaches the box and the inner side of every plane.
-pub fn sphere_touches_cluster(grid: &Grid, center: DVec3, radius: f64, b: &Aabb, x: u32, y: u32) -> bool {
+pub fn sphere_touches_cluster(
+    grid: &Grid,
+    center: DVec3,
+    radius: f64,
+    b: &Aabb,
+    x: u32,
+    y: u32,
+) -> bool {
     if !sphere_touches_box(center, radius, b) {
         return false;
     }

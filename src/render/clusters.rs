@@ -55,6 +55,8 @@ mod binding {
     pub const LIGHT_VIEW: u32 = 8;
     pub const LIGHT_RANGES: u32 = 9;
     pub const FILL_CURSORS: u32 = 10;
+    pub const SAMPLE_DEPTHS: u32 = 11;
+    pub const LAST: u32 = SAMPLE_DEPTHS;
 }
 
 /// Clusters of one scan workgroup (`SCAN_BLOCK` in light_assign.wesl).
@@ -73,6 +75,7 @@ pub struct ClusterBuffers {
     pub light_view: wgpu::Buffer,
     pub light_ranges: wgpu::Buffer,
     pub fill_cursors: wgpu::Buffer,
+    pub sample_depths: wgpu::Buffer,
     /// Entries the index buffer holds.
     pub index_capacity: u32,
 }
@@ -89,7 +92,13 @@ fn storage(gpu: &Gpu, label: &str, size: u64) -> wgpu::Buffer {
 }
 
 impl ClusterBuffers {
-    pub fn new(gpu: &Gpu, clusters: u32, lights: u32, index_capacity: u32, range: ClusterRange) -> Self {
+    pub fn new(
+        gpu: &Gpu,
+        clusters: u32,
+        lights: u32,
+        index_capacity: u32,
+        range: ClusterRange,
+    ) -> Self {
         let n = clusters as u64;
         Self {
             clusters,
@@ -108,10 +117,15 @@ impl ClusterBuffers {
             offsets: storage(gpu, "light offsets", n * 4),
             block_sums: storage(gpu, "block sums", n.div_ceil(SCAN_BLOCK as u64) * 4),
             indices: storage(gpu, "light indices", index_capacity as u64 * 4),
-            stats: storage(gpu, "cluster stats", std::mem::size_of::<ClusterStats>() as u64),
+            stats: storage(
+                gpu,
+                "cluster stats",
+                std::mem::size_of::<ClusterStats>() as u64,
+            ),
             light_view: storage(gpu, "view-space lights", lights.max(1) as u64 * 16),
             light_ranges: storage(gpu, "light cluster ranges", lights.max(1) as u64 * 16),
             fill_cursors: storage(gpu, "fill cursors", n * 4),
+            sample_depths: storage(gpu, "cluster sample depths", n * 8),
             index_capacity,
         }
     }
@@ -130,6 +144,7 @@ impl ClusterBuffers {
             &self.light_view,
             &self.light_ranges,
             &self.fill_cursors,
+            &self.sample_depths,
         ]
         .iter()
         .map(|b| b.size())
@@ -144,7 +159,7 @@ impl ClusterBuffers {
 
     /// Layout of group 1 for the passes that build clusters (all read-write).
     pub fn build_layout(gpu: &Gpu) -> wgpu::BindGroupLayout {
-        let entries: Vec<_> = (0..=binding::FILL_CURSORS)
+        let entries: Vec<_> = (0..=binding::LAST)
             .map(|b| wgpu::BindGroupLayoutEntry {
                 visibility: wgpu::ShaderStages::COMPUTE,
                 ..storage_entry(b, false)
@@ -159,13 +174,18 @@ impl ClusterBuffers {
 
     /// Layout of group 1 for the passes that look lists up (read-only).
     pub fn lookup_layout(gpu: &Gpu) -> wgpu::BindGroupLayout {
-        let entries: Vec<_> = [binding::RANGE, binding::COUNTS, binding::OFFSETS, binding::INDICES]
-            .into_iter()
-            .map(|b| wgpu::BindGroupLayoutEntry {
-                visibility: wgpu::ShaderStages::FRAGMENT | wgpu::ShaderStages::COMPUTE,
-                ..storage_entry(b, true)
-            })
-            .collect();
+        let entries: Vec<_> = [
+            binding::RANGE,
+            binding::COUNTS,
+            binding::OFFSETS,
+            binding::INDICES,
+        ]
+        .into_iter()
+        .map(|b| wgpu::BindGroupLayoutEntry {
+            visibility: wgpu::ShaderStages::FRAGMENT | wgpu::ShaderStages::COMPUTE,
+            ..storage_entry(b, true)
+        })
+        .collect();
         gpu.device
             .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
                 label: Some("cluster lookup"),
@@ -185,11 +205,17 @@ impl ClusterBuffers {
             binding::STATS => &self.stats,
             binding::LIGHT_VIEW => &self.light_view,
             binding::LIGHT_RANGES => &self.light_ranges,
-            _ => &self.fill_cursors,
+            binding::FILL_CURSORS => &self.fill_cursors,
+            _ => &self.sample_depths,
         }
     }
 
-    fn group(&self, gpu: &Gpu, layout: &wgpu::BindGroupLayout, bindings: &[u32]) -> wgpu::BindGroup {
+    fn group(
+        &self,
+        gpu: &Gpu,
+        layout: &wgpu::BindGroupLayout,
+        bindings: &[u32],
+    ) -> wgpu::BindGroup {
         let entries: Vec<_> = bindings
             .iter()
             .map(|&b| wgpu::BindGroupEntry {
@@ -205,7 +231,7 @@ impl ClusterBuffers {
     }
 
     pub fn build_group(&self, gpu: &Gpu, layout: &wgpu::BindGroupLayout) -> wgpu::BindGroup {
-        let all: Vec<u32> = (0..=binding::FILL_CURSORS).collect();
+        let all: Vec<u32> = (0..=binding::LAST).collect();
         self.group(gpu, layout, &all)
     }
 
@@ -213,13 +239,20 @@ impl ClusterBuffers {
         self.group(
             gpu,
             layout,
-            &[binding::RANGE, binding::COUNTS, binding::OFFSETS, binding::INDICES],
+            &[
+                binding::RANGE,
+                binding::COUNTS,
+                binding::OFFSETS,
+                binding::INDICES,
+            ],
         )
     }
 
     pub fn read_stats(&self, gpu: &Gpu) -> Result<ClusterStats, GpuError> {
         let bytes = read_buffer(gpu, &self.stats, 0, self.stats.size())?;
-        Ok(bytemuck::pod_read_unaligned(&bytes[..std::mem::size_of::<ClusterStats>()]))
+        Ok(bytemuck::pod_read_unaligned(
+            &bytes[..std::mem::size_of::<ClusterStats>()],
+        ))
     }
 
     pub fn read_range(&self, gpu: &Gpu) -> Result<ClusterRange, GpuError> {
@@ -230,8 +263,10 @@ impl ClusterBuffers {
     /// The light lists as the GPU holds them.
     pub fn read_lists(&self, gpu: &Gpu) -> Result<ClusterLists, GpuError> {
         let n = self.clusters as u64 * 4;
-        let counts: Vec<u32> = bytemuck::cast_slice(&read_buffer(gpu, &self.counts, 0, n)?).to_vec();
-        let offsets: Vec<u32> = bytemuck::cast_slice(&read_buffer(gpu, &self.offsets, 0, n)?).to_vec();
+        let counts: Vec<u32> =
+            bytemuck::cast_slice(&read_buffer(gpu, &self.counts, 0, n)?).to_vec();
+        let offsets: Vec<u32> =
+            bytemuck::cast_slice(&read_buffer(gpu, &self.offsets, 0, n)?).to_vec();
         let total: u64 = counts.iter().map(|&c| c as u64).sum();
         let used = (total * 4).min(self.indices.size());
         let indices: Vec<u32> = if used == 0 {
@@ -268,7 +303,8 @@ impl ClusterBuffers {
             max_per_cluster: lists.max_per_cluster,
             ..Default::default()
         };
-        gpu.queue.write_buffer(&self.stats, 0, bytemuck::bytes_of(&stats));
+        gpu.queue
+            .write_buffer(&self.stats, 0, bytemuck::bytes_of(&stats));
         true
     }
 }

@@ -10,7 +10,10 @@ pub fn formats(layout: GBufferLayout) -> Vec<wgpu::TextureFormat> {
     match layout {
         GBufferLayout::Wide => vec![F32_BITS_FORMAT; 3],
         GBufferLayout::Packed => vec![F32_BITS_FORMAT; 2],
-        GBufferLayout::Compact => vec![wgpu::TextureFormat::Rgba8Unorm, wgpu::TextureFormat::R32Uint],
+        GBufferLayout::Compact => vec![
+            wgpu::TextureFormat::Rgba8Unorm,
+            wgpu::TextureFormat::R32Uint,
+        ],
     }
 }
 

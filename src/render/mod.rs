@@ -262,7 +262,10 @@ impl<'g> Renderer<'g> {
         }
 
         let depth = DepthSetup::of(variant);
-        let gbuffer_layout = variant.pipeline.is_deferred().then(|| variant.gbuffer().layout);
+        let gbuffer_layout = variant
+            .pipeline
+            .is_deferred()
+            .then(|| variant.gbuffer().layout);
         let cluster_count = {
             let c = variant.clusters();
             c.grid.0 * c.grid.1 * c.grid.2
@@ -397,7 +400,8 @@ impl<'g> Renderer<'g> {
     fn remake_cluster_groups(&mut self) {
         if let Some(c) = &self.clusters {
             self.groups.cluster_build = Some(c.build_group(self.gpu, &self.layouts.cluster_build));
-            self.groups.cluster_lookup = Some(c.lookup_group(self.gpu, &self.layouts.cluster_lookup));
+            self.groups.cluster_lookup =
+                Some(c.lookup_group(self.gpu, &self.layouts.cluster_lookup));
         }
     }
 
@@ -463,15 +467,31 @@ impl<'g> Renderer<'g> {
         } else {
             "fs_main"
         };
-        let build = |vs: &str, fs: Option<&str>, buffers: &[Option<wgpu::VertexBufferLayout<'_>>], targets: &[Option<wgpu::ColorTargetState>], depth| {
+        let build = |vs: &str,
+                     fs: Option<&str>,
+                     buffers: &[Option<wgpu::VertexBufferLayout<'_>>],
+                     targets: &[Option<wgpu::ColorTargetState>],
+                     depth| {
             render_pipeline(gpu, composed, &layout, (vs, fs), buffers, targets, depth)
         };
         let pipelines = match pass.name {
-            "depth_prepass" => vec![build("vs_main", None, &vertex, &[], Some(d.state(d.compare(), true)))],
+            "depth_prepass" => vec![build(
+                "vs_main",
+                None,
+                &vertex,
+                &[],
+                Some(d.state(d.compare(), true)),
+            )],
             "gbuffer" => {
                 let formats = gbuffer::formats(self.variant.gbuffer().layout);
                 let targets: Vec<_> = formats.into_iter().map(color_target).collect();
-                vec![build("vs_main", Some("fs_main"), &vertex, &targets, Some(d.state(d.compare(), true)))]
+                vec![build(
+                    "vs_main",
+                    Some("fs_main"),
+                    &vertex,
+                    &targets,
+                    Some(d.state(d.compare(), true)),
+                )]
             }
             "forward" => {
                 let state = if self.variant.depth_prepass {
@@ -483,11 +503,29 @@ impl<'g> Renderer<'g> {
             }
             "resolve" => vec![build("vs_main", Some("fs_main"), &[], &[hdr], None)],
             "scissor_lights" => vec![
-                build("vs_ambient", Some("fs_ambient"), &[], std::slice::from_ref(&additive), None),
-                build("vs_light", Some("fs_light"), &[], std::slice::from_ref(&additive), None),
+                build(
+                    "vs_ambient",
+                    Some("fs_ambient"),
+                    &[],
+                    std::slice::from_ref(&additive),
+                    None,
+                ),
+                build(
+                    "vs_light",
+                    Some("fs_light"),
+                    &[],
+                    std::slice::from_ref(&additive),
+                    None,
+                ),
             ],
             "debug_view" | "tonemap" => {
-                vec![build("vs_main", Some("fs_main"), &[], &[color_target(LDR_FORMAT)], None)]
+                vec![build(
+                    "vs_main",
+                    Some("fs_main"),
+                    &[],
+                    &[color_target(LDR_FORMAT)],
+                    None,
+                )]
             }
             other => unreachable!("no render pipelines for pass `{other}`"),
         };
@@ -534,7 +572,10 @@ impl<'g> Renderer<'g> {
         self.run_frame(true)?;
         let sum = |b: &wgpu::Buffer| -> Result<u64, GpuError> {
             let bytes = read_buffer(gpu, b, 0, b.size())?;
-            Ok(bytemuck::cast_slice::<u8, u32>(&bytes).iter().map(|&v| v as u64).sum())
+            Ok(bytemuck::cast_slice::<u8, u32>(&bytes)
+                .iter()
+                .map(|&v| v as u64)
+                .sum())
         };
         let mut stats = FrameStats {
             light_evals: sum(&self.pixel_evals)?,
@@ -582,7 +623,11 @@ impl<'g> Renderer<'g> {
                 let mut pass = e.begin_compute_pass(&Default::default());
                 pass.set_pipeline(&p["mark_visible"]);
                 self.set_compute_groups(&mut pass, true);
-                pass.dispatch_workgroups(dispatch_size(self.width, 8), dispatch_size(self.height, 8), 1);
+                pass.dispatch_workgroups(
+                    dispatch_size(self.width, 8),
+                    dispatch_size(self.height, 8),
+                    1,
+                );
             }
             gpu.queue.submit([e.finish()]);
         })?;
@@ -626,11 +671,12 @@ impl<'g> Renderer<'g> {
             })?;
         }
         let cpu_ms = self.assign_on_cpu()?;
-        let static_range = !matches!(
-            self.variant.clusters().slicing,
-            ZSlicing::DynamicRange { .. }
-        );
-        let skip_bounds = self.bounds_built && static_range;
+        // Boxes depend on the projection, the size and the z-range, and with sample bounds
+        // on this frame's depth.
+        let clusters = self.variant.clusters();
+        let static_bounds =
+            !matches!(clusters.slicing, ZSlicing::DynamicRange { .. }) && !clusters.sample_bounds;
+        let skip_bounds = self.bounds_built && static_bounds;
         let passes = self.passes.clone();
         let timings = gpu.scoped("rendering a frame", || -> Result<Timings, GpuError> {
             let mut runner = PassRunner::new(gpu, passes.len() as u32 + 2);
@@ -700,9 +746,15 @@ impl<'g> Renderer<'g> {
         encoder: &mut wgpu::CommandEncoder,
         slot: Option<TimestampSlot<'_>>,
     ) {
-        let c = self.clusters.as_ref().expect("compute passes are clustered");
+        let c = self
+            .clusters
+            .as_ref()
+            .expect("compute passes are clustered");
         match name {
-            "mark_active" => encoder.clear_buffer(&c.active, 0, None),
+            "mark_active" => {
+                encoder.clear_buffer(&c.active, 0, None);
+                encoder.clear_buffer(&c.sample_depths, 0, None);
+            }
             "light_assign" => {
                 encoder.clear_buffer(&c.counts, 0, None);
                 encoder.clear_buffer(&c.fill_cursors, 0, None);
@@ -736,12 +788,18 @@ impl<'g> Renderer<'g> {
             "light_assign" => {
                 let l = self.scene.light_count;
                 // One workgroup per light, in rows of LIGHTS_PER_ROW (light_assign.wesl).
-                let per_light = (l.clamp(1, LIGHTS_PER_ROW), l.div_ceil(LIGHTS_PER_ROW).max(1));
+                let per_light = (
+                    l.clamp(1, LIGHTS_PER_ROW),
+                    l.div_ceil(LIGHTS_PER_ROW).max(1),
+                );
                 self.set_compute_groups(&mut pass, false);
                 for (entry, groups) in [
                     ("transform_lights", (dispatch_size(l, 64), 1)),
                     ("count_lights", per_light),
-                    ("scan_local", (dispatch_size(c.clusters, clusters::SCAN_BLOCK), 1)),
+                    (
+                        "scan_local",
+                        (dispatch_size(c.clusters, clusters::SCAN_BLOCK), 1),
+                    ),
                     ("scan_blocks", (1, 1)),
                     ("fill_lists", per_light),
                     ("finish_lists", (clusters, 1)),
@@ -783,8 +841,14 @@ impl<'g> Renderer<'g> {
         };
         let (colors, depth): (Vec<_>, _) = match name {
             "depth_prepass" => (vec![], depth_attachment(true)),
-            "gbuffer" => (gbuffer_views.iter().map(clear_attachment).collect(), depth_attachment(true)),
-            "forward" => (vec![clear_attachment(&hdr)], depth_attachment(!self.variant.depth_prepass)),
+            "gbuffer" => (
+                gbuffer_views.iter().map(clear_attachment).collect(),
+                depth_attachment(true),
+            ),
+            "forward" => (
+                vec![clear_attachment(&hdr)],
+                depth_attachment(!self.variant.depth_prepass),
+            ),
             "resolve" | "scissor_lights" => (vec![clear_attachment(&hdr)], None),
             _ => (vec![clear_attachment(&ldr)], None),
         };

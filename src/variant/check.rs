@@ -136,6 +136,12 @@ fn check_clusters(c: &Clusters, v: &Variant, out: &mut Vec<Problem>) {
             format!("is {max_per_cluster}; it must be in 1..={MAX_CAP}"),
         ));
     }
+    if c.sample_bounds && !c.active_clusters {
+        out.push(problem(
+            "clusters.sample_bounds",
+            "bounds from samples come from active-cluster marking: set `active_clusters: true` too",
+        ));
+    }
     if c.active_clusters && v.pipeline == Pipeline::ClusteredForward && !v.depth_prepass {
         out.push(problem(
             "clusters.active_clusters",

@@ -98,7 +98,11 @@ pub struct Clusters {
     /// How long a cluster's light list may be.
     pub lists: LightLists,
     /// Assign lights only to clusters that hold at least one visible sample (Olsson 2012).
+    /// Needs depth before shading (a pre-pass or a G-buffer).
     pub active_clusters: bool,
+    /// Olsson 2012's explicit bounds: shrink each active cluster's box in depth to the
+    /// samples it holds, so fewer lights touch it. Needs `active_clusters`.
+    pub sample_bounds: bool,
 }
 
 impl Default for Clusters {
@@ -109,6 +113,7 @@ impl Default for Clusters {
             assignment: Assignment::Gpu,
             lists: LightLists::Exact,
             active_clusters: false,
+            sample_bounds: false,
         }
     }
 }

@@ -40,5 +40,5 @@ pub fn cell(gpu: &Gpu, v: &LoadedVariant, scene: &str, p: SceneParams) -> CellRe
             ..Default::default()
         },
     )
-        .unwrap_or_else(|e| panic!("{} on {scene}: {e}", v.name))
+    .unwrap_or_else(|e| panic!("{} on {scene}: {e}", v.name))
 }

@@ -1,0 +1,469 @@
+//! Clustering changes the cost, never the picture: every clustered variant with exact lists
+//! and a full-precision G-buffer matches naive forward within 1 LSB, GPU light lists equal
+//! the CPU twin's, caps count every dropped light, and lossy layouts report their error.
+
+mod common;
+
+use std::collections::BTreeSet;
+
+use clusterlab::compose::Composer;
+use clusterlab::cpu::clusters::{self as cpu, Grid};
+use clusterlab::gpu::Gpu;
+use clusterlab::render::{FrameOutput, Renderer, cpu_grid};
+use clusterlab::run::reference_frame;
+use clusterlab::scene::{self, Light, SCENES, Scene};
+use clusterlab::variant::*;
+use common::{gpu, small};
+use glam::DVec3;
+
+fn loaded(name: &str, variant: Variant) -> LoadedVariant {
+    LoadedVariant {
+        name: name.to_string(),
+        path: "generated".into(),
+        variant,
+    }
+}
+
+fn clustered(pipeline: Pipeline, slicing: ZSlicing) -> Variant {
+    Variant {
+        description: "test".into(),
+        pipeline,
+        depth_prepass: pipeline == Pipeline::ClusteredForward,
+        clusters: Some(Clusters {
+            slicing,
+            ..Default::default()
+        }),
+        ..Default::default()
+    }
+}
+
+/// Every z-slicing scheme on both clustered pipelines, every depth set-up, the pipeline
+/// options (no pre-pass, active clusters, sample bounds, CPU assignment), and scissor
+/// deferred: all with exact lists and full-precision G-buffers.
+fn exact_variants() -> Vec<LoadedVariant> {
+    let schemes = [
+        ZSlicing::Linear,
+        ZSlicing::Exponential,
+        ZSlicing::NearSliceThenExponential {
+            near_slice_end: 3.0,
+        },
+        ZSlicing::OlssonCubic,
+        ZSlicing::DynamicRange {
+            source: DepthRangeSource::CurrentFrame,
+        },
+        ZSlicing::DynamicRange {
+            source: DepthRangeSource::PreviousFrame,
+        },
+    ];
+    let mut out = Vec::new();
+    for pipeline in [Pipeline::ClusteredForward, Pipeline::ClusteredDeferred] {
+        for s in schemes {
+            out.push(loaded(
+                &format!("{pipeline:?} {s:?}"),
+                clustered(pipeline, s),
+            ));
+        }
+    }
+    for (format, reversed_z) in [
+        (DepthFormat::Unorm24, false),
+        (DepthFormat::Float32, true),
+        (DepthFormat::Unorm24, true),
+    ] {
+        let mut v = clustered(Pipeline::ClusteredDeferred, ZSlicing::Exponential);
+        v.depth = Depth { format, reversed_z };
+        out.push(loaded(
+            &format!("deferred {format:?} reversed {reversed_z}"),
+            v,
+        ));
+    }
+    let mut no_prepass = clustered(Pipeline::ClusteredForward, ZSlicing::Exponential);
+    no_prepass.depth_prepass = false;
+    out.push(loaded("forward without pre-pass", no_prepass));
+    for pipeline in [Pipeline::ClusteredForward, Pipeline::ClusteredDeferred] {
+        let mut v = clustered(pipeline, ZSlicing::Exponential);
+        let c = v.clusters.as_mut().unwrap();
+        c.active_clusters = true;
+        c.sample_bounds = true;
+        out.push(loaded(&format!("{pipeline:?} sample bounds"), v));
+    }
+    let mut cpu = clustered(Pipeline::ClusteredForward, ZSlicing::Exponential);
+    cpu.clusters.as_mut().unwrap().assignment = Assignment::Cpu;
+    out.push(loaded("forward CPU assignment", cpu));
+    out.push(loaded(
+        "scissor",
+        Variant {
+            description: "test".into(),
+            pipeline: Pipeline::DeferredScissor,
+            ..Default::default()
+        },
+    ));
+    out
+}
+
+/// Naive forward with the same rasterisation (depth set-up and pre-pass) as `v`.
+fn naive_twin(v: &Variant) -> Variant {
+    Variant {
+        description: "naive twin".into(),
+        pipeline: Pipeline::NaiveForward,
+        depth_prepass: v.depth_prepass,
+        depth: v.depth.clone(),
+        shading: v.shading.clone(),
+        ..Default::default()
+    }
+}
+
+fn render(gpu: &Gpu, v: &Variant, scene: &Scene, frames: u32) -> FrameOutput {
+    let mut r =
+        Renderer::new(gpu, &Composer::default(), v, scene).unwrap_or_else(|e| panic!("{e}"));
+    let mut last = None;
+    for _ in 0..frames {
+        last = Some(r.render().unwrap_or_else(|e| panic!("{e}")));
+    }
+    last.expect("a frame")
+}
+
+fn max_lsb(a: &FrameOutput, b: &FrameOutput) -> u32 {
+    a.ldr
+        .iter()
+        .zip(&b.ldr)
+        .flat_map(|(p, q)| (0..3).map(move |c| p[c].abs_diff(q[c]) as u32))
+        .max()
+        .unwrap_or(0)
+}
+
+#[test]
+fn clustered_output_equals_naive_output() {
+    let gpu = gpu();
+    let composer = Composer::default();
+    let mut cases: Vec<(&str, Option<u32>)> = SCENES.iter().map(|s| (s.name, None)).collect();
+    cases.extend([
+        ("atrium", Some(0)),
+        ("atrium", Some(1)),
+        ("atrium", Some(4096)),
+    ]);
+    for (scene_name, lights) in cases {
+        let scene = scene::generate(scene_name, small(scene_name, 96, 54, lights)).unwrap();
+        for v in exact_variants() {
+            // Two frames, so previous-frame z-ranges are in use.
+            let frame = render(&gpu, &v.variant, &scene, 2);
+            let naive = render(&gpu, &naive_twin(&v.variant), &scene, 1);
+            let (reference, _) = reference_frame(&gpu, &composer, &v, &scene).unwrap();
+            let e = clusterlab::metrics::compare(&frame, &reference);
+            let what = format!(
+                "{} on {scene_name} with {} lights",
+                v.name,
+                scene.lights.len()
+            );
+            assert!(e.max_abs_8bit <= 1 && e.nan_pixels == 0, "{what}: {e:?}");
+            assert!(
+                max_lsb(&frame, &naive) <= 1,
+                "{what}: {} LSB from naive",
+                max_lsb(&frame, &naive)
+            );
+        }
+    }
+}
+
+#[test]
+fn capped_lists_drop_lights_exactly_when_the_cap_bites() {
+    let gpu = gpu();
+    let scene = scene::generate("atrium", small("atrium", 96, 54, Some(1024))).unwrap();
+    let exact = clustered(Pipeline::ClusteredForward, ZSlicing::Exponential);
+    let grid = cpu_grid(&exact, &scene);
+    let lists = cpu::assign(
+        &grid,
+        &cpu::cluster_bounds(&grid),
+        &cpu::view_lights(&scene.lights, scene.camera.view()),
+        None,
+        None,
+    );
+    let longest = lists.max_per_cluster;
+    assert!(
+        longest > 8,
+        "the scene must have lists longer than the small cap"
+    );
+    for cap in [4, longest - 1, longest, longest + 10] {
+        let mut v = exact.clone();
+        v.clusters.as_mut().unwrap().lists = LightLists::Capped {
+            max_per_cluster: cap,
+        };
+        let mut r = Renderer::new(&gpu, &Composer::default(), &v, &scene).unwrap();
+        r.render().unwrap();
+        let stats = r.stats().unwrap();
+        let expected: u64 = lists
+            .counts
+            .iter()
+            .map(|&n| n.saturating_sub(cap) as u64)
+            .sum();
+        assert_eq!(stats.dropped_lights, expected, "cap {cap}");
+        assert_eq!(
+            stats.dropped_lights > 0,
+            cap < longest,
+            "cap {cap} of {longest}"
+        );
+        assert!(stats.max_lights_per_cluster <= cap);
+    }
+}
+
+fn gpu_sets(r: &Renderer) -> Vec<BTreeSet<u32>> {
+    let lists = r.cluster_lists().unwrap().expect("clustered");
+    (0..lists.counts.len())
+        .map(|c| lists.list(c).iter().copied().collect())
+        .collect()
+}
+
+/// Assert the GPU's lists equal the CPU twin's as sets, except where f32 and f64 may round
+/// a test on its boundary differently (the light is then within a hair of the cluster).
+fn assert_lists_match(gpu: &Gpu, v: &Variant, scene: &Scene, what: &str) {
+    let mut r = Renderer::new(gpu, &Composer::default(), v, scene).unwrap();
+    r.render().unwrap();
+    let got = gpu_sets(&r);
+    let grid: Grid = cpu_grid(v, scene);
+    let bounds = cpu::cluster_bounds(&grid);
+    let lights = cpu::view_lights(&scene.lights, scene.camera.view());
+    let want = cpu::assign(&grid, &bounds, &lights, None, None);
+    let mut compared = 0;
+    for (c, set) in got.iter().enumerate() {
+        let expected: BTreeSet<u32> = want.list(c).iter().copied().collect();
+        // Lists are in ascending order on the GPU too.
+        let lists = r.cluster_lists().unwrap().unwrap();
+        assert!(
+            lists.list(c).windows(2).all(|w| w[0] < w[1]),
+            "{what}: cluster {c} not ascending"
+        );
+        for &i in set.symmetric_difference(&expected) {
+            let (center, radius) = lights[i as usize];
+            let b = bounds[c].expect("a listed cluster has a box");
+            let (x, y) = (c as u32 % grid.x, (c as u32 / grid.x) % grid.y);
+            let wider = cpu::sphere_touches_cluster(&grid, center, radius * (1.0 + 1e-4), &b, x, y);
+            let narrower =
+                cpu::sphere_touches_cluster(&grid, center, radius * (1.0 - 1e-4), &b, x, y);
+            assert!(
+                wider != narrower,
+                "{what}: cluster {c}, light {i}: GPU {} it, CPU {}",
+                if set.contains(&i) {
+                    "lists"
+                } else {
+                    "leaves out"
+                },
+                if expected.contains(&i) {
+                    "lists it"
+                } else {
+                    "does not"
+                }
+            );
+        }
+        compared += set.len();
+    }
+    assert!(
+        compared > 0 || scene.lights.is_empty(),
+        "{what}: nothing compared"
+    );
+}
+
+#[test]
+fn gpu_light_lists_equal_the_cpu_twin_on_random_scenes() {
+    let gpu = gpu();
+    for slicing in [
+        ZSlicing::Linear,
+        ZSlicing::Exponential,
+        ZSlicing::NearSliceThenExponential {
+            near_slice_end: 2.0,
+        },
+        ZSlicing::OlssonCubic,
+    ] {
+        let v = clustered(Pipeline::ClusteredForward, slicing);
+        for (name, seed) in [("atrium", 1), ("atrium", 7), ("spheres", 3)] {
+            let mut p = small(name, 128, 72, Some(512));
+            p.seed = seed;
+            let scene = scene::generate(name, p).unwrap();
+            assert_lists_match(&gpu, &v, &scene, &format!("{slicing:?} {name} seed {seed}"));
+        }
+    }
+}
+
+/// A light at view position `p` (x right, y up, -z forward) with `radius`.
+fn light_at_view(scene: &Scene, p: DVec3, radius: f32) -> Light {
+    let world = scene.camera.view().inverse().transform_point3(p);
+    Light {
+        position: world.as_vec3().to_array(),
+        radius,
+        color: [1.0, 1.0, 1.0],
+        intensity: 1.0,
+    }
+}
+
+#[test]
+fn gpu_light_lists_equal_the_cpu_twin_at_the_edges() {
+    let gpu = gpu();
+    let v = clustered(Pipeline::ClusteredForward, ZSlicing::Exponential);
+    let mut scene = scene::generate("atrium", small("atrium", 128, 72, Some(0))).unwrap();
+    let grid = cpu_grid(&v, &scene);
+    let near = grid.near;
+    // On a slice boundary, straddling the near plane, behind the camera (reaching past it),
+    // entirely behind the camera, beyond far, and one huge light over everything.
+    let boundary = grid.slice_depths(10).0;
+    scene.lights = vec![
+        light_at_view(&scene, DVec3::new(0.0, 0.0, -boundary), 0.5),
+        light_at_view(&scene, DVec3::new(0.3, -0.2, -boundary), 1.0),
+        light_at_view(&scene, DVec3::new(0.0, 0.0, -near), 0.5),
+        light_at_view(&scene, DVec3::new(0.5, 0.5, 1.0), 2.0),
+        light_at_view(&scene, DVec3::new(0.0, 0.0, 5.0), 1.0),
+        light_at_view(&scene, DVec3::new(0.0, 0.0, -grid.far - 3.0), 2.0),
+        light_at_view(&scene, DVec3::new(0.0, 0.0, -10.0), 1000.0),
+    ];
+    assert_lists_match(&gpu, &v, &scene, "edge lights");
+    // The huge light is in every non-empty cluster; the one behind the camera in none.
+    let mut r = Renderer::new(&gpu, &Composer::default(), &v, &scene).unwrap();
+    r.render().unwrap();
+    let sets = gpu_sets(&r);
+    assert!(sets.iter().all(|s| s.contains(&6)));
+    assert!(sets.iter().all(|s| !s.contains(&4)));
+    assert!(
+        sets.iter().any(|s| s.contains(&2)),
+        "the near-plane light lights the first slice"
+    );
+}
+
+#[test]
+fn lossy_layouts_report_their_error_and_32_bit_octahedral_stays_within_1_lsb() {
+    let gpu = gpu();
+    let composer = Composer::default();
+    let scene = scene::generate("spheres", small("spheres", 128, 72, None)).unwrap();
+    // The first case is the most precise; every other must measure a larger error.
+    let cases = [
+        (
+            GBufferLayout::Packed,
+            NormalCodec::Octahedral {
+                bits: 32,
+                precise: true,
+            },
+            true,
+        ),
+        (
+            GBufferLayout::Packed,
+            NormalCodec::Octahedral {
+                bits: 32,
+                precise: false,
+            },
+            true,
+        ),
+        (
+            GBufferLayout::Packed,
+            NormalCodec::Octahedral {
+                bits: 16,
+                precise: false,
+            },
+            false,
+        ),
+        (
+            GBufferLayout::Packed,
+            NormalCodec::Polar { bits: 16 },
+            false,
+        ),
+        (
+            GBufferLayout::Compact,
+            NormalCodec::Spheremap { bits: 24 },
+            false,
+        ),
+    ];
+    let mut best = None;
+    for (layout, codec, within_1_lsb) in cases {
+        let mut v = clustered(Pipeline::ClusteredDeferred, ZSlicing::Exponential);
+        v.gbuffer = Some(GBuffer { layout });
+        v.normals = Some(codec);
+        let v = loaded(&format!("{layout:?} {codec:?}"), v);
+        let frame = render(&gpu, &v.variant, &scene, 1);
+        let (reference, _) = reference_frame(&gpu, &composer, &v, &scene).unwrap();
+        let e = clusterlab::metrics::compare(&frame, &reference);
+        assert_eq!(e.nan_pixels, 0, "{}", v.name);
+        assert!(
+            e.rmse > 0.0 && e.rmse.is_finite(),
+            "{}: the error is measured: {e:?}",
+            v.name
+        );
+        if within_1_lsb {
+            assert!(e.max_abs_8bit <= 1, "{}: {e:?}", v.name);
+        }
+        match best {
+            None => best = Some(e.rmse),
+            Some(b) if !within_1_lsb => assert!(e.rmse > b, "{}: {e:?} not worse than {b}", v.name),
+            _ => {}
+        }
+    }
+}
+
+#[test]
+fn counters_are_exact_where_they_can_be_computed() {
+    let gpu = gpu();
+    let scene = scene::generate("atrium", small("atrium", 96, 54, Some(256))).unwrap();
+    let composer = Composer::default();
+    // Naive forward with a pre-pass evaluates every light once per covered pixel.
+    let naive = Variant {
+        description: "naive".into(),
+        depth_prepass: true,
+        ..Default::default()
+    };
+    let truth = clusterlab::render::raster_truth(&gpu, &composer, &naive, &scene).unwrap();
+    let covered = (0..truth.position.len())
+        .filter(|&i| truth.covered(i))
+        .count() as u64;
+    let mut r = Renderer::new(&gpu, &composer, &naive, &scene).unwrap();
+    r.render().unwrap();
+    let s = r.stats().unwrap();
+    assert_eq!(s.light_evals, covered * 256);
+    // Useful evaluations are a property of the picture, the same for every pipeline.
+    let useful: u64 = (0..truth.position.len())
+        .filter(|&i| truth.covered(i))
+        .map(|i| {
+            let p = truth.surface(i).position;
+            scene
+                .lights
+                .iter()
+                .filter(|l| DVec3::from(l.position.map(f64::from)).distance(p) < l.radius as f64)
+                .count() as u64
+        })
+        .sum();
+    assert!(
+        s.useful_light_evals.abs_diff(useful) <= useful / 1000 + 2,
+        "{} vs {useful}",
+        s.useful_light_evals
+    );
+    for v in exact_variants() {
+        let mut r = Renderer::new(&gpu, &composer, &v.variant, &scene).unwrap();
+        r.render().unwrap();
+        let c = r.stats().unwrap();
+        if v.variant.pipeline == Pipeline::ClusteredForward && !v.variant.depth_prepass {
+            // Without a pre-pass, hidden fragments are shaded (and counted) too.
+            assert!(c.useful_light_evals > useful, "{}", v.name);
+        } else {
+            assert!(
+                c.useful_light_evals.abs_diff(useful) <= useful / 1000 + 2,
+                "{}: {} vs {useful}",
+                v.name,
+                c.useful_light_evals
+            );
+        }
+        assert!(c.light_evals >= c.useful_light_evals, "{}", v.name);
+        if v.variant.pipeline.is_clustered() {
+            assert!(
+                c.active_clusters > 0 && c.active_clusters <= c.clusters,
+                "{}",
+                v.name
+            );
+            assert!(
+                c.cluster_bytes > 0 && c.light_list_entries > 0,
+                "{}",
+                v.name
+            );
+            assert_eq!(c.dropped_lights, 0, "{}", v.name);
+        }
+        if v.variant.pipeline.is_deferred() {
+            assert_eq!(
+                c.gbuffer_bytes_per_pixel, 52,
+                "{}: wide is 3 x 16 bytes and depth",
+                v.name
+            );
+        }
+    }
+}
