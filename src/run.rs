@@ -214,24 +214,27 @@ fn median(mut v: Vec<f64>) -> f64 {
     v.get(v.len() / 2).copied().unwrap_or(0.0)
 }
 
-/// Per-pass medians over several frames of the same pass list.
+/// Per-pass medians over several frames, by pass name in order of first appearance. A pass
+/// a frame skipped (cluster bounds that are still valid) counts as 0 ms in that frame.
 fn median_timings(runs: &[FrameOutput]) -> Timings {
-    let first = &runs[0].timings;
-    let passes = first
-        .passes
+    let mut names: Vec<&str> = Vec::new();
+    for r in runs {
+        for (n, _) in &r.timings.passes {
+            if !names.contains(&n.as_str()) {
+                names.push(n);
+            }
+        }
+    }
+    let passes = names
         .iter()
-        .enumerate()
-        .map(|(i, (name, _))| {
-            let samples = runs
-                .iter()
-                .filter_map(|r| r.timings.passes.get(i).map(|p| p.1))
-                .collect();
-            (name.clone(), median(samples))
+        .map(|&name| {
+            let samples = runs.iter().map(|r| r.timings.get(name)).collect();
+            (name.to_string(), median(samples))
         })
         .collect();
     Timings {
         passes,
-        gpu_timestamps: first.gpu_timestamps,
+        gpu_timestamps: runs.first().is_some_and(|r| r.timings.gpu_timestamps),
     }
 }
 

@@ -184,8 +184,8 @@ impl Composer {
             let base = format!("{}/", self.display_base.display());
             wesl_error(text.replace(&base, ""))
         })?;
-        let wgsl = result.to_string();
         let sourcemap = result.sourcemap.unwrap_or_default();
+        let wgsl = deterministic_order(result.syntax, &sourcemap).to_string();
 
         let naga_error = |message: String, span: Option<std::ops::Range<usize>>| {
             let (location, composed_line) = match span {
@@ -227,6 +227,23 @@ impl Composer {
             info,
         })
     }
+}
+
+/// The declarations grouped by module: the root's first, then the others by module path,
+/// each in its source order. wesl assembles modules in hash-map order, which changes from
+/// one process to the next; WGSL does not care about declaration order, snapshots do.
+fn deterministic_order(
+    mut unit: wesl::syntax::TranslationUnit,
+    sourcemap: &wesl::BasicSourceMap,
+) -> wesl::syntax::TranslationUnit {
+    use wesl::SourceMap;
+    use wgsl_parse::SyntaxNode;
+    unit.global_declarations.sort_by_cached_key(|decl| {
+        decl.ident()
+            .and_then(|id| sourcemap.get_decl(&id.name()).map(|(m, _)| m.to_string()))
+            .map_or((0, String::new()), |module| (1, module))
+    });
+    unit
 }
 
 /// `text` with every mangled declaration name replaced by `module::name`.

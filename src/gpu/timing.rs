@@ -13,7 +13,7 @@ pub struct Timings {
 
 impl Timings {
     pub fn total_ms(&self) -> f64 {
-        self.passes.iter().map(|(_, ms)| ms).sum()
+        self.passes.iter().fold(0.0, |total, (_, ms)| total + ms)
     }
 
     /// Time of a pass by name (0 when it did not run); passes that ran twice add up.
@@ -21,8 +21,8 @@ impl Timings {
         self.passes
             .iter()
             .filter(|(n, _)| n == name)
-            .map(|(_, ms)| ms)
-            .sum()
+            // A fold from +0.0: an empty float sum is -0.0 in Rust.
+            .fold(0.0, |total, (_, ms)| total + ms)
     }
 }
 

@@ -42,7 +42,11 @@ fn sample_type(format: wgpu::TextureFormat) -> wgpu::TextureSampleType {
 
 /// Group 2: depth at binding 0, then the layout's targets (none for `None`: depth only).
 pub fn read_layout(gpu: &Gpu, layout: Option<GBufferLayout>) -> wgpu::BindGroupLayout {
-    let mut entries = vec![texture_entry(0, wgpu::TextureSampleType::Depth)];
+    // Depth binds as unfilterable float: naga's GLSL output cannot load from depth textures.
+    let mut entries = vec![texture_entry(
+        0,
+        wgpu::TextureSampleType::Float { filterable: false },
+    )];
     if let Some(layout) = layout {
         for (i, f) in formats(layout).into_iter().enumerate() {
             entries.push(texture_entry(i as u32 + 1, sample_type(f)));
