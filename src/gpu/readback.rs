@@ -9,18 +9,9 @@ pub fn read_buffer(
     offset: u64,
     size: u64,
 ) -> Result<Vec<u8>, GpuError> {
-    let staging = gpu.device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("read-back"),
-        size,
-        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-        mapped_at_creation: false,
-    });
-    let mut encoder = gpu
-        .device
-        .create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
-    encoder.copy_buffer_to_buffer(buffer, offset, &staging, 0, size);
-    gpu.queue.submit([encoder.finish()]);
-    map_and_copy(gpu, &staging, size as usize)
+    read_back(gpu, size, |encoder, staging| {
+        encoder.copy_buffer_to_buffer(buffer, offset, staging, 0, size);
+    })
 }
 
 /// Read a whole 2D texture as tightly packed rows of `bytes_per_pixel`.
@@ -33,9 +24,36 @@ pub fn read_texture(
     let row = width * bytes_per_pixel;
     let padded =
         row.div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT) * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
-    let size = padded as u64 * height as u64;
+    let bytes = read_back(gpu, padded as u64 * height as u64, |encoder, staging| {
+        encoder.copy_texture_to_buffer(
+            texture.as_image_copy(),
+            wgpu::TexelCopyBufferInfo {
+                buffer: staging,
+                layout: wgpu::TexelCopyBufferLayout {
+                    offset: 0,
+                    bytes_per_row: Some(padded),
+                    rows_per_image: Some(height),
+                },
+            },
+            texture.size(),
+        );
+    })?;
+    let mut out = Vec::with_capacity((row * height) as usize);
+    for y in 0..height as usize {
+        let start = y * padded as usize;
+        out.extend_from_slice(&bytes[start..start + row as usize]);
+    }
+    Ok(out)
+}
+
+/// Copy `size` bytes into a mappable staging buffer with `copy`, then map and read them.
+fn read_back(
+    gpu: &Gpu,
+    size: u64,
+    copy: impl FnOnce(&mut wgpu::CommandEncoder, &wgpu::Buffer),
+) -> Result<Vec<u8>, GpuError> {
     let staging = gpu.device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("texture read-back"),
+        label: Some("read-back"),
         size,
         usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
         mapped_at_creation: false,
@@ -43,26 +61,9 @@ pub fn read_texture(
     let mut encoder = gpu
         .device
         .create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
-    encoder.copy_texture_to_buffer(
-        texture.as_image_copy(),
-        wgpu::TexelCopyBufferInfo {
-            buffer: &staging,
-            layout: wgpu::TexelCopyBufferLayout {
-                offset: 0,
-                bytes_per_row: Some(padded),
-                rows_per_image: Some(height),
-            },
-        },
-        texture.size(),
-    );
+    copy(&mut encoder, &staging);
     gpu.queue.submit([encoder.finish()]);
-    let bytes = map_and_copy(gpu, &staging, size as usize)?;
-    let mut out = Vec::with_capacity((row * height) as usize);
-    for y in 0..height as usize {
-        let start = y * padded as usize;
-        out.extend_from_slice(&bytes[start..start + row as usize]);
-    }
-    Ok(out)
+    map_and_copy(gpu, &staging, size as usize)
 }
 
 fn map_and_copy(gpu: &Gpu, staging: &wgpu::Buffer, size: usize) -> Result<Vec<u8>, GpuError> {
