@@ -9,7 +9,7 @@ use std::collections::BTreeSet;
 use clusterlab::compose::Composer;
 use clusterlab::cpu::clusters::{self as cpu, Grid};
 use clusterlab::gpu::Gpu;
-use clusterlab::render::{FrameOutput, Renderer, cpu_grid};
+use clusterlab::render::{FrameOutput, Renderer};
 use clusterlab::run::reference_frame;
 use clusterlab::scene::{self, Light, SCENES, Scene};
 use clusterlab::variant::*;
@@ -169,7 +169,7 @@ fn capped_lists_drop_lights_exactly_when_the_cap_bites() {
     let gpu = gpu();
     let scene = scene::generate("atrium", small("atrium", 96, 54, Some(1024))).unwrap();
     let exact = clustered(Pipeline::ClusteredForward, ZSlicing::Exponential);
-    let grid = cpu_grid(&exact, &scene);
+    let grid = Grid::of(&exact, &scene);
     let lists = cpu::assign(
         &grid,
         &cpu::cluster_bounds(&grid),
@@ -218,7 +218,7 @@ fn assert_lists_match(gpu: &Gpu, v: &Variant, scene: &Scene, what: &str) {
     let mut r = Renderer::new(gpu, &Composer::default(), v, scene).unwrap();
     r.render().unwrap();
     let got = gpu_sets(&r);
-    let grid: Grid = cpu_grid(v, scene);
+    let grid: Grid = Grid::of(v, scene);
     let bounds = cpu::cluster_bounds(&grid);
     let lights = cpu::view_lights(&scene.lights, scene.camera.view());
     let want = cpu::assign(&grid, &bounds, &lights, None, None);
@@ -298,7 +298,7 @@ fn gpu_light_lists_equal_the_cpu_twin_at_the_edges() {
     let gpu = gpu();
     let v = clustered(Pipeline::ClusteredForward, ZSlicing::Exponential);
     let mut scene = scene::generate("atrium", small("atrium", 128, 72, Some(0))).unwrap();
-    let grid = cpu_grid(&v, &scene);
+    let grid = Grid::of(&v, &scene);
     let near = grid.near;
     // On a slice boundary, straddling the near plane, behind the camera (reaching past it),
     // entirely behind the camera, beyond far, and one huge light over everything.
@@ -466,4 +466,37 @@ fn counters_are_exact_where_they_can_be_computed() {
             );
         }
     }
+}
+
+/// Lists longer than the first index buffer: the frame grows it and runs again, and the
+/// result is the CPU twin's lists and an exact picture, not truncated lists.
+#[test]
+fn lists_that_outgrow_their_buffer_grow_it_and_stay_exact() {
+    let gpu = gpu();
+    let composer = Composer::default();
+    let scene = scene::generate("atrium", small("atrium", 96, 54, Some(4096))).unwrap();
+    let v = loaded(
+        "forward",
+        clustered(Pipeline::ClusteredForward, ZSlicing::Exponential),
+    );
+    let mut r = Renderer::new(&gpu, &composer, &v.variant, &scene).unwrap();
+    let frame = r.render().unwrap();
+    let stats = r.stats().unwrap();
+    assert!(
+        stats.list_reallocations >= 1,
+        "the scene must outgrow the first buffer"
+    );
+    let grid = Grid::of(&v.variant, &scene);
+    let lights = cpu::view_lights(&scene.lights, scene.camera.view());
+    let want = cpu::assign(&grid, &cpu::cluster_bounds(&grid), &lights, None, None);
+    let total = want.indices.len() as u64;
+    // f32 and f64 may decide a borderline light differently (see assert_lists_match).
+    assert!(
+        stats.light_list_entries.abs_diff(total) <= total / 10_000 + 2,
+        "{} vs {total}",
+        stats.light_list_entries
+    );
+    let (reference, _) = reference_frame(&gpu, &composer, &v, &scene).unwrap();
+    let e = clusterlab::metrics::compare(&frame, &reference);
+    assert!(e.max_abs_8bit <= 1 && e.nan_pixels == 0, "{e:?}");
 }

@@ -5,7 +5,8 @@
 use glam::{DMat4, DVec2, DVec3};
 
 use super::zslice::{self, Scheme};
-use crate::scene::Light;
+use crate::scene::{Light, Scene};
+use crate::variant::{Variant, ZSlicing};
 
 /// Relative padding of every box (as in the shaders).
 pub const BOUNDS_PADDING: f64 = 1e-4;
@@ -27,6 +28,38 @@ pub struct Grid {
 }
 
 impl Grid {
+    /// The twin of a variant's grid over a scene's camera (static z-range).
+    pub fn of(variant: &Variant, scene: &Scene) -> Grid {
+        let c = variant.clusters();
+        let cam = &scene.camera;
+        let tan_half_fov_y = (cam.fov_y / 2.0).tan();
+        let scheme = match c.slicing {
+            ZSlicing::Linear => Scheme::Linear,
+            ZSlicing::Exponential | ZSlicing::DynamicRange { .. } => Scheme::Exponential,
+            ZSlicing::NearSliceThenExponential { near_slice_end } => Scheme::NearThenExponential {
+                near_end: near_slice_end as f64,
+            },
+            ZSlicing::OlssonCubic => Scheme::Olsson {
+                tan_half_fov_y,
+                tiles_y: c.grid.1,
+            },
+        };
+        // The GPU sees the camera's planes as f32; so does the twin.
+        let near = cam.near as f32 as f64;
+        let far = cam.far as f32 as f64;
+        Grid {
+            x: c.grid.0,
+            y: c.grid.1,
+            z: c.grid.2,
+            scheme,
+            range: (near, far),
+            near,
+            far,
+            tan_half_fov_y,
+            aspect: scene.aspect(),
+        }
+    }
+
     pub fn count(&self) -> usize {
         (self.x * self.y * self.z) as usize
     }

@@ -5,7 +5,7 @@ mod readback;
 mod timing;
 
 pub use readback::{read_buffer, read_texture};
-pub use timing::{PassTimer, Timings};
+pub use timing::{PassTimer, TimestampSlot, Timings};
 
 use std::fmt;
 use std::sync::{Arc, Mutex};

@@ -26,6 +26,29 @@ impl Timings {
     }
 }
 
+/// Where a pass writes its timestamps (when the adapter has them).
+pub struct TimestampSlot<'a> {
+    query_set: &'a wgpu::QuerySet,
+    index: u32,
+}
+
+impl<'a> TimestampSlot<'a> {
+    pub fn render(slot: Option<Self>) -> Option<wgpu::RenderPassTimestampWrites<'a>> {
+        slot.map(|s| wgpu::RenderPassTimestampWrites {
+            query_set: s.query_set,
+            beginning_of_pass_write_index: Some(s.index * 2),
+            end_of_pass_write_index: Some(s.index * 2 + 1),
+        })
+    }
+    pub fn compute(slot: Option<Self>) -> Option<wgpu::ComputePassTimestampWrites<'a>> {
+        slot.map(|s| wgpu::ComputePassTimestampWrites {
+            query_set: s.query_set,
+            beginning_of_pass_write_index: Some(s.index * 2),
+            end_of_pass_write_index: Some(s.index * 2 + 1),
+        })
+    }
+}
+
 /// Hands out timestamp slots to passes and turns them into milliseconds.
 pub struct PassTimer {
     query_set: Option<wgpu::QuerySet>,
@@ -51,12 +74,16 @@ impl PassTimer {
         }
     }
 
-    pub(crate) fn query_set(&self) -> Option<&wgpu::QuerySet> {
-        self.query_set.as_ref()
+    /// A timestamp slot for the next pass named `name` (None without timestamps or when
+    /// full).
+    pub fn claim_slot(&mut self, name: &str) -> Option<TimestampSlot<'_>> {
+        let index = self.claim(name)?;
+        self.query_set
+            .as_ref()
+            .map(|query_set| TimestampSlot { query_set, index })
     }
 
-    /// The next free slot, recorded under `name` (None without timestamps or when full).
-    pub(crate) fn claim(&mut self, name: &str) -> Option<u32> {
+    fn claim(&mut self, name: &str) -> Option<u32> {
         self.query_set.as_ref()?;
         let index = self.names.len() as u32;
         if index >= self.capacity {

@@ -8,7 +8,7 @@ mod resources;
 mod truth;
 
 pub use clusters::{ClusterBuffers, ClusterRange, ClusterStats};
-pub use passes::{PassRunner, TimestampSlot, shader_module};
+pub use passes::{PassRunner, shader_module};
 pub use resources::{DepthSetup, F32_BITS_FORMAT, LDR_FORMAT, SceneBuffers, ViewUniform};
 pub use truth::raster_truth;
 
@@ -20,8 +20,7 @@ use serde::Serialize;
 
 use crate::compose::{self, ComposedPass, Composer, Pass, ShaderError};
 use crate::cpu::clusters::{self as cpu_clusters, ClusterLists, Grid};
-use crate::cpu::zslice::Scheme;
-use crate::gpu::{Gpu, GpuError, Timings, read_buffer, read_texture};
+use crate::gpu::{Gpu, GpuError, TimestampSlot, Timings, read_buffer, read_texture};
 use crate::scene::{Light, Scene};
 use crate::variant::{Assignment, LightLists, Variant, ZSlicing};
 use passes::{clear_attachment, color_target, render_pipeline};
@@ -535,17 +534,7 @@ impl<'g> Renderer<'g> {
     /// Render one frame (timed) and read back its images.
     pub fn render(&mut self) -> Result<FrameOutput, RenderError> {
         let start = Instant::now();
-        let mut attempt = 0;
-        let (timings, cpu_assign_ms) = loop {
-            let (timings, cpu_ms) = self.run_frame(false)?;
-            if self.grow_lists_if_needed()? {
-                attempt += 1;
-                if attempt < 3 {
-                    continue;
-                }
-            }
-            break (timings, cpu_ms);
-        };
+        let (timings, cpu_assign_ms) = self.run_fitted(false)?;
         let wall_ms = start.elapsed().as_secs_f64() * 1e3;
         let hdr = read_hdr(self.gpu, &self.targets.hdr)?;
         let ldr = read_texture(self.gpu, &self.targets.ldr, 4)?;
@@ -563,13 +552,7 @@ impl<'g> Renderer<'g> {
     /// Render the frame again with instrumented shading and return its exact counters.
     pub fn stats(&mut self) -> Result<FrameStats, RenderError> {
         let gpu = self.gpu;
-        gpu.scoped("clearing counters", || {
-            let mut e = gpu.device.create_command_encoder(&Default::default());
-            e.clear_buffer(&self.pixel_evals, 0, None);
-            e.clear_buffer(&self.pixel_useful, 0, None);
-            gpu.queue.submit([e.finish()]);
-        })?;
-        self.run_frame(true)?;
+        self.run_fitted(true)?;
         let sum = |b: &wgpu::Buffer| -> Result<u64, GpuError> {
             let bytes = read_buffer(gpu, b, 0, b.size())?;
             Ok(bytemuck::cast_slice::<u8, u32>(&bytes)
@@ -659,17 +642,40 @@ impl<'g> Renderer<'g> {
         Ok(true)
     }
 
+    /// Run the frame until its light lists fit: the index buffer grows to the exact total a
+    /// frame reports, so one re-run fits; lists that still do not fit are an error, never a
+    /// picture with lights missing.
+    fn run_fitted(&mut self, instrumented: bool) -> Result<(Timings, Option<f64>), RenderError> {
+        let mut frame = self.run_frame(instrumented)?;
+        let mut runs = 1;
+        while self.grow_lists_if_needed()? {
+            if runs == 3 {
+                return Err(RenderError::Gpu(GpuError::Captured(
+                    "the light lists still overflowed their buffer after growing it twice".into(),
+                )));
+            }
+            frame = self.run_frame(instrumented)?;
+            runs += 1;
+        }
+        Ok(frame)
+    }
+
     /// Encode and run every pass of the frame; returns pass timings and the CPU assignment
     /// time.
     fn run_frame(&mut self, instrumented: bool) -> Result<(Timings, Option<f64>), RenderError> {
         let gpu = self.gpu;
-        if let Some(c) = &self.clusters {
-            gpu.scoped("clearing cluster counters", || {
-                let mut e = gpu.device.create_command_encoder(&Default::default());
+        // Counters start at zero in every run of a frame (a re-run must not add up twice).
+        gpu.scoped("clearing counters", || {
+            let mut e = gpu.device.create_command_encoder(&Default::default());
+            if let Some(c) = &self.clusters {
                 e.clear_buffer(&c.stats, 0, None);
-                gpu.queue.submit([e.finish()]);
-            })?;
-        }
+            }
+            if instrumented {
+                e.clear_buffer(&self.pixel_evals, 0, None);
+                e.clear_buffer(&self.pixel_useful, 0, None);
+            }
+            gpu.queue.submit([e.finish()]);
+        })?;
         let cpu_ms = self.assign_on_cpu()?;
         // Boxes depend on the projection, the size and the z-range, and with sample bounds
         // on this frame's depth.
@@ -912,40 +918,8 @@ impl<'g> Renderer<'g> {
     }
 }
 
-/// The CPU twin of a variant's grid over a scene's camera (static z-range).
-pub fn cpu_grid(variant: &Variant, scene: &Scene) -> Grid {
-    let c = variant.clusters();
-    let cam = &scene.camera;
-    let tan_half_fov_y = (cam.fov_y / 2.0).tan();
-    let scheme = match c.slicing {
-        ZSlicing::Linear => Scheme::Linear,
-        ZSlicing::Exponential | ZSlicing::DynamicRange { .. } => Scheme::Exponential,
-        ZSlicing::NearSliceThenExponential { near_slice_end } => Scheme::NearThenExponential {
-            near_end: near_slice_end as f64,
-        },
-        ZSlicing::OlssonCubic => Scheme::Olsson {
-            tan_half_fov_y,
-            tiles_y: c.grid.1,
-        },
-    };
-    // The GPU sees the camera's planes as f32; so does the twin.
-    let near = cam.near as f32 as f64;
-    let far = cam.far as f32 as f64;
-    Grid {
-        x: c.grid.0,
-        y: c.grid.1,
-        z: c.grid.2,
-        scheme,
-        range: (near, far),
-        near,
-        far,
-        tan_half_fov_y,
-        aspect: scene.aspect(),
-    }
-}
-
 fn cpu_assignment(variant: &Variant, scene: &Scene) -> CpuAssignment {
-    let grid = cpu_grid(variant, scene);
+    let grid = Grid::of(variant, scene);
     let lights: &[Light] = &scene.lights;
     CpuAssignment {
         bounds: cpu_clusters::cluster_bounds(&grid),

@@ -3,30 +3,7 @@
 use std::time::Instant;
 
 use crate::compose::ComposedPass;
-use crate::gpu::{Gpu, GpuError, PassTimer, Timings};
-
-/// Where a pass writes its timestamps (when the adapter has them).
-pub struct TimestampSlot<'a> {
-    query_set: &'a wgpu::QuerySet,
-    index: u32,
-}
-
-impl<'a> TimestampSlot<'a> {
-    pub fn render(slot: Option<Self>) -> Option<wgpu::RenderPassTimestampWrites<'a>> {
-        slot.map(|s| wgpu::RenderPassTimestampWrites {
-            query_set: s.query_set,
-            beginning_of_pass_write_index: Some(s.index * 2),
-            end_of_pass_write_index: Some(s.index * 2 + 1),
-        })
-    }
-    pub fn compute(slot: Option<Self>) -> Option<wgpu::ComputePassTimestampWrites<'a>> {
-        slot.map(|s| wgpu::ComputePassTimestampWrites {
-            query_set: s.query_set,
-            beginning_of_pass_write_index: Some(s.index * 2),
-            end_of_pass_write_index: Some(s.index * 2 + 1),
-        })
-    }
-}
+use crate::gpu::{Gpu, GpuError, PassTimer, TimestampSlot, Timings};
 
 /// Encodes a frame pass by pass. With timestamps, all passes go into one submission; without,
 /// each pass is submitted and waited for, and timed by the wall clock.
@@ -79,15 +56,6 @@ impl<'g> PassRunner<'g> {
         }
         self.gpu.wait()?;
         self.timer.finish(self.gpu)
-    }
-}
-
-impl PassTimer {
-    /// A timestamp slot for the next pass named `name`.
-    pub fn claim_slot(&mut self, name: &str) -> Option<TimestampSlot<'_>> {
-        let index = self.claim(name)?;
-        self.query_set()
-            .map(|query_set| TimestampSlot { query_set, index })
     }
 }
 
