@@ -9,32 +9,19 @@
 
 use std::path::Path;
 
+mod common;
+
 use clusterlab::compose::Composer;
 use clusterlab::gpu::Gpu;
 use clusterlab::render::Renderer;
 use clusterlab::scene::{self, find_scene};
 use clusterlab::variant;
-
-fn env<T: std::str::FromStr>(name: &str, default: T) -> T {
-    std::env::var(name)
-        .ok()
-        .and_then(|v| v.parse().ok())
-        .unwrap_or(default)
-}
-
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    v[v.len() / 2]
-}
+use common::{env, median};
 
 fn main() {
     let lights: u32 = env("CLUSTERLAB_BENCH_LIGHTS", 4096);
     let rounds: usize = env("CLUSTERLAB_BENCH_ROUNDS", 3);
-    let size: String = env("CLUSTERLAB_BENCH_SIZE", "640x360".to_string());
-    let (w, h) = size
-        .split_once('x')
-        .and_then(|(w, h)| Some((w.parse().ok()?, h.parse().ok()?)))
-        .expect("CLUSTERLAB_BENCH_SIZE is WxH");
+    let (w, h) = common::size("640x360");
     let names: String = env(
         "CLUSTERLAB_BENCH_VARIANTS",
         "forward_plus,forward_plus_olsson,clustered_deferred_16x16x24,clustered_deferred_active,clustered_deferred_olsson,deferred_scissor"

@@ -8,7 +8,8 @@ use serde::Serialize;
 use serde_json::{Map, Value};
 
 use crate::compose::Composer;
-use crate::cpu::reference::{ReferenceFrame, shade_reference};
+use crate::cpu::post::{CameraPair, Geometry, PostParams};
+use crate::cpu::reference::{ReferenceFrame, post_process, shade_reference};
 use crate::cpu::shading::ShadingParams;
 use crate::gpu::{AdapterSummary, Gpu, Timings};
 use crate::metrics::{self, ErrorMetrics};
@@ -30,7 +31,8 @@ pub struct RenderReport {
     pub seed: u64,
     /// Milliseconds per pass (median over the timed frames), with their sum as `total`.
     pub gpu_ms: Map<String, Value>,
-    /// "gpu timestamps", or "wall clock" where the adapter has no timestamp queries.
+    /// "gpu timestamps", or "wall clock" (each pass submitted alone and waited for) on
+    /// adapters without timestamp queries and on software adapters (see `gpu`).
     pub timing_source: &'static str,
     pub frames: u32,
     /// Format of the HDR colour target (rgba32float, or rgba16float where not renderable).
@@ -186,7 +188,8 @@ pub fn run_cell(
     })
 }
 
-/// The raster truth of the variant's rasterisation, shaded on the CPU in f64.
+/// The raster truth of the variant's rasterisation, shaded and post-processed on the CPU
+/// in f64.
 pub fn reference_frame(
     gpu: &Gpu,
     composer: &Composer,
@@ -195,13 +198,23 @@ pub fn reference_frame(
 ) -> Result<(ReferenceFrame, f64), RunError> {
     let truth = raster_truth(gpu, composer, &variant.variant, scene)?;
     let start = Instant::now();
-    let reference = shade_reference(
+    let mut reference = shade_reference(
         &truth,
         &scene.lights,
         scene.camera.eye,
         &ShadingParams::of(&variant.variant),
         EXPOSURE,
     );
+    let post = PostParams::of(&variant.variant);
+    if post.any() {
+        let cams = CameraPair::of(scene, variant.variant.depth.reversed_z);
+        post_process(
+            &mut reference,
+            &post,
+            &Geometry::from_truth(&truth, &cams),
+            EXPOSURE,
+        );
+    }
     Ok((reference, start.elapsed().as_secs_f64() * 1e3))
 }
 

@@ -141,6 +141,14 @@ pub fn constants_module(v: &Variant) -> String {
         ("NEAR_SLICE_END", near_slice_end),
         ("OUTLINE_THRESHOLD", outline.depth_threshold),
         ("BLOOM_THRESHOLD", bloom.threshold),
+        (
+            "BLOOM_SIGMA",
+            crate::cpu::post::bloom_sigma(bloom.radius) as f32,
+        ),
+        (
+            "BLOOM_WEIGHT_SUM",
+            crate::cpu::post::bloom_weight_sum(bloom.radius) as f32,
+        ),
     ];
     let mut text = String::new();
     for (name, value) in u32s {

@@ -4,6 +4,7 @@
 pub mod clusters;
 pub mod color;
 pub mod normals;
+pub mod post;
 pub mod reference;
 pub mod shading;
 pub mod zslice;

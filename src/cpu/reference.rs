@@ -5,6 +5,7 @@ use glam::DVec3;
 use rayon::prelude::*;
 
 use super::color::display8;
+use super::post::{Geometry, Image, PostParams};
 use super::shading::{ShadingParams, Surface, shade};
 use crate::scene::Light;
 
@@ -72,4 +73,25 @@ pub fn shade_reference(
         hdr,
         ldr,
     }
+}
+
+/// Apply the variant's post effects to a reference frame, in f64, on the geometry of the
+/// raster truth.
+pub fn post_process(
+    frame: &mut ReferenceFrame,
+    params: &PostParams,
+    geometry: &Geometry,
+    exposure: f64,
+) {
+    if !params.any() {
+        return;
+    }
+    let image = Image::new(
+        frame.width,
+        frame.height,
+        frame.hdr.iter().map(|&c| DVec3::from(c)).collect(),
+    );
+    let out = super::post::apply(params, &image, geometry);
+    frame.hdr = out.pixels.iter().map(|c| c.to_array()).collect();
+    frame.ldr = frame.hdr.iter().map(|&c| display8(c, exposure)).collect();
 }

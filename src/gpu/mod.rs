@@ -58,7 +58,8 @@ pub struct Gpu {
     pub device: wgpu::Device,
     pub queue: wgpu::Queue,
     pub adapter: AdapterSummary,
-    /// Timestamp queries work, so pass times are GPU times; otherwise wall-clock per pass.
+    /// Pass times come from timestamp queries (hardware adapters that have them); otherwise
+    /// each pass is submitted alone and timed by the wall clock.
     pub timestamps: bool,
     /// Format of HDR colour targets: rgba32float where the adapter can render (and blend)
     /// it, else rgba16float (OpenGL through wgpu).
@@ -156,7 +157,8 @@ impl Gpu {
                 backend: info.backend.to_string(),
                 driver,
             },
-            timestamps: features.contains(wgpu::Features::TIMESTAMP_QUERY),
+            timestamps: features.contains(wgpu::Features::TIMESTAMP_QUERY)
+                && timestamps_are_per_pass(info.device_type),
             hdr_format,
             limits,
             uncaptured,
@@ -219,5 +221,18 @@ fn parse_backends(name: &str) -> Result<wgpu::Backends, GpuError> {
         Err(GpuError::UnknownBackend(name.to_string()))
     } else {
         Ok(b)
+    }
+}
+
+/// Whether pass timestamps measure each pass's own work. Software adapters (lavapipe,
+/// llvmpipe) record a compute pass's timestamps without waiting for its dispatches, whose
+/// work then lands in whichever pass comes next; there each pass is submitted alone and
+/// timed by the wall clock instead, which on a CPU device is exactly its cost.
+/// `CLUSTERLAB_TIMING=timestamps` or `=wall` overrides the choice.
+fn timestamps_are_per_pass(device: wgpu::DeviceType) -> bool {
+    match std::env::var("CLUSTERLAB_TIMING").as_deref() {
+        Ok("timestamps") => true,
+        Ok("wall") => false,
+        _ => device != wgpu::DeviceType::Cpu,
     }
 }

@@ -4,6 +4,7 @@
 mod clusters;
 mod gbuffer;
 mod passes;
+mod post;
 mod resources;
 mod truth;
 
@@ -24,6 +25,7 @@ use crate::gpu::{Gpu, GpuError, TimestampSlot, Timings, read_buffer, read_textur
 use crate::scene::{Light, Scene};
 use crate::variant::{Assignment, LightLists, Variant, ZSlicing};
 use passes::{clear_attachment, color_target, render_pipeline};
+use post::{PostChain, PostInputs, is_post};
 use resources::{frame_bind_group, frame_layout, storage_entry, target, texture_entry};
 
 /// Why a frame could not be rendered.
@@ -97,6 +99,8 @@ pub struct FrameStats {
     pub cluster_bytes: u64,
     /// G-buffer bytes per pixel, depth included (0 for forward pipelines).
     pub gbuffer_bytes_per_pixel: u32,
+    /// Bytes per pixel of the post-processing images (0 without post effects).
+    pub post_bytes_per_pixel: u32,
     /// Times the light index buffer was too small and the frame was run again larger.
     pub list_reallocations: u32,
     /// The clustered depth range of the frame [near, far].
@@ -166,7 +170,7 @@ fn runnable(name: &str) -> bool {
             | "scissor_lights"
             | "debug_view"
             | "tonemap"
-    )
+    ) || is_post(name)
 }
 
 /// Shading passes, which have an instrumented twin for the counters.
@@ -200,6 +204,7 @@ pub struct Renderer<'g> {
     scene: SceneBuffers,
     targets: Targets,
     clusters: Option<ClusterBuffers>,
+    post: PostChain,
     pixel_evals: wgpu::Buffer,
     pixel_useful: wgpu::Buffer,
     layouts: Layouts,
@@ -324,6 +329,21 @@ impl<'g> Renderer<'g> {
                         )],
                     }),
             };
+            let post_passes: Vec<_> = composed
+                .iter()
+                .filter(|(p, _, _)| is_post(p.name))
+                .map(|(p, c, _)| (p.name, c))
+                .collect();
+            let post = PostChain::new(
+                gpu,
+                variant,
+                &post_passes,
+                PostInputs {
+                    shaded: &targets.hdr,
+                    depth: &targets.depth,
+                    frame_layout: &layouts.frame,
+                },
+            );
             let groups = Groups {
                 frame: frame_bind_group(gpu, &layouts.frame, &scene_buffers),
                 cluster_build: None,
@@ -353,7 +373,7 @@ impl<'g> Renderer<'g> {
                     entries: &[wgpu::BindGroupEntry {
                         binding: 0,
                         resource: wgpu::BindingResource::TextureView(
-                            &targets.hdr.create_view(&Default::default()),
+                            &post.output(&targets.hdr).create_view(&Default::default()),
                         ),
                     }],
                 }),
@@ -368,6 +388,7 @@ impl<'g> Renderer<'g> {
                 scene: scene_buffers,
                 targets,
                 clusters,
+                post,
                 pixel_evals,
                 pixel_useful,
                 layouts,
@@ -382,6 +403,9 @@ impl<'g> Renderer<'g> {
         renderer.remake_cluster_groups();
         gpu.scoped("creating pipelines", || {
             for (pass, timed, instrumented) in &composed {
+                if is_post(pass.name) {
+                    continue; // The post chain holds their pipelines.
+                }
                 let p = renderer.pipelines(pass, timed, false);
                 renderer.timed.insert(pass.name, p);
                 if let Some(i) = instrumented {
@@ -536,7 +560,7 @@ impl<'g> Renderer<'g> {
         let start = Instant::now();
         let (timings, cpu_assign_ms) = self.run_fitted(false)?;
         let wall_ms = start.elapsed().as_secs_f64() * 1e3;
-        let hdr = read_hdr(self.gpu, &self.targets.hdr)?;
+        let hdr = read_hdr(self.gpu, self.post.output(&self.targets.hdr))?;
         let ldr = read_texture(self.gpu, &self.targets.ldr, 4)?;
         Ok(FrameOutput {
             width: self.width,
@@ -568,6 +592,7 @@ impl<'g> Renderer<'g> {
             } else {
                 0
             },
+            post_bytes_per_pixel: self.post.bytes_per_pixel(),
             list_reallocations: self.reallocations,
             ..Default::default()
         };
@@ -734,6 +759,9 @@ impl<'g> Renderer<'g> {
         slot: Option<TimestampSlot<'_>>,
         instrumented: bool,
     ) {
+        if is_post(name) {
+            return self.post.encode(name, encoder, slot, &self.groups.frame);
+        }
         let pipelines = if instrumented && is_shading(name) {
             &self.instrumented[name]
         } else {
@@ -899,6 +927,24 @@ impl<'g> Renderer<'g> {
                 pass.draw(0..3, 0..1);
             }
         }
+    }
+
+    /// The shading pass's HDR image of the last frame, before post-processing.
+    pub fn read_shaded(&self) -> Result<Vec<[f32; 4]>, RenderError> {
+        Ok(read_hdr(self.gpu, &self.targets.hdr)?)
+    }
+
+    /// The depth buffer of the last frame, for variants with `depth.format: Float32` (24-bit
+    /// depth cannot be copied out).
+    pub fn read_depth(&self) -> Result<Vec<f32>, RenderError> {
+        let t = &self.targets.depth;
+        if t.format() != wgpu::TextureFormat::Depth32Float {
+            return Err(RenderError::NotRunnable(format!(
+                "reading back depth needs depth.format: Float32 (this variant's depth is {:?})",
+                t.format()
+            )));
+        }
+        Ok(bytemuck::cast_slice(&read_texture(self.gpu, t, 4)?).to_vec())
     }
 
     /// The light lists as the GPU holds them after the last frame (clustered variants).

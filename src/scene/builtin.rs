@@ -28,13 +28,13 @@ const fn defaults(lights: u32, radius_range: (f32, f32)) -> SceneParams {
 pub static SCENES: &[SceneInfo] = &[
     SceneInfo {
         name: "atrium",
-        description: "a procedural hall after the Sponza atrium: tiled floor, walls, two rows of columns, beams, galleries, curtains, spheres; real overdraw",
+        description: "a procedural hall after the Sponza atrium: tiled floor, walls, two rows of columns, beams, galleries, curtains, spheres; real overdraw; the camera walks down the hall at 3 units/s",
         defaults: defaults(1024, (1.0, 3.0)),
         generate: atrium,
     },
     SceneInfo {
         name: "spheres",
-        description: "spheres on a plane, normals over the whole sphere (for normal-packing error)",
+        description: "spheres on a plane, normals over the whole sphere (for normal-packing error); the camera pans at 3 units/s",
         defaults: defaults(128, (1.5, 4.0)),
         generate: spheres,
     },
@@ -157,8 +157,10 @@ fn camera_pair(
     velocity: DVec3,
     t: f64,
 ) -> (Camera, Camera) {
+    // At the default time (1 s) the camera is at `eye`; it moves at `velocity` (scene units
+    // per second), so the previous frame's camera is `velocity * FRAME_DT` behind it.
     let at = |time: f64| {
-        let offset = velocity * time;
+        let offset = velocity * (time - 1.0);
         Camera {
             eye: eye + offset,
             target: target + offset,
@@ -169,8 +171,8 @@ fn camera_pair(
         }
     };
     let (mut now, mut prev) = (at(t), at(t - FRAME_DT));
-    let far = Scene::far_plane_for(&mesh.vertices, now.eye)
-        .max(Scene::far_plane_for(&mesh.vertices, prev.eye));
+    // One projection for both frames: motion vectors compare positions, not depths.
+    let far = Scene::far_plane_for(&mesh.vertices, now.eye);
     now.far = far;
     prev.far = far;
     (now, prev)
@@ -289,9 +291,9 @@ fn atrium(p: SceneParams) -> Scene {
     );
     let cams = camera_pair(
         &m,
-        DVec3::new(-14.5, 1.8, 0.8),
-        DVec3::new(5.0, 3.6, -0.4),
-        DVec3::new(0.5, 0.0, 0.0),
+        DVec3::new(-14.0, 1.8, 0.8),
+        DVec3::new(5.5, 3.6, -0.4),
+        DVec3::new(3.0, 0.0, 0.0),
         p.time,
     );
     finish("atrium", p, m, lights, cams)
@@ -317,9 +319,9 @@ fn spheres(p: SceneParams) -> Scene {
     );
     let cams = camera_pair(
         &m,
-        DVec3::new(0.0, 6.0, 9.0),
-        DVec3::new(0.0, 0.3, -0.5),
-        DVec3::new(0.2, 0.0, 0.0),
+        DVec3::new(0.2, 6.0, 9.0),
+        DVec3::new(0.2, 0.3, -0.5),
+        DVec3::new(3.0, 0.0, 0.0),
         p.time,
     );
     finish("spheres", p, m, lights, cams)
@@ -334,9 +336,9 @@ fn plane() -> MeshBuilder {
 fn plane_camera(m: &MeshBuilder, t: f64) -> (Camera, Camera) {
     camera_pair(
         m,
-        DVec3::new(0.0, 3.0, 8.0),
-        DVec3::ZERO,
+        DVec3::new(0.1, 3.0, 8.0),
         DVec3::new(0.1, 0.0, 0.0),
+        DVec3::new(2.0, 0.0, 0.0),
         t,
     )
 }

@@ -237,10 +237,10 @@ fn check_post(post: &Post, v: &Variant, out: &mut Vec<Problem>) {
                 format!("is {}; it must be a finite value >= 0", bloom.threshold),
             ));
         }
-        if !(1..=32).contains(&bloom.radius) {
+        if !(1..=64).contains(&bloom.radius) {
             out.push(problem(
                 "post.bloom.radius",
-                format!("is {}; it must be in 1..=32", bloom.radius),
+                format!("is {}; it must be in 1..=64", bloom.radius),
             ));
         }
     }

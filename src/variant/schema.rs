@@ -322,7 +322,8 @@ pub struct Toon {
     pub mode: ToonMode,
     /// Number of bands, in 2..=32.
     pub bands: u32,
-    /// Dark outlines where depth jumps; the threshold is a relative view-depth step.
+    /// Dark outlines where depth jumps; the threshold is a relative view-depth step. They
+    /// run in the toon compute pass, with either mode.
     pub outlines: Option<Outlines>,
 }
 
@@ -341,7 +342,8 @@ impl Default for Toon {
 pub enum ToonMode {
     /// Each light's diffuse term goes through the band ramp inside the shading pass.
     PerLight,
-    /// A compute pass quantises the accumulated colour's luminance.
+    /// A compute pass quantises the norm of the accumulated colour on the display scale
+    /// n / (1 + n), to the middle of each band, and keeps its hue.
     PostProcess,
 }
 
@@ -367,7 +369,7 @@ impl Default for Outlines {
 pub struct Bloom {
     /// Linear HDR luminance above which a pixel blooms, >= 0.
     pub threshold: f32,
-    /// Blur radius in pixels, in 1..=32.
+    /// Blur radius in pixels, in 1..=64; the Gaussian's sigma is radius / 2.
     pub radius: u32,
     /// How the blur is computed.
     pub kernel: BloomKernel,
@@ -396,7 +398,8 @@ pub enum BloomKernel {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct MotionBlur {
-    /// Samples along each pixel's motion vector, in 2..=64.
+    /// Samples along each pixel's motion vector (from the previous frame's camera), in
+    /// 2..=64.
     pub samples: u32,
 }
 
