@@ -2,12 +2,14 @@
 //!
 //! Data flows one way: a [`variant`] file is parsed and checked, [`compose`]d into
 //! naga-validated WGSL per pass, and [`render`]ed on the [`gpu`] against seeded [`scene`]s;
-//! the frame is compared ([`metrics`]) with an independent [`cpu`] reference.
+//! the frame is compared ([`metrics`]) with an independent [`cpu`] reference. The
+//! [`matrix`] runs many such cells and reports them side by side.
 
 pub mod compose;
 pub mod cpu;
 pub mod explain;
 pub mod gpu;
+pub mod matrix;
 pub mod metrics;
 pub mod render;
 pub mod run;

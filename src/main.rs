@@ -43,6 +43,61 @@ enum Command {
     /// Render one variant on one scene, measure it against the CPU f64 reference, and write
     /// the image and its error heat map.
     Render(RenderArgs),
+    /// Run the variant matrix: variants x scenes x sweeps, each cell timed and measured
+    /// against the reference; writes results.json, results.csv, images and index.html.
+    /// With no arguments: every variant in variants/ on every scene, plus a light-count
+    /// sweep of naive forward, Forward+ and clustered deferred.
+    Matrix(MatrixArgs),
+    /// Combine matrix result folders (shards of one study) into one report.
+    Merge {
+        /// Result folders (each with a results.json).
+        #[arg(required = true)]
+        dirs: Vec<PathBuf>,
+        /// Folder for the combined report.
+        #[arg(long, default_value = "out/matrix")]
+        out: PathBuf,
+        /// Print results.json to stdout (the table goes to stderr).
+        #[arg(long)]
+        json: bool,
+    },
+}
+
+#[derive(clap::Args)]
+struct MatrixArgs {
+    /// Variant files, folders of them, or names in variants/ (default: variants/).
+    #[arg(long, num_args = 1..)]
+    variants: Vec<String>,
+    /// Comma-separated built-in scenes (default: all; see `clusterlab scenes`).
+    #[arg(long, value_delimiter = ',')]
+    scenes: Vec<String>,
+    /// A swept parameter: lights=64,256,...  radius=1,2..4,...  grid=16x9x24,...
+    /// Repeat for a grid of sweeps.
+    #[arg(long, value_parser = clusterlab::matrix::parse_sweep)]
+    sweep: Vec<clusterlab::matrix::Sweep>,
+    /// Image size of every cell, WIDTHxHEIGHT (default: each scene's).
+    #[arg(long, value_parser = parse_size)]
+    size: Option<(u32, u32)>,
+    /// Timed frames per cell; pass times are medians over them.
+    #[arg(long, default_value_t = 3)]
+    frames: u32,
+    /// Untimed frames first (software rasterisers compile on first use).
+    #[arg(long, default_value_t = 1)]
+    warmup: u32,
+    /// Folder for results.json, results.csv, images/, plots/ and index.html.
+    #[arg(long, default_value = "out/matrix")]
+    out: PathBuf,
+    /// Print results.json to stdout (the table goes to stderr).
+    #[arg(long)]
+    json: bool,
+    /// Run only shard K of N (1-based): every N-th cell from the K-th.
+    #[arg(long, value_parser = clusterlab::matrix::parse_shard)]
+    shard: Option<(u32, u32)>,
+    /// An earlier results.json (or its folder): show each cell's change against it.
+    #[arg(long)]
+    baseline: Option<PathBuf>,
+    /// GPU backend: vulkan, gl, metal, dx12 (default: WGPU_BACKEND, else Vulkan first).
+    #[arg(long)]
+    backend: Option<String>,
 }
 
 #[derive(clap::Args)]
@@ -162,6 +217,8 @@ fn main() -> ExitCode {
             Ok(true)
         }
         Command::Render(args) => render(&args),
+        Command::Matrix(args) => matrix(&args),
+        Command::Merge { dirs, out, json } => merge(&dirs, &out, json),
     };
     match result {
         Ok(true) => ExitCode::SUCCESS,
@@ -313,6 +370,7 @@ fn render(args: &RenderArgs) -> Result<bool, String> {
             frames: args.frames,
             stats: !args.no_stats,
             out: Some(&args.out),
+            references: None,
         },
     )
     .map_err(|e| format!("variant `{}` on scene `{}`: {e}", loaded.name, args.scene))?;
@@ -374,4 +432,133 @@ fn debug_view_name(view: DebugView) -> &'static str {
         .iter()
         .find(|(_, v)| *v == view)
         .map_or("debug", |(name, _)| *name)
+}
+
+/// The default study: every variant on every scene, and the light-count sweep.
+fn default_studies() -> Result<Vec<clusterlab::matrix::Study>, String> {
+    use clusterlab::matrix::{Study, Sweep, find_variants};
+    let scenes: Vec<String> = clusterlab::scene::SCENES
+        .iter()
+        .map(|s| s.name.to_string())
+        .collect();
+    Ok(vec![
+        Study {
+            name: "variants".into(),
+            variants: find_variants(&["variants".into()])?,
+            scenes,
+            sweeps: vec![],
+            size: None,
+        },
+        Study {
+            name: "lights".into(),
+            variants: find_variants(&[
+                "naive_forward".into(),
+                "forward_plus".into(),
+                "clustered_deferred_16x16x24".into(),
+            ])?,
+            scenes: vec!["atrium".into()],
+            sweeps: vec![Sweep::Lights(vec![64, 256, 1024, 5000, 16384])],
+            size: Some((256, 144)),
+        },
+    ])
+}
+
+fn matrix(args: &MatrixArgs) -> Result<bool, String> {
+    use clusterlab::matrix::{self, MatrixOptions, Study};
+    let custom = !args.variants.is_empty() || !args.scenes.is_empty() || !args.sweep.is_empty();
+    let mut studies = if custom {
+        let variants = if args.variants.is_empty() {
+            vec!["variants".to_string()]
+        } else {
+            args.variants.clone()
+        };
+        let scenes = if args.scenes.is_empty() {
+            clusterlab::scene::SCENES
+                .iter()
+                .map(|s| s.name.to_string())
+                .collect()
+        } else {
+            args.scenes.clone()
+        };
+        vec![Study {
+            name: "custom".into(),
+            variants: matrix::find_variants(&variants)?,
+            scenes,
+            sweeps: args.sweep.clone(),
+            size: None,
+        }]
+    } else {
+        default_studies()?
+    };
+    if let Some(size) = args.size {
+        if size.0 == 0 || size.1 == 0 {
+            return Err(format!(
+                "--size {}x{}: width and height must be at least 1",
+                size.0, size.1
+            ));
+        }
+        for s in &mut studies {
+            s.size = Some(size);
+        }
+    }
+    let baseline = args
+        .baseline
+        .as_deref()
+        .map(matrix::Results::load)
+        .transpose()?;
+    let mut cells = matrix::expand(&studies)?;
+    if let Some(shard) = args.shard {
+        cells = matrix::shard(cells, shard);
+    }
+    let gpu = clusterlab::gpu::Gpu::new(args.backend.as_deref()).map_err(|e| e.to_string())?;
+    std::fs::create_dir_all(&args.out)
+        .map_err(|e| format!("{}: cannot create folder: {e}", args.out.display()))?;
+    eprintln!(
+        "{} cells on {} ({}, {}); writing to {}",
+        cells.len(),
+        gpu.adapter.name,
+        gpu.adapter.backend,
+        gpu.adapter.driver,
+        args.out.display()
+    );
+    let options = MatrixOptions {
+        warmup: args.warmup,
+        frames: args.frames.max(1),
+        out: args.out.clone(),
+        progress: true,
+        shard: args.shard,
+        command: std::env::args().collect(),
+    };
+    let start = Instant::now();
+    let mut results = matrix::run(&gpu, &Composer::default(), &cells, &options);
+    if let Some(old) = &baseline {
+        matrix::derive(&mut results.cells, Some(old));
+    }
+    matrix::write_report(&args.out, &results)?;
+    report(&results, args.json, &args.out)?;
+    eprintln!("finished in {:.0} s", start.elapsed().as_secs_f64());
+    Ok(results.failed() == 0)
+}
+
+fn merge(dirs: &[PathBuf], out: &Path, json: bool) -> Result<bool, String> {
+    let results = clusterlab::matrix::merge(dirs, out)?;
+    clusterlab::matrix::write_report(out, &results)?;
+    report(&results, json, out)?;
+    Ok(results.failed() == 0)
+}
+
+/// Print the table (stdout, or stderr when stdout carries the JSON).
+fn report(results: &clusterlab::matrix::Results, json: bool, out: &Path) -> Result<(), String> {
+    let table = clusterlab::matrix::table(results);
+    if json {
+        eprint!("{table}");
+        println!(
+            "{}",
+            serde_json::to_string_pretty(results).map_err(|e| e.to_string())?
+        );
+    } else {
+        print!("{table}");
+        println!("report: {}", out.join("index.html").display());
+    }
+    Ok(())
 }

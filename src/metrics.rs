@@ -1,13 +1,13 @@
 //! Error of a frame against the CPU reference, and an error heat map.
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use crate::cpu::reference::ReferenceFrame;
 use crate::render::FrameOutput;
 
 /// How far a frame is from the reference. HDR figures are in linear radiance; 8-bit figures
 /// in display code values (LSB).
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct ErrorMetrics {
     /// Largest per-channel difference of the displayed 8-bit images.
     pub max_abs_8bit: u32,

@@ -1,7 +1,9 @@
 //! One cell of work: a variant on a scene, rendered, measured against the CPU reference,
 //! reported and written out.
 
+use std::collections::HashMap;
 use std::path::{Path, PathBuf};
+use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
 use serde::Serialize;
@@ -31,6 +33,8 @@ pub struct RenderReport {
     pub seed: u64,
     /// Milliseconds per pass (median over the timed frames), with their sum as `total`.
     pub gpu_ms: Map<String, Value>,
+    /// [min, max] milliseconds per pass over the timed frames, `total` included.
+    pub gpu_ms_spread: Map<String, Value>,
     /// "gpu timestamps", or "wall clock" (each pass submitted alone and waited for) on
     /// adapters without timestamp queries and on software adapters (see `gpu`).
     pub timing_source: &'static str,
@@ -86,7 +90,7 @@ impl From<crate::gpu::GpuError> for RunError {
 pub struct CellResult {
     pub report: RenderReport,
     pub frame: FrameOutput,
-    pub reference: ReferenceFrame,
+    pub reference: Arc<ReferenceFrame>,
 }
 
 /// How to run a cell.
@@ -100,6 +104,8 @@ pub struct CellOptions<'a> {
     pub stats: bool,
     /// Folder for the image and its heat map.
     pub out: Option<&'a Path>,
+    /// Share reference frames between cells that would compute the same one.
+    pub references: Option<&'a ReferenceCache>,
 }
 
 impl Default for CellOptions<'_> {
@@ -109,6 +115,7 @@ impl Default for CellOptions<'_> {
             frames: 1,
             stats: true,
             out: None,
+            references: None,
         }
     }
 }
@@ -136,6 +143,7 @@ pub fn run_cell(
     }
     let wall_ms = median(runs.iter().map(|f| f.wall_ms).collect());
     let timings = median_timings(&runs);
+    let gpu_ms_spread = spread(&runs, &timings);
     let frame = runs.pop().expect("at least one frame");
     let stats = if options.stats {
         Some(renderer.stats()?)
@@ -147,10 +155,21 @@ pub fn run_cell(
         cpu_ms.insert("light_assign".into(), round3(ms).into());
     }
 
-    let (reference, reference_ms) = reference_frame(gpu, composer, variant, &scene)?;
+    let (reference, reference_ms) = match options.references {
+        Some(cache) => cache.get_or_compute(gpu, composer, variant, &scene)?,
+        None => {
+            let (r, ms) = reference_frame(gpu, composer, variant, &scene)?;
+            (Arc::new(r), ms)
+        }
+    };
     let error = metrics::compare(&frame, &reference);
     let images = match out {
-        Some(dir) => write_images(dir, &variant.name, &scene, &frame, &reference)?,
+        Some(dir) => write_images(
+            dir,
+            &format!("{}@{}", variant.name, scene.name),
+            &frame,
+            &reference,
+        )?,
         None => Vec::new(),
     };
 
@@ -167,6 +186,7 @@ pub fn run_cell(
         lights: scene.lights.len() as u32,
         seed: params.seed,
         gpu_ms,
+        gpu_ms_spread,
         timing_source: if timings.gpu_timestamps {
             "gpu timestamps"
         } else {
@@ -186,6 +206,54 @@ pub fn run_cell(
         frame,
         reference,
     })
+}
+
+/// Reference frames by what determines them, so that variants which rasterise, shade and
+/// post-process alike share one (the matrix runs many such cells).
+#[derive(Default)]
+pub struct ReferenceCache {
+    frames: Mutex<HashMap<String, (Arc<ReferenceFrame>, f64)>>,
+}
+
+impl std::fmt::Debug for ReferenceCache {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let n = self.frames.lock().map_or(0, |m| m.len());
+        write!(f, "ReferenceCache({n} frames)")
+    }
+}
+
+impl ReferenceCache {
+    /// The reference of `variant` on `scene`, computed on first use. The time returned is
+    /// the time it took when it was computed.
+    pub fn get_or_compute(
+        &self,
+        gpu: &Gpu,
+        composer: &Composer,
+        variant: &LoadedVariant,
+        scene: &Scene,
+    ) -> Result<(Arc<ReferenceFrame>, f64), RunError> {
+        let v = &variant.variant;
+        // Everything the raster truth, the shading and the post chain depend on.
+        let key = format!(
+            "{}|{:?}|{:?}|{:?}|{:?}|{}",
+            scene.name,
+            scene.params,
+            ShadingParams::of(v),
+            PostParams::of(v),
+            v.depth,
+            v.depth_prepass
+        );
+        if let Some(hit) = self.frames.lock().expect("cache lock").get(&key) {
+            return Ok(hit.clone());
+        }
+        let (frame, ms) = reference_frame(gpu, composer, variant, scene)?;
+        let entry = (Arc::new(frame), ms);
+        self.frames
+            .lock()
+            .expect("cache lock")
+            .insert(key, entry.clone());
+        Ok(entry)
+    }
 }
 
 /// The raster truth of the variant's rasterisation, shaded and post-processed on the CPU
@@ -227,6 +295,27 @@ fn median(mut v: Vec<f64>) -> f64 {
     v.get(v.len() / 2).copied().unwrap_or(0.0)
 }
 
+/// [min, max] of each pass of `medians` (and of the total) over the frames.
+fn spread(runs: &[FrameOutput], medians: &Timings) -> Map<String, Value> {
+    let range = |samples: Vec<f64>| {
+        let min = samples.iter().copied().fold(f64::INFINITY, f64::min);
+        let max = samples.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        Value::from(vec![round3(min), round3(max)])
+    };
+    let mut out = Map::new();
+    out.insert(
+        "total".into(),
+        range(runs.iter().map(|r| r.timings.total_ms()).collect()),
+    );
+    for (name, _) in &medians.passes {
+        out.insert(
+            name.clone(),
+            range(runs.iter().map(|r| r.timings.get(name)).collect()),
+        );
+    }
+    out
+}
+
 /// Per-pass medians over several frames, by pass name in order of first appearance. A pass
 /// a frame skipped (cluster bounds that are still valid) counts as 0 ms in that frame.
 fn median_timings(runs: &[FrameOutput]) -> Timings {
@@ -251,17 +340,15 @@ fn median_timings(runs: &[FrameOutput]) -> Timings {
     }
 }
 
-/// Write `name@scene.png` (the image) and `name@scene.heat.png` (its error heat map).
-fn write_images(
+/// Write `STEM.png` (the image) and `STEM.heat.png` (its error heat map) into `dir`.
+pub fn write_images(
     dir: &Path,
-    name: &str,
-    scene: &Scene,
+    stem: &str,
     frame: &FrameOutput,
     reference: &ReferenceFrame,
 ) -> Result<Vec<PathBuf>, RunError> {
     std::fs::create_dir_all(dir)
         .map_err(|e| RunError::Io(format!("{}: cannot create folder: {e}", dir.display())))?;
-    let stem = format!("{name}@{}", scene.name);
     let rgb: Vec<u8> = frame.ldr.iter().flat_map(|p| [p[0], p[1], p[2]]).collect();
     let image_path = dir.join(format!("{stem}.png"));
     let heat_path = dir.join(format!("{stem}.heat.png"));

@@ -79,7 +79,7 @@ pub struct FrameOutput {
 }
 
 /// Exact counters of a frame, from an instrumented run of it.
-#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize, serde::Deserialize)]
 pub struct FrameStats {
     /// Light evaluations performed by the shading pass.
     pub light_evals: u64,
@@ -101,6 +101,9 @@ pub struct FrameStats {
     pub gbuffer_bytes_per_pixel: u32,
     /// Bytes per pixel of the post-processing images (0 without post effects).
     pub post_bytes_per_pixel: u32,
+    /// Bytes per pixel of every full-size image the frame keeps: depth, G-buffer, HDR
+    /// colour, post images and the 8-bit output.
+    pub frame_bytes_per_pixel: u32,
     /// Times the light index buffer was too small and the frame was run again larger.
     pub list_reallocations: u32,
     /// The clustered depth range of the frame [near, far].
@@ -593,6 +596,7 @@ impl<'g> Renderer<'g> {
                 0
             },
             post_bytes_per_pixel: self.post.bytes_per_pixel(),
+            frame_bytes_per_pixel: self.frame_bytes_per_pixel(),
             list_reallocations: self.reallocations,
             ..Default::default()
         };
@@ -613,6 +617,26 @@ impl<'g> Renderer<'g> {
             stats.active_clusters = self.count_visible_clusters()? as u64;
         }
         Ok(stats)
+    }
+
+    fn frame_bytes_per_pixel(&self) -> u32 {
+        let t = &self.targets;
+        let size = |tex: &wgpu::Texture| {
+            // Depth formats have no copy size for the whole texture; 24-bit depth takes 4.
+            tex.format()
+                .block_copy_size(None)
+                .or_else(|| {
+                    tex.format()
+                        .block_copy_size(Some(wgpu::TextureAspect::DepthOnly))
+                })
+                .unwrap_or(4)
+        };
+        [&t.depth, &t.hdr, &t.ldr]
+            .into_iter()
+            .chain(&t.gbuffer)
+            .map(size)
+            .sum::<u32>()
+            + self.post.bytes_per_pixel()
     }
 
     /// Clusters holding a visible sample of the last frame's depth (exact marking).

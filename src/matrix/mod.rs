@@ -1,0 +1,449 @@
+//! The variant matrix: every cell (a variant on a scene with given parameters) rendered,
+//! timed over several frames and measured against the CPU reference; then speed-ups against
+//! naive forward, the time-error Pareto front, and a report (JSON, CSV, HTML, terminal).
+
+mod html;
+mod plan;
+mod plots;
+mod report;
+
+pub use plan::{
+    CellSpec, ParamsRecord, PlannedCell, Study, Sweep, VariantEntry, expand, find_variants,
+    parse_shard, parse_sweep, shard,
+};
+pub use report::{table, write_report};
+
+use std::collections::BTreeMap;
+use std::panic::{AssertUnwindSafe, catch_unwind};
+use std::path::{Path, PathBuf};
+
+use serde::{Deserialize, Serialize};
+use serde_json::{Map, Value};
+use sha2::{Digest, Sha256};
+
+use crate::compose::Composer;
+use crate::gpu::{AdapterSummary, Gpu};
+use crate::metrics::ErrorMetrics;
+use crate::render::{FrameStats, Renderer};
+use crate::run::{CellOptions, ReferenceCache, run_cell, write_images, write_png};
+use crate::scene::SCENES;
+use crate::variant::DebugView;
+
+/// Everything a matrix run wrote about one cell.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct CellRecord {
+    #[serde(flatten)]
+    pub spec: CellSpec,
+    /// Why the cell failed; absent when it ran.
+    pub failure: Option<String>,
+    /// Median milliseconds per pass over the timed frames, with `total`.
+    pub gpu_ms: Map<String, Value>,
+    /// [min, max] milliseconds per pass over the timed frames.
+    pub gpu_ms_spread: Map<String, Value>,
+    pub timing_source: Option<String>,
+    pub frames: u32,
+    pub wall_ms: Option<f64>,
+    pub reference_ms: Option<f64>,
+    pub error: Option<ErrorMetrics>,
+    pub stats: Option<FrameStats>,
+    /// Image files, relative to the results folder.
+    pub images: Images,
+    /// Naive forward's total time over this cell's, on the same scene and parameters.
+    pub speedup_vs_naive: Option<f64>,
+    /// On the time-error Pareto front of its scene and parameters.
+    pub pareto: bool,
+    /// Change against `--baseline` (a cell with the same id there).
+    pub vs_baseline: Option<BaselineChange>,
+}
+
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+pub struct Images {
+    pub image: Option<String>,
+    pub heat: Option<String>,
+    /// Lights per cluster (clustered variants, cells without sweeps).
+    pub debug: Option<String>,
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct BaselineChange {
+    /// This run's total GPU time over the baseline's.
+    pub time_ratio: f64,
+    pub max_abs_8bit_change: i64,
+    pub rmse_8bit_change: f64,
+}
+
+impl CellRecord {
+    pub fn ok(&self) -> bool {
+        self.failure.is_none()
+    }
+
+    /// Median total GPU milliseconds.
+    pub fn total_ms(&self) -> Option<f64> {
+        self.gpu_ms.get("total").and_then(Value::as_f64)
+    }
+
+    fn failed(spec: CellSpec, why: String) -> Self {
+        Self {
+            spec,
+            failure: Some(why),
+            gpu_ms: Map::new(),
+            gpu_ms_spread: Map::new(),
+            timing_source: None,
+            frames: 0,
+            wall_ms: None,
+            reference_ms: None,
+            error: None,
+            stats: None,
+            images: Images::default(),
+            speedup_vs_naive: None,
+            pareto: false,
+            vs_baseline: None,
+        }
+    }
+}
+
+/// Where and how results were made.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct Provenance {
+    pub tool: String,
+    pub date: String,
+    pub git_revision: String,
+    /// The working tree had uncommitted changes.
+    pub git_dirty: bool,
+    pub adapter: AdapterSummary,
+    pub hdr_format: String,
+    pub timing_source: String,
+    pub command: Vec<String>,
+    /// `K/N` when the run was one shard of a study.
+    pub shard: Option<String>,
+    /// SHA-256 of each variant file's text, by variant name.
+    pub variant_files: BTreeMap<String, VariantFile>,
+    /// Built-in scene generators and their defaults, by name.
+    pub scenes: BTreeMap<String, ParamsRecord>,
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct VariantFile {
+    pub path: PathBuf,
+    pub sha256: String,
+}
+
+/// The contents of results.json.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct Results {
+    /// One per run that contributed cells (several after `merge`).
+    pub provenance: Vec<Provenance>,
+    pub cells: Vec<CellRecord>,
+}
+
+impl Results {
+    pub fn failed(&self) -> usize {
+        self.cells.iter().filter(|c| !c.ok()).count()
+    }
+
+    /// Read `results.json` (a file, or a folder holding one).
+    pub fn load(path: &Path) -> Result<Self, String> {
+        let file = if path.is_dir() {
+            path.join("results.json")
+        } else {
+            path.to_path_buf()
+        };
+        if !file.exists() {
+            return Err(format!(
+                "{}: no such results file (give a matrix output folder or its results.json)",
+                path.display()
+            ));
+        }
+        let text = std::fs::read_to_string(&file)
+            .map_err(|e| format!("{}: cannot read: {e}", file.display()))?;
+        serde_json::from_str(&text).map_err(|e| {
+            format!(
+                "{}:{}:{}: not a clusterlab results file: {e}",
+                file.display(),
+                e.line(),
+                e.column()
+            )
+        })
+    }
+}
+
+/// How a matrix runs.
+#[derive(Clone, Debug)]
+pub struct MatrixOptions {
+    pub warmup: u32,
+    pub frames: u32,
+    pub out: PathBuf,
+    /// Show a progress bar on stderr.
+    pub progress: bool,
+    pub shard: Option<(u32, u32)>,
+    pub command: Vec<String>,
+}
+
+/// Run every cell, one at a time, and return the results with speed-ups and the Pareto
+/// front filled in. A cell that fails (or panics) is recorded and the others still run.
+pub fn run(
+    gpu: &Gpu,
+    composer: &Composer,
+    cells: &[PlannedCell],
+    options: &MatrixOptions,
+) -> Results {
+    let images = options.out.join("images");
+    let references = ReferenceCache::default();
+    let bar = if options.progress {
+        indicatif::ProgressBar::new(cells.len() as u64)
+    } else {
+        indicatif::ProgressBar::hidden()
+    };
+    bar.set_style(
+        indicatif::ProgressStyle::with_template(
+            "{elapsed_precise} [{bar:30}] {pos}/{len} {wide_msg}",
+        )
+        .expect("valid template")
+        .progress_chars("=> "),
+    );
+    let mut records = Vec::with_capacity(cells.len());
+    for cell in cells {
+        bar.set_message(cell.spec.id.clone());
+        let record = catch_unwind(AssertUnwindSafe(|| {
+            run_one(gpu, composer, cell, options, &images, &references)
+        }))
+        .unwrap_or_else(|panic| {
+            let why = panic
+                .downcast_ref::<String>()
+                .cloned()
+                .or_else(|| panic.downcast_ref::<&str>().map(|s| s.to_string()))
+                .unwrap_or_else(|| "unknown panic".into());
+            CellRecord::failed(cell.spec.clone(), format!("panicked: {why}"))
+        });
+        if let Some(why) = &record.failure {
+            bar.println(format!(
+                "FAILED {}: {}",
+                cell.spec.id,
+                why.lines().next().unwrap_or("")
+            ));
+        }
+        records.push(record);
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+    let mut results = Results {
+        provenance: vec![provenance(gpu, cells, options)],
+        cells: records,
+    };
+    derive(&mut results.cells, None);
+    results
+}
+
+fn run_one(
+    gpu: &Gpu,
+    composer: &Composer,
+    cell: &PlannedCell,
+    options: &MatrixOptions,
+    images: &Path,
+    references: &ReferenceCache,
+) -> CellRecord {
+    let spec = cell.spec.clone();
+    let loaded = match &cell.variant {
+        Ok(v) => v,
+        Err(why) => return CellRecord::failed(spec, why.clone()),
+    };
+    let result = run_cell(
+        gpu,
+        composer,
+        loaded,
+        &spec.scene,
+        spec.params.into(),
+        CellOptions {
+            warmup: options.warmup,
+            frames: options.frames,
+            stats: true,
+            out: None,
+            references: Some(references),
+        },
+    );
+    let c = match result {
+        Ok(c) => c,
+        Err(e) => return CellRecord::failed(spec, e.to_string()),
+    };
+    let stem = spec.file_stem();
+    let relative = |p: &Path| {
+        p.strip_prefix(&options.out)
+            .unwrap_or(p)
+            .to_string_lossy()
+            .into_owned()
+    };
+    let mut files = Images::default();
+    match write_images(images, &stem, &c.frame, &c.reference) {
+        Ok(paths) => {
+            files.image = paths.first().map(|p| relative(p));
+            files.heat = paths.get(1).map(|p| relative(p));
+        }
+        Err(e) => return CellRecord::failed(spec, e.to_string()),
+    }
+    // The lights-per-cluster view shows where a clustered variant spends its time.
+    let v = &loaded.variant;
+    if v.pipeline.is_clustered() && spec.sweep.is_empty() && v.debug_view == DebugView::Off {
+        let mut debug = v.clone();
+        debug.debug_view = DebugView::LightsPerCluster;
+        debug.post = Default::default();
+        let path = images.join(format!("{stem}.debug.png"));
+        let written = crate::scene::generate(&spec.scene, spec.params.into())
+            .map_err(|e| e.to_string())
+            .and_then(|scene| {
+                let mut r =
+                    Renderer::new(gpu, composer, &debug, &scene).map_err(|e| e.to_string())?;
+                let f = r.render().map_err(|e| e.to_string())?;
+                let rgb: Vec<u8> = f.ldr.iter().flat_map(|p| [p[0], p[1], p[2]]).collect();
+                write_png(&path, f.width, f.height, &rgb).map_err(|e| e.to_string())
+            });
+        if written.is_ok() {
+            files.debug = Some(relative(&path));
+        }
+    }
+    let r = c.report;
+    CellRecord {
+        spec,
+        failure: None,
+        gpu_ms: r.gpu_ms,
+        gpu_ms_spread: r.gpu_ms_spread,
+        timing_source: Some(r.timing_source.to_string()),
+        frames: r.frames,
+        wall_ms: Some(r.wall_ms),
+        reference_ms: Some(r.reference_ms),
+        error: Some(r.error),
+        stats: r.stats,
+        images: files,
+        speedup_vs_naive: None,
+        pareto: false,
+        vs_baseline: None,
+    }
+}
+
+/// Fill in speed-ups against naive forward and the Pareto front (per group of scene and
+/// parameters), and the change against a baseline run.
+pub fn derive(cells: &mut [CellRecord], baseline: Option<&Results>) {
+    let groups: Vec<String> = cells.iter().map(|c| c.spec.group()).collect();
+    for i in 0..cells.len() {
+        let group = &groups[i];
+        let in_group = |j: usize| &groups[j] == group && cells[j].ok();
+        let naive = (0..cells.len())
+            .filter(|&j| in_group(j) && cells[j].spec.is_naive_baseline())
+            // The variant named naive_forward first, then any plain naive one.
+            .min_by_key(|&j| cells[j].spec.variant != "naive_forward")
+            .and_then(|j| cells[j].total_ms());
+        let speedup = match (naive, cells[i].total_ms()) {
+            (Some(n), Some(t)) if t > 0.0 && cells[i].ok() => Some(round3(n / t)),
+            _ => None,
+        };
+        // Pareto: no other cell of the group is at least as fast and as accurate, and
+        // strictly better in one. Debug views show no scene and take no part.
+        let point = |j: usize| -> Option<(f64, f64)> {
+            let c = &cells[j];
+            if !c.ok() || c.spec.debug_view {
+                return None;
+            }
+            Some((c.total_ms()?, c.error.as_ref()?.rmse_8bit))
+        };
+        let pareto = point(i).is_some_and(|(t, e)| {
+            !(0..cells.len()).any(|j| {
+                j != i
+                    && in_group(j)
+                    && point(j).is_some_and(|(tj, ej)| tj <= t && ej <= e && (tj < t || ej < e))
+            })
+        });
+        let vs_baseline = baseline.and_then(|b| {
+            let old = b.cells.iter().find(|o| o.spec.id == cells[i].spec.id)?;
+            let (t_new, t_old) = (cells[i].total_ms()?, old.total_ms()?);
+            let (e_new, e_old) = (cells[i].error.as_ref()?, old.error.as_ref()?);
+            Some(BaselineChange {
+                time_ratio: round3(t_new / t_old.max(1e-9)),
+                max_abs_8bit_change: e_new.max_abs_8bit as i64 - e_old.max_abs_8bit as i64,
+                rmse_8bit_change: e_new.rmse_8bit - e_old.rmse_8bit,
+            })
+        });
+        cells[i].speedup_vs_naive = speedup;
+        cells[i].pareto = pareto;
+        cells[i].vs_baseline = vs_baseline;
+    }
+}
+
+/// Combine result folders into one: cells by id (a later folder's cell replaces an earlier
+/// one's), images copied into `out`, provenance of every run kept.
+pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<Results, String> {
+    let mut merged = Results {
+        provenance: Vec::new(),
+        cells: Vec::new(),
+    };
+    let images = out.join("images");
+    std::fs::create_dir_all(&images)
+        .map_err(|e| format!("{}: cannot create folder: {e}", images.display()))?;
+    for dir in dirs {
+        let r = Results::load(dir)?;
+        merged.provenance.extend(r.provenance);
+        for cell in r.cells {
+            for file in [&cell.images.image, &cell.images.heat, &cell.images.debug]
+                .into_iter()
+                .flatten()
+            {
+                let (from, to) = (dir.join(file), out.join(file));
+                if from != to {
+                    std::fs::copy(&from, &to).map_err(|e| {
+                        format!("copying {} to {}: {e}", from.display(), to.display())
+                    })?;
+                }
+            }
+            merged.cells.retain(|c| c.spec.id != cell.spec.id);
+            merged.cells.push(cell);
+        }
+    }
+    derive(&mut merged.cells, None);
+    Ok(merged)
+}
+
+fn provenance(gpu: &Gpu, cells: &[PlannedCell], options: &MatrixOptions) -> Provenance {
+    let mut variant_files = BTreeMap::new();
+    for c in cells {
+        if let Ok(text) = std::fs::read(&c.spec.variant_path) {
+            variant_files
+                .entry(c.spec.variant.clone())
+                .or_insert_with(|| VariantFile {
+                    path: c.spec.variant_path.clone(),
+                    sha256: format!("{:x}", Sha256::digest(&text)),
+                });
+        }
+    }
+    let git = |args: &[&str]| {
+        std::process::Command::new("git")
+            .args(args)
+            .output()
+            .ok()
+            .filter(|o| o.status.success())
+            .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string())
+    };
+    Provenance {
+        tool: format!("clusterlab {}", env!("CARGO_PKG_VERSION")),
+        date: humantime::format_rfc3339_seconds(std::time::SystemTime::now()).to_string(),
+        git_revision: git(&["rev-parse", "HEAD"]).unwrap_or_else(|| "unknown".into()),
+        git_dirty: git(&["status", "--porcelain", "--untracked-files=no"])
+            .is_some_and(|s| !s.is_empty()),
+        adapter: gpu.adapter.clone(),
+        hdr_format: format!("{:?}", gpu.hdr_format).to_lowercase(),
+        timing_source: if gpu.timestamps {
+            "gpu timestamps"
+        } else {
+            "wall clock"
+        }
+        .into(),
+        command: options.command.clone(),
+        shard: options.shard.map(|(k, n)| format!("{k}/{n}")),
+        variant_files,
+        scenes: SCENES
+            .iter()
+            .map(|s| (s.name.to_string(), s.defaults.into()))
+            .collect(),
+    }
+}
+
+fn round3(x: f64) -> f64 {
+    (x * 1000.0).round() / 1000.0
+}

@@ -1,0 +1,591 @@
+//! Which cells a matrix runs: studies (variants x scenes x sweeps), the naive baselines
+//! their speed-ups need, and a deterministic slice of them for `--shard`.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+use serde::{Deserialize, Serialize};
+
+use crate::scene::{SceneParams, find_scene};
+use crate::variant::{self, LoadedVariant, Pipeline, Variant};
+
+/// One swept parameter and its values.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Sweep {
+    Lights(Vec<u32>),
+    /// Light radius ranges (min, max).
+    Radius(Vec<(f32, f32)>),
+    /// Cluster grids; applies to clustered variants only.
+    Grid(Vec<(u32, u32, u32)>),
+}
+
+/// Parse `lights=64,256`, `radius=1,2..4` (a single value r means r..r) or
+/// `grid=16x9x24,32x18x48`.
+pub fn parse_sweep(s: &str) -> Result<Sweep, String> {
+    let (name, values) = s
+        .split_once('=')
+        .ok_or_else(|| format!("`{s}` is not NAME=V1,V2,...; e.g. lights=64,256,1024"))?;
+    let items: Vec<&str> = values.split(',').map(str::trim).collect();
+    if items.iter().any(|v| v.is_empty()) {
+        return Err(format!("`{s}`: a value is empty"));
+    }
+    let bad = |v: &str, what: &str| format!("`{v}` in `{s}` is not {what}");
+    match name.trim() {
+        "lights" => items
+            .iter()
+            .map(|v| {
+                let n: u32 = v.parse().map_err(|_| bad(v, "a whole number"))?;
+                if n > crate::scene::MAX_LIGHTS {
+                    return Err(format!(
+                        "`{v}` in `{s}`: at most {} lights",
+                        crate::scene::MAX_LIGHTS
+                    ));
+                }
+                Ok(n)
+            })
+            .collect::<Result<_, _>>()
+            .map(Sweep::Lights),
+        "radius" => items
+            .iter()
+            .map(|v| {
+                let num = |x: &str| {
+                    x.trim()
+                        .parse::<f32>()
+                        .ok()
+                        .filter(|r| r.is_finite() && *r >= 0.0)
+                        .ok_or_else(|| bad(v, "a radius >= 0 or a range MIN..MAX"))
+                };
+                let (a, b) = match v.split_once("..") {
+                    Some((a, b)) => (num(a)?, num(b)?),
+                    None => (num(v)?, num(v)?),
+                };
+                if a > b {
+                    return Err(format!("`{v}` in `{s}`: MIN is above MAX"));
+                }
+                Ok((a, b))
+            })
+            .collect::<Result<_, _>>()
+            .map(Sweep::Radius),
+        "grid" => items
+            .iter()
+            .map(|v| {
+                let dims: Vec<u32> = v
+                    .split(['x', 'X'])
+                    .map(|d| d.parse::<u32>().ok().filter(|&d| d >= 1))
+                    .collect::<Option<_>>()
+                    .ok_or_else(|| bad(v, "a grid XxYxZ of whole numbers >= 1"))?;
+                match dims[..] {
+                    [x, y, z] => Ok((x, y, z)),
+                    _ => Err(bad(v, "a grid XxYxZ")),
+                }
+            })
+            .collect::<Result<_, _>>()
+            .map(Sweep::Grid),
+        other => Err(format!(
+            "`{other}` cannot be swept; sweep lights, radius or grid"
+        )),
+    }
+}
+
+/// A variant as a study names it: loaded, or the reason it would not load.
+#[derive(Clone, Debug)]
+pub struct VariantEntry {
+    pub name: String,
+    pub path: PathBuf,
+    pub loaded: Result<LoadedVariant, String>,
+}
+
+impl VariantEntry {
+    fn load(path: &Path) -> Self {
+        let name = path
+            .file_stem()
+            .map_or("variant".into(), |s| s.to_string_lossy().into_owned());
+        Self {
+            name,
+            path: path.to_path_buf(),
+            loaded: variant::load(path).map_err(|e| e.to_string()),
+        }
+    }
+}
+
+/// Variant files from arguments: files, folders of them, or names in `variants/`.
+pub fn find_variants(args: &[String]) -> Result<Vec<VariantEntry>, String> {
+    let mut out = Vec::new();
+    for arg in args {
+        let mut path = PathBuf::from(arg);
+        if !path.exists() {
+            let named = Path::new("variants").join(format!("{arg}.ron"));
+            if named.exists() {
+                path = named;
+            }
+        }
+        let files = variant::find_files(&path).map_err(|e| e.to_string())?;
+        if files.is_empty() {
+            return Err(format!("{}: no .ron variant files there", path.display()));
+        }
+        out.extend(files.iter().map(|f| VariantEntry::load(f)));
+    }
+    Ok(out)
+}
+
+/// A set of cells: every variant on every scene at every combination of the sweeps.
+#[derive(Clone, Debug)]
+pub struct Study {
+    pub name: String,
+    pub variants: Vec<VariantEntry>,
+    pub scenes: Vec<String>,
+    pub sweeps: Vec<Sweep>,
+    /// Image size for every cell (default: each scene's).
+    pub size: Option<(u32, u32)>,
+}
+
+/// Scene parameters as results record them.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ParamsRecord {
+    pub width: u32,
+    pub height: u32,
+    pub lights: u32,
+    pub radius: [f32; 2],
+    pub seed: u64,
+    pub time: f64,
+}
+
+impl From<SceneParams> for ParamsRecord {
+    fn from(p: SceneParams) -> Self {
+        Self {
+            width: p.width,
+            height: p.height,
+            lights: p.lights,
+            radius: [p.radius_range.0, p.radius_range.1],
+            seed: p.seed,
+            time: p.time,
+        }
+    }
+}
+
+impl From<ParamsRecord> for SceneParams {
+    fn from(p: ParamsRecord) -> Self {
+        Self {
+            width: p.width,
+            height: p.height,
+            lights: p.lights,
+            radius_range: (p.radius[0], p.radius[1]),
+            seed: p.seed,
+            time: p.time,
+        }
+    }
+}
+
+/// What identifies a cell and how to run it.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct CellSpec {
+    /// `variant@scene`, with the swept values in brackets: `forward_plus@atrium[lights=1024]`.
+    pub id: String,
+    /// The study the cell belongs to ("variants", "lights", "baseline", ...).
+    pub study: String,
+    pub variant: String,
+    pub variant_path: PathBuf,
+    pub scene: String,
+    pub params: ParamsRecord,
+    /// Swept values by parameter.
+    pub sweep: BTreeMap<String, String>,
+    /// The cluster grid the cell ran with (clustered variants).
+    pub grid: Option<[u32; 3]>,
+    /// Pipeline name (absent when the variant did not load).
+    pub pipeline: Option<String>,
+    /// Whether the image is a debug view rather than the shaded scene.
+    pub debug_view: bool,
+    /// Whether the variant has post effects.
+    pub post: bool,
+}
+
+impl CellSpec {
+    /// The parameters a cell's speed-up and Pareto front are compared within.
+    pub fn group(&self) -> String {
+        let p = &self.params;
+        format!(
+            "{} {}x{} {} lights r{}..{} seed {} t{}",
+            self.scene, p.width, p.height, p.lights, p.radius[0], p.radius[1], p.seed, p.time
+        )
+    }
+
+    /// A plain naive forward cell: the speed-up baseline of its group.
+    pub fn is_naive_baseline(&self) -> bool {
+        self.pipeline.as_deref() == Some("NaiveForward") && !self.post && !self.debug_view
+    }
+
+    /// The id as a file name.
+    pub fn file_stem(&self) -> String {
+        self.id
+            .chars()
+            .map(|c| {
+                if c.is_ascii_alphanumeric() || "_-.@=".contains(c) {
+                    c
+                } else {
+                    '_'
+                }
+            })
+            .collect()
+    }
+}
+
+/// A cell ready to run.
+#[derive(Clone, Debug)]
+pub struct PlannedCell {
+    pub spec: CellSpec,
+    pub variant: Result<LoadedVariant, String>,
+}
+
+/// Expand studies into cells, in a fixed order; add a naive forward baseline for every
+/// group of parameters that has none, from `baseline` (when there is no naive variant in
+/// the studies, the one in variants/ or the built-in default).
+pub fn expand(studies: &[Study]) -> Result<Vec<PlannedCell>, String> {
+    let mut cells: Vec<PlannedCell> = Vec::new();
+    for study in studies {
+        for scene in &study.scenes {
+            let info = find_scene(scene).ok_or_else(|| {
+                let names: Vec<&str> = crate::scene::SCENES.iter().map(|s| s.name).collect();
+                format!(
+                    "there is no scene `{scene}`; the scenes are {}",
+                    names.join(", ")
+                )
+            })?;
+            let mut base = info.defaults;
+            if let Some((w, h)) = study.size {
+                (base.width, base.height) = (w, h);
+            }
+            for entry in &study.variants {
+                for point in sweep_points(&study.sweeps) {
+                    let cell = make_cell(&study.name, entry, scene, base, &point);
+                    if !cells.iter().any(|c| c.spec.id == cell.spec.id) {
+                        cells.push(cell);
+                    }
+                }
+            }
+        }
+    }
+    add_baselines(&mut cells);
+    Ok(cells)
+}
+
+/// One value per sweep.
+#[derive(Clone, Debug, Default)]
+struct Point {
+    lights: Option<u32>,
+    radius: Option<(f32, f32)>,
+    grid: Option<(u32, u32, u32)>,
+}
+
+fn sweep_points(sweeps: &[Sweep]) -> Vec<Point> {
+    let mut points = vec![Point::default()];
+    for sweep in sweeps {
+        let mut next = Vec::new();
+        for p in &points {
+            match sweep {
+                Sweep::Lights(v) => next.extend(v.iter().map(|&n| Point {
+                    lights: Some(n),
+                    ..p.clone()
+                })),
+                Sweep::Radius(v) => next.extend(v.iter().map(|&r| Point {
+                    radius: Some(r),
+                    ..p.clone()
+                })),
+                Sweep::Grid(v) => next.extend(v.iter().map(|&g| Point {
+                    grid: Some(g),
+                    ..p.clone()
+                })),
+            }
+        }
+        points = next;
+    }
+    points
+}
+
+fn make_cell(
+    study: &str,
+    entry: &VariantEntry,
+    scene: &str,
+    base: SceneParams,
+    point: &Point,
+) -> PlannedCell {
+    let mut params = base;
+    let mut sweep = BTreeMap::new();
+    if let Some(n) = point.lights {
+        params.lights = n;
+        sweep.insert("lights".to_string(), n.to_string());
+    }
+    if let Some((a, b)) = point.radius {
+        params.radius_range = (a, b);
+        sweep.insert("radius".to_string(), format!("{a}..{b}"));
+    }
+    let mut loaded = entry.loaded.clone();
+    let mut grid = None;
+    // A grid sweep leaves unclustered variants alone: their cells for every grid share one
+    // id, and `expand` keeps the first.
+    if let Ok(v) = &mut loaded
+        && v.variant.pipeline.is_clustered()
+        && let Some(g) = point.grid
+    {
+        let mut clusters = v.variant.clusters();
+        clusters.grid = g;
+        v.variant.clusters = Some(clusters);
+        sweep.insert("grid".to_string(), format!("{}x{}x{}", g.0, g.1, g.2));
+        if let Some(p) = variant::check(&v.variant).first() {
+            loaded = Err(format!(
+                "grid {}x{}x{}: {} {}",
+                g.0, g.1, g.2, p.field, p.message
+            ));
+        }
+    }
+    if let Ok(v) = &loaded
+        && v.variant.pipeline.is_clustered()
+    {
+        let g = v.variant.clusters().grid;
+        grid = Some([g.0, g.1, g.2]);
+    }
+    let variant_info = loaded.as_ref().ok().map(|v| &v.variant);
+    let mut id = format!("{}@{scene}", entry.name);
+    if !sweep.is_empty() {
+        let parts: Vec<String> = sweep.iter().map(|(k, v)| format!("{k}={v}")).collect();
+        id.push_str(&format!("[{}]", parts.join(",")));
+    }
+    PlannedCell {
+        spec: CellSpec {
+            id,
+            study: study.to_string(),
+            variant: entry.name.clone(),
+            variant_path: entry.path.clone(),
+            scene: scene.to_string(),
+            params: params.into(),
+            sweep,
+            grid,
+            pipeline: variant_info.map(|v| format!("{:?}", v.pipeline)),
+            debug_view: variant_info.is_some_and(|v| v.debug_view != variant::DebugView::Off),
+            post: variant_info.is_some_and(|v| v.post.any()),
+        },
+        variant: loaded,
+    }
+}
+
+fn add_baselines(cells: &mut Vec<PlannedCell>) {
+    let naive = cells
+        .iter()
+        .find(|c| c.spec.is_naive_baseline() && c.spec.variant == "naive_forward")
+        .or_else(|| cells.iter().find(|c| c.spec.is_naive_baseline()))
+        .map(|c| {
+            (
+                c.spec.variant.clone(),
+                c.spec.variant_path.clone(),
+                c.variant.clone(),
+            )
+        });
+    let (name, path, loaded) = naive.unwrap_or_else(|| {
+        let path = PathBuf::from("variants/naive_forward.ron");
+        match variant::load(&path) {
+            Ok(v) => ("naive_forward".into(), path, Ok(v)),
+            Err(_) => (
+                "naive_forward".into(),
+                PathBuf::from("built-in"),
+                Ok(LoadedVariant {
+                    name: "naive_forward".into(),
+                    path: PathBuf::from("built-in"),
+                    variant: Variant {
+                        description: "Naive forward: every fragment loops over every light".into(),
+                        pipeline: Pipeline::NaiveForward,
+                        ..Default::default()
+                    },
+                }),
+            ),
+        }
+    });
+    let mut missing: Vec<CellSpec> = Vec::new();
+    for c in cells.iter() {
+        let group = c.spec.group();
+        let has = cells
+            .iter()
+            .any(|o| o.spec.group() == group && o.spec.is_naive_baseline());
+        if !has && !missing.iter().any(|m| m.group() == group) {
+            missing.push(c.spec.clone());
+        }
+    }
+    for spec in missing {
+        let mut id = format!("{name}@{}", spec.scene);
+        if !spec.sweep.is_empty() {
+            let parts: Vec<String> = spec
+                .sweep
+                .iter()
+                .filter(|(k, _)| *k != "grid")
+                .map(|(k, v)| format!("{k}={v}"))
+                .collect();
+            if !parts.is_empty() {
+                id.push_str(&format!("[{}]", parts.join(",")));
+            }
+        }
+        let mut sweep = spec.sweep.clone();
+        sweep.remove("grid");
+        cells.push(PlannedCell {
+            spec: CellSpec {
+                id,
+                study: "baseline".into(),
+                variant: name.clone(),
+                variant_path: path.clone(),
+                scene: spec.scene.clone(),
+                params: spec.params,
+                sweep,
+                grid: None,
+                pipeline: Some("NaiveForward".into()),
+                debug_view: false,
+                post: false,
+            },
+            variant: loaded.clone(),
+        });
+    }
+}
+
+/// Parse `K/N` (1-based).
+pub fn parse_shard(s: &str) -> Result<(u32, u32), String> {
+    let (k, n) = s
+        .split_once('/')
+        .ok_or_else(|| format!("`{s}` is not K/N, e.g. 2/4"))?;
+    let (k, n): (u32, u32) = (
+        k.trim()
+            .parse()
+            .map_err(|_| format!("`{k}` in `{s}` is not a whole number"))?,
+        n.trim()
+            .parse()
+            .map_err(|_| format!("`{n}` in `{s}` is not a whole number"))?,
+    );
+    if n == 0 || k == 0 || k > n {
+        return Err(format!("shard `{s}`: K must be in 1..=N and N at least 1"));
+    }
+    Ok((k, n))
+}
+
+/// The cells of shard `k` of `n`: every n-th cell from the k-th, so each shard gets a mix
+/// of cheap and expensive cells. Deterministic for the same plan.
+pub fn shard(cells: Vec<PlannedCell>, (k, n): (u32, u32)) -> Vec<PlannedCell> {
+    cells
+        .into_iter()
+        .enumerate()
+        .filter(|(i, _)| *i as u32 % n == k - 1)
+        .map(|(_, c)| c)
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn entry(name: &str) -> VariantEntry {
+        VariantEntry::load(&PathBuf::from(format!("variants/{name}.ron")))
+    }
+
+    fn study(variants: &[&str], sweeps: Vec<Sweep>) -> Study {
+        Study {
+            name: "test".into(),
+            variants: variants.iter().map(|v| entry(v)).collect(),
+            scenes: vec!["one_light".into()],
+            sweeps,
+            size: Some((32, 18)),
+        }
+    }
+
+    #[test]
+    fn sweeps_parse_and_bad_ones_say_what_is_valid() {
+        assert_eq!(
+            parse_sweep("lights=64, 256"),
+            Ok(Sweep::Lights(vec![64, 256]))
+        );
+        assert_eq!(
+            parse_sweep("radius=1,2..4"),
+            Ok(Sweep::Radius(vec![(1.0, 1.0), (2.0, 4.0)]))
+        );
+        assert_eq!(
+            parse_sweep("grid=16x9x24"),
+            Ok(Sweep::Grid(vec![(16, 9, 24)]))
+        );
+        for (bad, says) in [
+            ("lights", "NAME=V1,V2"),
+            ("lights=ten", "`ten` in `lights=ten` is not a whole number"),
+            ("lights=1,,2", "a value is empty"),
+            ("radius=4..2", "MIN is above MAX"),
+            ("grid=16x9", "is not a grid XxYxZ"),
+            ("grid=0x1x1", "whole numbers >= 1"),
+            ("fov=60", "sweep lights, radius or grid"),
+        ] {
+            let e = parse_sweep(bad).unwrap_err();
+            assert!(e.contains(says), "{bad}: {e}");
+        }
+    }
+
+    #[test]
+    fn cells_cover_the_sweeps_and_every_group_gets_a_naive_baseline() {
+        let s = study(
+            &["forward_plus", "deferred_scissor"],
+            vec![
+                Sweep::Lights(vec![4, 8]),
+                Sweep::Grid(vec![(8, 8, 8), (4, 4, 4)]),
+            ],
+        );
+        let cells = expand(&[s]).unwrap();
+        let ids: Vec<&str> = cells.iter().map(|c| c.spec.id.as_str()).collect();
+        assert_eq!(
+            ids,
+            [
+                "forward_plus@one_light[grid=8x8x8,lights=4]",
+                "forward_plus@one_light[grid=4x4x4,lights=4]",
+                "forward_plus@one_light[grid=8x8x8,lights=8]",
+                "forward_plus@one_light[grid=4x4x4,lights=8]",
+                // Not clustered: one cell per light count, whatever the grid.
+                "deferred_scissor@one_light[lights=4]",
+                "deferred_scissor@one_light[lights=8]",
+                "naive_forward@one_light[lights=4]",
+                "naive_forward@one_light[lights=8]",
+            ]
+        );
+        assert_eq!(cells[1].spec.grid, Some([4, 4, 4]));
+        assert_eq!(cells[1].spec.params.lights, 4);
+        assert_eq!(cells[6].spec.study, "baseline");
+        assert!(cells[6].spec.is_naive_baseline());
+    }
+
+    #[test]
+    fn a_study_with_naive_forward_needs_no_extra_baseline_and_a_bad_scene_is_named() {
+        let cells = expand(&[study(&["naive_forward", "forward_plus"], vec![])]).unwrap();
+        assert_eq!(cells.len(), 2);
+        let mut s = study(&["forward_plus"], vec![]);
+        s.scenes = vec!["moon".into()];
+        let e = expand(&[s]).unwrap_err();
+        assert!(e.contains("no scene `moon`") && e.contains("atrium"), "{e}");
+    }
+
+    #[test]
+    fn shards_split_the_cells_without_overlap() {
+        let s = study(
+            &[
+                "forward_plus",
+                "clustered_deferred_16x16x24",
+                "naive_forward",
+            ],
+            vec![Sweep::Lights(vec![1, 2, 3])],
+        );
+        let all: Vec<String> = expand(std::slice::from_ref(&s))
+            .unwrap()
+            .into_iter()
+            .map(|c| c.spec.id)
+            .collect();
+        let mut seen = Vec::new();
+        for k in 1..=4 {
+            let part = shard(expand(std::slice::from_ref(&s)).unwrap(), (k, 4));
+            seen.extend(part.into_iter().map(|c| c.spec.id));
+        }
+        seen.sort();
+        let mut expected = all.clone();
+        expected.sort();
+        assert_eq!(seen, expected);
+        assert_eq!(parse_shard("2/4"), Ok((2, 4)));
+        assert!(parse_shard("5/4").is_err());
+        assert!(parse_shard("0/4").is_err());
+        assert!(parse_shard("1-4").is_err());
+    }
+}

@@ -1,0 +1,372 @@
+//! The report's plots, as SVG (plotters): time against error with the Pareto front, time
+//! against light count per pipeline, time against cluster count, and time per pass.
+
+use plotters::coord::Shift;
+use plotters::prelude::*;
+
+use super::report::{grouped, label};
+use super::{CellRecord, Results};
+
+/// One plot of the report.
+pub struct Plot {
+    /// File name under plots/.
+    pub file: String,
+    pub title: String,
+    pub svg: String,
+}
+
+const SIZE: (u32, u32) = (880, 520);
+const FONT: &str = "sans-serif";
+
+fn pipeline_color(c: &CellRecord) -> RGBColor {
+    match c.spec.pipeline.as_deref() {
+        Some("NaiveForward") => RGBColor(214, 39, 40),
+        Some("ClusteredForward") => RGBColor(31, 119, 180),
+        Some("ClusteredDeferred") => RGBColor(44, 160, 44),
+        Some("DeferredScissor") => RGBColor(255, 127, 14),
+        _ => RGBColor(127, 127, 127),
+    }
+}
+
+fn series_color(i: usize) -> RGBColor {
+    // Tableau 20: the ten hues, then their light tints.
+    const COLORS: [RGBColor; 20] = [
+        RGBColor(31, 119, 180),
+        RGBColor(255, 127, 14),
+        RGBColor(44, 160, 44),
+        RGBColor(214, 39, 40),
+        RGBColor(148, 103, 189),
+        RGBColor(140, 86, 75),
+        RGBColor(227, 119, 194),
+        RGBColor(127, 127, 127),
+        RGBColor(188, 189, 34),
+        RGBColor(23, 190, 207),
+        RGBColor(174, 199, 232),
+        RGBColor(255, 187, 120),
+        RGBColor(152, 223, 138),
+        RGBColor(255, 152, 150),
+        RGBColor(197, 176, 213),
+        RGBColor(196, 156, 148),
+        RGBColor(247, 182, 210),
+        RGBColor(199, 199, 199),
+        RGBColor(219, 219, 141),
+        RGBColor(158, 218, 229),
+    ];
+    COLORS[i % COLORS.len()]
+}
+
+/// Every plot the results support.
+pub fn all(results: &Results) -> Vec<Plot> {
+    let mut plots = Vec::new();
+    for (n, (group, cells)) in grouped(results).into_iter().enumerate() {
+        let shown: Vec<&CellRecord> = cells
+            .into_iter()
+            .filter(|c| c.ok() && !c.spec.debug_view && c.total_ms().is_some())
+            .collect();
+        // Light-count sweeps make many small groups; their story is the lights plot.
+        if shown.len() < 4 {
+            continue;
+        }
+        let mut add = |kind: &str, title: String, svg: Option<String>| {
+            if let Some(svg) = svg {
+                plots.push(Plot {
+                    file: format!("{kind}_{n}.svg"),
+                    title,
+                    svg,
+                });
+            }
+        };
+        add(
+            "time_error",
+            format!("GPU time against error: {group}"),
+            draw(|a| time_error(a, &shown)),
+        );
+        add(
+            "time_clusters",
+            format!("GPU time against cluster count: {group}"),
+            draw(|a| time_clusters(a, &shown)),
+        );
+        // Naive forward's light loop would flatten every other bar; the table has it.
+        let fast: Vec<&CellRecord> = shown
+            .iter()
+            .copied()
+            .filter(|c| c.spec.pipeline.as_deref() != Some("NaiveForward"))
+            .collect();
+        add(
+            "passes",
+            format!("GPU time per pass (naive forward left out): {group}"),
+            draw(|a| passes(a, &fast)),
+        );
+    }
+    if let Some(svg) = draw(|a| time_lights(a, results)) {
+        plots.push(Plot {
+            file: "time_lights.svg".into(),
+            title: "GPU time against light count".into(),
+            svg,
+        });
+    }
+    plots
+}
+
+type Area<'a> = DrawingArea<SVGBackend<'a>, Shift>;
+type Drawn = Result<bool, Box<dyn std::error::Error>>;
+
+/// Run a drawing into an SVG string; None when it had nothing to draw or failed.
+fn draw(f: impl FnOnce(&Area<'_>) -> Drawn) -> Option<String> {
+    let mut svg = String::new();
+    let drawn = {
+        let area = SVGBackend::with_string(&mut svg, SIZE).into_drawing_area();
+        let drawn = area
+            .fill(&WHITE)
+            .map_err(|e| e.into())
+            .and_then(|()| f(&area));
+        let presented = area.present();
+        drawn.ok().filter(|d| *d && presented.is_ok())
+    };
+    drawn.map(|_| svg)
+}
+
+fn log_range(values: impl Iterator<Item = f64>) -> (f64, f64) {
+    let (lo, hi) = values.fold((f64::INFINITY, 0f64), |(lo, hi), v| (lo.min(v), hi.max(v)));
+    (lo.max(1e-4) / 1.5, hi.max(1e-3) * 1.5)
+}
+
+/// Errors below this show at it on the log axis (an exact image has RMSE 0).
+const ERROR_FLOOR: f64 = 1e-3;
+
+fn time_error(area: &Area<'_>, cells: &[&CellRecord]) -> Drawn {
+    let points: Vec<(f64, f64, &CellRecord)> = cells
+        .iter()
+        .filter_map(|c| {
+            let e = c.error.as_ref()?.rmse_8bit.max(ERROR_FLOOR);
+            Some((c.total_ms()?, e, *c))
+        })
+        .collect();
+    if points.len() < 2 {
+        return Ok(false);
+    }
+    let (t0, t1) = log_range(points.iter().map(|p| p.0));
+    let e1 = points.iter().map(|p| p.1).fold(0.0, f64::max).max(0.1) * 3.0;
+    let mut chart = ChartBuilder::on(area)
+        .margin(16)
+        .x_label_area_size(44)
+        .y_label_area_size(64)
+        .build_cartesian_2d((t0..t1).log_scale(), (ERROR_FLOOR / 2.0..e1).log_scale())?;
+    chart
+        .configure_mesh()
+        .x_desc("GPU time per frame, ms (log)")
+        .y_desc("RMSE against the reference, 8-bit LSB (log; 0.001 = exact)")
+        .label_style((FONT, 14))
+        .draw()?;
+    let mut front: Vec<(f64, f64)> = points
+        .iter()
+        .filter(|p| p.2.pareto)
+        .map(|p| (p.0, p.1))
+        .collect();
+    front.sort_by(|a, b| a.0.total_cmp(&b.0));
+    chart
+        .draw_series(LineSeries::new(front, BLACK.stroke_width(2)))?
+        .label("Pareto front")
+        .legend(|(x, y)| PathElement::new([(x, y), (x + 16, y)], BLACK.stroke_width(2)));
+    for (name, pipeline) in [
+        ("naive forward", "NaiveForward"),
+        ("clustered forward", "ClusteredForward"),
+        ("clustered deferred", "ClusteredDeferred"),
+        ("scissor deferred", "DeferredScissor"),
+    ] {
+        let mine: Vec<_> = points
+            .iter()
+            .filter(|p| p.2.spec.pipeline.as_deref() == Some(pipeline))
+            .collect();
+        if mine.is_empty() {
+            continue;
+        }
+        let color = pipeline_color(mine[0].2);
+        chart
+            .draw_series(
+                mine.iter()
+                    .map(|p| Circle::new((p.0, p.1), 5, color.filled())),
+            )?
+            .label(name)
+            .legend(move |(x, y)| Circle::new((x + 8, y), 5, color.filled()));
+    }
+    chart.draw_series(points.iter().map(|p| {
+        Text::new(
+            format!("{}{}", if p.2.pareto { "* " } else { "" }, label(p.2)),
+            (p.0, p.1),
+            (FONT, 11).into_font().color(&RGBColor(60, 60, 60)),
+        )
+    }))?;
+    chart
+        .configure_series_labels()
+        .position(SeriesLabelPosition::UpperRight)
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .label_font((FONT, 13))
+        .draw()?;
+    Ok(true)
+}
+
+fn time_clusters(area: &Area<'_>, cells: &[&CellRecord]) -> Drawn {
+    let points: Vec<(f64, f64, &CellRecord)> = cells
+        .iter()
+        .filter(|c| !c.spec.post)
+        .filter_map(|c| {
+            let g = c.spec.grid?;
+            Some(((g[0] * g[1] * g[2]) as f64, c.total_ms()?, *c))
+        })
+        .collect();
+    if points.len() < 2 {
+        return Ok(false);
+    }
+    let c1 = points.iter().map(|p| p.0).fold(0.0, f64::max) * 1.25;
+    let t1 = points.iter().map(|p| p.1).fold(0.0, f64::max) * 1.15;
+    let mut chart = ChartBuilder::on(area)
+        .margin(16)
+        .x_label_area_size(44)
+        .y_label_area_size(64)
+        .build_cartesian_2d(0.0..c1, 0.0..t1)?;
+    chart
+        .configure_mesh()
+        .x_desc("clusters in the grid")
+        .y_desc("GPU time per frame, ms")
+        .label_style((FONT, 14))
+        .draw()?;
+    chart.draw_series(
+        points
+            .iter()
+            .map(|p| Circle::new((p.0, p.1), 5, pipeline_color(p.2).filled())),
+    )?;
+    chart.draw_series(points.iter().map(|p| {
+        let g = p.2.spec.grid.unwrap_or_default();
+        Text::new(
+            format!("{} ({}x{}x{})", label(p.2), g[0], g[1], g[2]),
+            (p.0, p.1),
+            (FONT, 11).into_font().color(&RGBColor(60, 60, 60)),
+        )
+    }))?;
+    Ok(true)
+}
+
+fn passes(area: &Area<'_>, cells: &[&CellRecord]) -> Drawn {
+    let mut names: Vec<String> = Vec::new();
+    for c in cells {
+        for k in c.gpu_ms.keys() {
+            if k != "total" && !names.contains(k) {
+                names.push(k.clone());
+            }
+        }
+    }
+    if names.is_empty() {
+        return Ok(false);
+    }
+    let rows: Vec<&CellRecord> = cells.iter().rev().copied().collect();
+    let longest = rows
+        .iter()
+        .filter_map(|c| c.total_ms())
+        .fold(0.0, f64::max)
+        .max(1e-3);
+    let n = rows.len() as i32;
+    let mut chart = ChartBuilder::on(area)
+        .margin(16)
+        .x_label_area_size(44)
+        .y_label_area_size(250)
+        .build_cartesian_2d(0.0..longest * 1.05, (0..n - 1).into_segmented())?;
+    chart
+        .configure_mesh()
+        .disable_y_mesh()
+        .y_labels(rows.len())
+        .y_label_formatter(&|v| match v {
+            SegmentValue::CenterOf(i) => rows.get(*i as usize).map_or(String::new(), |c| label(c)),
+            _ => String::new(),
+        })
+        .x_desc("GPU time per frame, ms (median)")
+        .label_style((FONT, 12))
+        .draw()?;
+    for (k, name) in names.iter().enumerate() {
+        let color = series_color(k);
+        let bars = rows.iter().enumerate().filter_map(|(i, c)| {
+            let ms = c.gpu_ms.get(name)?.as_f64()?;
+            // Passes stack in the order they ran (the map's order).
+            let before: f64 = c
+                .gpu_ms
+                .iter()
+                .take_while(|(n, _)| *n != name)
+                .filter(|(n, _)| *n != "total")
+                .filter_map(|(_, v)| v.as_f64())
+                .sum();
+            let y = i as i32;
+            Some(Rectangle::new(
+                [
+                    (before, SegmentValue::Exact(y)),
+                    (before + ms, SegmentValue::Exact(y + 1)),
+                ],
+                color.filled(),
+            ))
+        });
+        chart
+            .draw_series(bars)?
+            .label(name.clone())
+            .legend(move |(x, y)| Rectangle::new([(x, y - 5), (x + 12, y + 5)], color.filled()));
+    }
+    chart
+        .configure_series_labels()
+        .position(SeriesLabelPosition::UpperRight)
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .label_font((FONT, 12))
+        .draw()?;
+    Ok(true)
+}
+
+fn time_lights(area: &Area<'_>, results: &Results) -> Drawn {
+    // One series per variant (and per scene and size, when a study has several).
+    let mut series: Vec<(String, Vec<(f64, f64)>)> = Vec::new();
+    for c in &results.cells {
+        if !c.ok() || !c.spec.sweep.contains_key("lights") {
+            continue;
+        }
+        let Some(ms) = c.total_ms() else { continue };
+        let p = &c.spec.params;
+        let key = format!("{} ({} {}x{})", label(c), c.spec.scene, p.width, p.height);
+        let point = (p.lights.max(1) as f64, ms);
+        match series.iter_mut().find(|(k, _)| *k == key) {
+            Some((_, pts)) => pts.push(point),
+            None => series.push((key, vec![point])),
+        }
+    }
+    series.retain(|(_, pts)| pts.len() >= 2);
+    if series.is_empty() {
+        return Ok(false);
+    }
+    let (l0, l1) = log_range(series.iter().flat_map(|s| s.1.iter().map(|p| p.0)));
+    let (t0, t1) = log_range(series.iter().flat_map(|s| s.1.iter().map(|p| p.1)));
+    let mut chart = ChartBuilder::on(area)
+        .margin(16)
+        .x_label_area_size(44)
+        .y_label_area_size(64)
+        .build_cartesian_2d((l0..l1).log_scale(), (t0..t1).log_scale())?;
+    chart
+        .configure_mesh()
+        .x_desc("lights (log)")
+        .y_desc("GPU time per frame, ms (log)")
+        .label_style((FONT, 14))
+        .draw()?;
+    for (i, (name, mut pts)) in series.into_iter().enumerate() {
+        pts.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let color = series_color(i);
+        chart
+            .draw_series(LineSeries::new(pts.clone(), color.stroke_width(2)))?
+            .label(name)
+            .legend(move |(x, y)| PathElement::new([(x, y), (x + 16, y)], color.stroke_width(2)));
+        chart.draw_series(pts.iter().map(|p| Circle::new(*p, 4, color.filled())))?;
+    }
+    chart
+        .configure_series_labels()
+        .position(SeriesLabelPosition::UpperLeft)
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .label_font((FONT, 13))
+        .draw()?;
+    Ok(true)
+}

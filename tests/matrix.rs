@@ -1,0 +1,195 @@
+//! The matrix command end to end, on tiny cells: a broken variant fails its cells and not
+//! the others, every report file is written, shards merge back into the whole, and a
+//! baseline run shows each cell's change.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use clusterlab::matrix::Results;
+
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("clusterlab-matrix-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("scratch folder");
+    dir
+}
+
+/// A folder with a good variant and a broken one.
+fn variants(dir: &Path) -> PathBuf {
+    let v = dir.join("variants");
+    std::fs::create_dir_all(&v).unwrap();
+    std::fs::copy("variants/forward_plus.ron", v.join("forward_plus.ron")).unwrap();
+    std::fs::write(
+        v.join("broken.ron"),
+        "(\n    description: \"broken\",\n    pipeline: Sideways,\n)\n",
+    )
+    .unwrap();
+    v
+}
+
+fn matrix(args: &[&str]) -> (i32, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_clusterlab"))
+        .args(args)
+        .output()
+        .expect("clusterlab runs");
+    let text =
+        String::from_utf8_lossy(&out.stdout).into_owned() + &String::from_utf8_lossy(&out.stderr);
+    (out.status.code().unwrap_or(-1), text)
+}
+
+fn run(variants: &Path, out: &Path, extra: &[&str]) -> (i32, String) {
+    let mut args = vec![
+        "matrix",
+        "--variants",
+        variants.to_str().unwrap(),
+        "--scenes",
+        "one_light,empty",
+        "--size",
+        "48x27",
+        "--sweep",
+        "lights=1,3",
+        "--frames",
+        "2",
+        "--warmup",
+        "0",
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    args.extend_from_slice(extra);
+    matrix(&args)
+}
+
+fn ids(r: &Results) -> Vec<String> {
+    let mut v: Vec<String> = r.cells.iter().map(|c| c.spec.id.clone()).collect();
+    v.sort();
+    v
+}
+
+#[test]
+fn a_broken_variant_fails_its_cells_and_the_rest_run_and_report() {
+    let dir = scratch("run");
+    let v = variants(&dir);
+    let out = dir.join("all");
+    let (code, text) = run(&v, &out, &[]);
+    assert_eq!(code, 1, "a failed cell makes exit code 1\n{text}");
+    assert!(text.contains("FAILED"), "{text}");
+
+    let r = Results::load(&out).expect("results.json");
+    // 2 variants x 2 scenes x 2 light counts, plus a naive baseline for each of 4 groups.
+    assert_eq!(r.cells.len(), 12, "{:?}", ids(&r));
+    let broken: Vec<_> = r
+        .cells
+        .iter()
+        .filter(|c| c.spec.variant == "broken")
+        .collect();
+    assert_eq!(broken.len(), 4);
+    for c in &broken {
+        let why = c.failure.as_deref().expect("broken cells fail");
+        assert!(why.contains("broken.ron:3:15"), "{why}");
+    }
+    for c in r.cells.iter().filter(|c| c.spec.variant != "broken") {
+        assert!(c.ok(), "{}: {:?}", c.spec.id, c.failure);
+        assert!(c.speedup_vs_naive.is_some(), "{}", c.spec.id);
+        let e = c.error.as_ref().unwrap();
+        assert!(e.max_abs_8bit <= 1, "{}: {e:?}", c.spec.id);
+        assert_eq!(c.frames, 2);
+        for image in [&c.images.image, &c.images.heat].into_iter().flatten() {
+            assert!(out.join(image).is_file(), "{image}");
+        }
+    }
+    let p = &r.provenance[0];
+    assert_eq!(p.variant_files["forward_plus"].sha256.len(), 64);
+    assert!(!p.git_revision.is_empty() && !p.date.is_empty());
+    for file in ["results.json", "results.csv", "index.html", "plots"] {
+        assert!(out.join(file).exists(), "{file}");
+    }
+    let rows = csv::Reader::from_path(out.join("results.csv"))
+        .unwrap()
+        .records()
+        .count();
+    assert_eq!(rows, 12);
+    let html = std::fs::read_to_string(out.join("index.html")).unwrap();
+    assert!(html.contains("forward_plus") && html.contains("Sideways"));
+    let leftovers: Vec<_> = walk(&out)
+        .into_iter()
+        .filter(|p| p.to_string_lossy().contains(".tmp"))
+        .collect();
+    assert!(leftovers.is_empty(), "{leftovers:?}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+fn walk(dir: &Path) -> Vec<PathBuf> {
+    let mut out = Vec::new();
+    for e in std::fs::read_dir(dir).unwrap().flatten() {
+        let p = e.path();
+        if p.is_dir() {
+            out.extend(walk(&p));
+        } else {
+            out.push(p);
+        }
+    }
+    out
+}
+
+#[test]
+fn shards_merge_into_the_whole_and_a_baseline_shows_changes() {
+    let dir = scratch("shards");
+    let v = dir.join("variants");
+    std::fs::create_dir_all(&v).unwrap();
+    std::fs::copy("variants/forward_plus.ron", v.join("forward_plus.ron")).unwrap();
+    let (a, b, merged) = (dir.join("a"), dir.join("b"), dir.join("merged"));
+    assert_eq!(run(&v, &a, &["--shard", "1/2"]).0, 0);
+    assert_eq!(run(&v, &b, &["--shard", "2/2"]).0, 0);
+    let (code, text) = matrix(&[
+        "merge",
+        a.to_str().unwrap(),
+        b.to_str().unwrap(),
+        "--out",
+        merged.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{text}");
+    let (ra, rb, rm) = (
+        Results::load(&a).unwrap(),
+        Results::load(&b).unwrap(),
+        Results::load(&merged).unwrap(),
+    );
+    assert_eq!(rm.cells.len(), 8);
+    assert_eq!(ra.cells.len() + rb.cells.len(), 8);
+    assert!(ids(&ra).iter().all(|id| !ids(&rb).contains(id)));
+    assert_eq!(rm.provenance.len(), 2);
+    // Speed-ups need the naive cell of the group, which may sit in the other shard.
+    assert!(rm.cells.iter().all(|c| c.speedup_vs_naive.is_some()));
+    for c in &rm.cells {
+        assert!(merged.join(c.images.image.as_ref().unwrap()).is_file());
+    }
+
+    let (code, text) = run(
+        &v,
+        &dir.join("again"),
+        &["--baseline", merged.join("results.json").to_str().unwrap()],
+    );
+    assert_eq!(code, 0, "{text}");
+    assert!(text.contains("vs baseline"), "{text}");
+    let again = Results::load(&dir.join("again")).unwrap();
+    assert!(again.cells.iter().all(|c| c.vs_baseline.is_some()));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn bad_arguments_are_named() {
+    let (code, text) = matrix(&["matrix", "--sweep", "lights=lots"]);
+    assert_eq!(code, 2, "{text}");
+    assert!(
+        text.contains("`lots` in `lights=lots` is not a whole number"),
+        "{text}"
+    );
+    let (code, text) = matrix(&["matrix", "--scenes", "moon", "--out", "/nonexistent/x"]);
+    assert_eq!(code, 1);
+    assert!(text.contains("no scene `moon`"), "{text}");
+    let (code, text) = matrix(&["merge", "/nonexistent/results"]);
+    assert_eq!(code, 1);
+    assert!(
+        text.contains("/nonexistent/results: no such results file"),
+        "{text}"
+    );
+}
