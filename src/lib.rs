@@ -14,5 +14,6 @@ pub mod metrics;
 pub mod render;
 pub mod run;
 pub mod scene;
+pub mod stress;
 pub mod twins;
 pub mod variant;

@@ -48,6 +48,18 @@ enum Command {
     /// With no arguments: every variant in variants/ on every scene, plus a light-count
     /// sweep of naive forward, Forward+ and clustered deferred.
     Matrix(MatrixArgs),
+    /// Run the stress suite: adversarial cameras, sizes, lights, geometry and grids on every
+    /// pipeline they apply to; exit code 1 if any check fails.
+    Stress {
+        /// Only the cases whose name contains this.
+        filter: Option<String>,
+        /// Print the runs as JSON.
+        #[arg(long)]
+        json: bool,
+        /// GPU backend: vulkan, gl, metal, dx12 (default: WGPU_BACKEND, else Vulkan first).
+        #[arg(long)]
+        backend: Option<String>,
+    },
     /// Combine matrix result folders (shards of one study) into one report.
     Merge {
         /// Result folders (each with a results.json).
@@ -219,6 +231,11 @@ fn main() -> ExitCode {
         Command::Render(args) => render(&args),
         Command::Matrix(args) => matrix(&args),
         Command::Merge { dirs, out, json } => merge(&dirs, &out, json),
+        Command::Stress {
+            filter,
+            json,
+            backend,
+        } => stress(filter.as_deref(), json, backend.as_deref()),
     };
     match result {
         Ok(true) => ExitCode::SUCCESS,
@@ -561,4 +578,33 @@ fn report(results: &clusterlab::matrix::Results, json: bool, out: &Path) -> Resu
         println!("report: {}", out.join("index.html").display());
     }
     Ok(())
+}
+
+fn stress(filter: Option<&str>, json: bool, backend: Option<&str>) -> Result<bool, String> {
+    let gpu = clusterlab::gpu::Gpu::new(backend).map_err(|e| e.to_string())?;
+    eprintln!(
+        "stress suite on {} ({}, {})",
+        gpu.adapter.name, gpu.adapter.backend, gpu.adapter.driver
+    );
+    let bar = indicatif::ProgressBar::new_spinner();
+    let runs = clusterlab::stress::run(&gpu, &Composer::default(), filter, &|what| {
+        bar.set_message(what.to_string());
+        bar.tick();
+    });
+    bar.finish_and_clear();
+    if runs.is_empty() {
+        return Err(format!(
+            "no stress case matches `{}`",
+            filter.unwrap_or_default()
+        ));
+    }
+    if json {
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&runs).map_err(|e| e.to_string())?
+        );
+    } else {
+        print!("{}", clusterlab::stress::report(&runs));
+    }
+    Ok(runs.iter().all(|r| r.ok))
 }

@@ -130,10 +130,24 @@ pub fn run_cell(
     params: SceneParams,
     options: CellOptions<'_>,
 ) -> Result<CellResult, RunError> {
-    let CellOptions { frames, out, .. } = options;
     gpu.check_size(params.width, params.height)?;
     let scene = crate::scene::generate(scene_name, params).map_err(RunError::Scene)?;
-    let mut renderer = Renderer::new(gpu, composer, &variant.variant, &scene)?;
+    run_scene(gpu, composer, variant, &scene, options)
+}
+
+/// Render `variant` on a scene made elsewhere (the stress cases build their own), compare
+/// the last frame with the CPU reference, count, and write its images.
+pub fn run_scene(
+    gpu: &Gpu,
+    composer: &Composer,
+    variant: &LoadedVariant,
+    scene: &Scene,
+    options: CellOptions<'_>,
+) -> Result<CellResult, RunError> {
+    let CellOptions { frames, out, .. } = options;
+    let params = scene.params;
+    gpu.check_size(params.width, params.height)?;
+    let mut renderer = Renderer::new(gpu, composer, &variant.variant, scene)?;
     for _ in 0..options.warmup {
         renderer.render()?;
     }
@@ -156,9 +170,9 @@ pub fn run_cell(
     }
 
     let (reference, reference_ms) = match options.references {
-        Some(cache) => cache.get_or_compute(gpu, composer, variant, &scene)?,
+        Some(cache) => cache.get_or_compute(gpu, composer, variant, scene)?,
         None => {
-            let (r, ms) = reference_frame(gpu, composer, variant, &scene)?;
+            let (r, ms) = reference_frame(gpu, composer, variant, scene)?;
             (Arc::new(r), ms)
         }
     };

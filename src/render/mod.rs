@@ -108,6 +108,10 @@ pub struct FrameStats {
     pub list_reallocations: u32,
     /// The clustered depth range of the frame [near, far].
     pub z_range: Option<[f32; 2]>,
+    /// Pixels whose shading looked up a cluster index outside the grid (clustered).
+    pub clusters_out_of_grid: u64,
+    /// The first such pixel: [x, y, cluster index].
+    pub first_out_of_grid: Option<[u32; 3]>,
 }
 
 /// Bind group layouts of every group a pass may use.
@@ -210,6 +214,7 @@ pub struct Renderer<'g> {
     post: PostChain,
     pixel_evals: wgpu::Buffer,
     pixel_useful: wgpu::Buffer,
+    pixel_clusters: wgpu::Buffer,
     layouts: Layouts,
     groups: Groups,
     timed: HashMap<&'static str, PassPipelines>,
@@ -307,6 +312,7 @@ impl<'g> Renderer<'g> {
             };
             let pixel_evals = pixel_buffer("pixel light evaluations");
             let pixel_useful = pixel_buffer("pixel useful evaluations");
+            let pixel_clusters = pixel_buffer("pixel cluster indices");
             let layouts = Layouts {
                 frame: frame_layout(gpu),
                 cluster_build: ClusterBuffers::build_layout(gpu),
@@ -317,7 +323,7 @@ impl<'g> Renderer<'g> {
                     .device
                     .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
                         label: Some("stats"),
-                        entries: &[0, 1].map(|b| wgpu::BindGroupLayoutEntry {
+                        entries: &[0, 1, 2].map(|b| wgpu::BindGroupLayoutEntry {
                             visibility: wgpu::ShaderStages::FRAGMENT,
                             ..storage_entry(b, false)
                         }),
@@ -368,6 +374,10 @@ impl<'g> Renderer<'g> {
                             binding: 1,
                             resource: pixel_useful.as_entire_binding(),
                         },
+                        wgpu::BindGroupEntry {
+                            binding: 2,
+                            resource: pixel_clusters.as_entire_binding(),
+                        },
                     ],
                 }),
                 tonemap: gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
@@ -394,6 +404,7 @@ impl<'g> Renderer<'g> {
                 post,
                 pixel_evals,
                 pixel_useful,
+                pixel_clusters,
                 layouts,
                 groups,
                 timed: HashMap::new(),
@@ -615,6 +626,14 @@ impl<'g> Renderer<'g> {
                 c.clusters as u64
             };
             stats.active_clusters = self.count_visible_clusters()? as u64;
+            let bytes = read_buffer(gpu, &self.pixel_clusters, 0, self.pixel_clusters.size())?;
+            let used: &[u32] = bytemuck::cast_slice(&bytes);
+            let outside = |&(_, &v): &(usize, &u32)| v > c.clusters;
+            stats.clusters_out_of_grid = used.iter().enumerate().filter(outside).count() as u64;
+            stats.first_out_of_grid = used.iter().enumerate().find(outside).map(|(i, &v)| {
+                let w = self.width as usize;
+                [(i % w) as u32, (i / w) as u32, v - 1]
+            });
         }
         Ok(stats)
     }
@@ -722,6 +741,7 @@ impl<'g> Renderer<'g> {
             if instrumented {
                 e.clear_buffer(&self.pixel_evals, 0, None);
                 e.clear_buffer(&self.pixel_useful, 0, None);
+                e.clear_buffer(&self.pixel_clusters, 0, None);
             }
             gpu.queue.submit([e.finish()]);
         })?;

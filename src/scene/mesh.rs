@@ -77,6 +77,18 @@ impl MeshBuilder {
         }
     }
 
+    /// The inside of an axis-aligned box: the six faces pointing in (a room).
+    pub fn cuboid_inside(&mut self, min: DVec3, max: DVec3, albedo: [f32; 3]) {
+        let (lo, hi) = (min.to_array(), max.to_array());
+        for axis in 0..3 {
+            let (u, v) = ((axis + 1) % 3, (axis + 2) % 3);
+            let span_min = [lo[u], lo[v]];
+            let span_max = [hi[u], hi[v]];
+            self.axis_rect(axis, hi[axis], span_min, span_max, false, albedo);
+            self.axis_rect(axis, lo[axis], span_min, span_max, true, albedo);
+        }
+    }
+
     /// A vertical cylinder standing on `base`, smooth sides and flat caps.
     pub fn cylinder(
         &mut self,

@@ -1,0 +1,714 @@
+//! The adversarial cases: cameras, sizes, lights and geometry where clustered shading tends
+//! to break numerically, each a hand-built scene and the variants it applies to.
+
+use glam::DVec3;
+
+use crate::cpu::zslice::{self, Scheme};
+use crate::scene::{Camera, Light, MeshBuilder, Scene, SceneParams, Vertex};
+use crate::variant::*;
+
+/// One stress case: a scene and the variants to run on it.
+pub struct Case {
+    pub name: &'static str,
+    pub what: &'static str,
+    pub scene: Scene,
+    pub variants: Vec<(String, Variant)>,
+}
+
+/// Image size of the cases that do not test sizes (small: CI runs them all).
+pub const SIZE: (u32, u32) = (48, 27);
+
+const STONE: [f32; 3] = [0.75, 0.72, 0.66];
+const RED: [f32; 3] = [0.8, 0.3, 0.25];
+const BLUE: [f32; 3] = [0.25, 0.4, 0.8];
+
+fn variant(description: &str, pipeline: Pipeline) -> Variant {
+    Variant {
+        description: description.into(),
+        pipeline,
+        depth_prepass: pipeline == Pipeline::ClusteredForward,
+        clusters: pipeline.is_clustered().then(|| Clusters {
+            grid: (8, 6, 12),
+            slicing: ZSlicing::Exponential,
+            ..Default::default()
+        }),
+        ..Default::default()
+    }
+}
+
+/// The four pipelines, exact (full-precision G-buffer, exact lists).
+pub fn pipelines() -> Vec<(String, Variant)> {
+    [
+        ("naive_forward", Pipeline::NaiveForward),
+        ("forward_plus", Pipeline::ClusteredForward),
+        ("clustered_deferred", Pipeline::ClusteredDeferred),
+        ("deferred_scissor", Pipeline::DeferredScissor),
+    ]
+    .into_iter()
+    .map(|(n, p)| (n.to_string(), variant(n, p)))
+    .collect()
+}
+
+/// The clustered pipelines only.
+fn clustered() -> Vec<(String, Variant)> {
+    pipelines()
+        .into_iter()
+        .filter(|(_, v)| v.pipeline.is_clustered())
+        .collect()
+}
+
+/// The pipelines plus deferred with each packed normal codec (for the normal cases).
+fn with_codecs() -> Vec<(String, Variant)> {
+    let mut out = pipelines();
+    for (name, codec) in [
+        (
+            "deferred_octahedral",
+            NormalCodec::Octahedral {
+                bits: 32,
+                precise: true,
+            },
+        ),
+        (
+            "deferred_octahedral_fast",
+            NormalCodec::Octahedral {
+                bits: 32,
+                precise: false,
+            },
+        ),
+        ("deferred_polar", NormalCodec::Polar { bits: 32 }),
+        ("deferred_spheremap", NormalCodec::Spheremap { bits: 32 }),
+    ] {
+        let mut v = variant(name, Pipeline::ClusteredDeferred);
+        v.gbuffer = Some(GBuffer {
+            layout: GBufferLayout::Packed,
+        });
+        v.normals = Some(codec);
+        out.push((name.to_string(), v));
+    }
+    let mut compact = variant("deferred_compact", Pipeline::ClusteredDeferred);
+    compact.gbuffer = Some(GBuffer {
+        layout: GBufferLayout::Compact,
+    });
+    out.push(("deferred_compact".to_string(), compact));
+    out
+}
+
+fn with_grid(grid: (u32, u32, u32)) -> Vec<(String, Variant)> {
+    clustered()
+        .into_iter()
+        .map(|(n, mut v)| {
+            if let Some(c) = &mut v.clusters {
+                c.grid = grid;
+            }
+            (format!("{n}_{}x{}x{}", grid.0, grid.1, grid.2), v)
+        })
+        .collect()
+}
+
+fn with_slicing(slicing: ZSlicing, tag: &str) -> Vec<(String, Variant)> {
+    clustered()
+        .into_iter()
+        .map(|(n, mut v)| {
+            if let Some(c) = &mut v.clusters {
+                c.slicing = slicing;
+            }
+            (format!("{n}_{tag}"), v)
+        })
+        .collect()
+}
+
+fn reversed() -> Vec<(String, Variant)> {
+    pipelines()
+        .into_iter()
+        .map(|(n, mut v)| {
+            v.depth = Depth {
+                format: DepthFormat::Float32,
+                reversed_z: true,
+            };
+            (format!("{n}_reversed_z"), v)
+        })
+        .collect()
+}
+
+/// A room of boxes and a sphere: every normal direction, some overdraw.
+fn room() -> MeshBuilder {
+    let mut m = MeshBuilder::default();
+    m.axis_rect(1, 0.0, [-6.0, -6.0], [6.0, 6.0], true, STONE);
+    m.cuboid(
+        DVec3::new(-2.5, 0.0, -2.0),
+        DVec3::new(-1.0, 2.0, -0.5),
+        RED,
+    );
+    m.cuboid(DVec3::new(1.0, 0.0, -3.0), DVec3::new(2.5, 1.0, -1.5), BLUE);
+    m.sphere(DVec3::new(0.3, 1.0, 0.5), 1.0, 12, 24, STONE);
+    m
+}
+
+fn camera(eye: DVec3, target: DVec3, fov_deg: f64, near: f64, far: f64) -> Camera {
+    Camera {
+        eye,
+        target,
+        up: DVec3::Y,
+        fov_y: fov_deg.to_radians(),
+        near,
+        far,
+    }
+}
+
+fn default_camera(m: &MeshBuilder) -> Camera {
+    let eye = DVec3::new(0.0, 3.0, 7.0);
+    camera(
+        eye,
+        DVec3::new(0.0, 0.8, 0.0),
+        60.0,
+        0.1,
+        Scene::far_plane_for(&m.vertices, eye),
+    )
+}
+
+fn light(position: DVec3, radius: f32, intensity: f32) -> Light {
+    Light {
+        position: position.as_vec3().to_array(),
+        radius,
+        color: [1.0, 0.9, 0.8],
+        intensity,
+    }
+}
+
+/// `n` lights on a lattice over the room, radius `r`, total power about 60.
+fn lattice(n: u32, r: f32) -> Vec<Light> {
+    let side = (n as f64).cbrt().ceil().max(1.0) as u32;
+    (0..n)
+        .map(|i| {
+            let (a, b, c) = (i % side, (i / side) % side, i / (side * side));
+            let t = |k: u32| (k as f64 + 0.5) / side as f64;
+            let p = DVec3::new(-5.5 + 11.0 * t(a), 0.2 + 3.5 * t(c), -5.5 + 11.0 * t(b));
+            let mut l = light(p, r, 60.0 / n.max(1) as f32);
+            l.color = [0.5 + 0.5 * t(a) as f32, 0.6, 1.0 - 0.5 * t(b) as f32];
+            l
+        })
+        .collect()
+}
+
+fn scene(
+    name: &str,
+    size: (u32, u32),
+    mesh: MeshBuilder,
+    lights: Vec<Light>,
+    cam: Camera,
+) -> Scene {
+    Scene {
+        name: name.to_string(),
+        params: SceneParams {
+            width: size.0,
+            height: size.1,
+            lights: lights.len() as u32,
+            radius_range: (0.0, 0.0),
+            seed: 0,
+            time: 1.0,
+        },
+        vertices: mesh.vertices,
+        indices: mesh.indices,
+        lights,
+        camera: cam,
+        prev_camera: cam,
+    }
+}
+
+fn case(
+    name: &'static str,
+    what: &'static str,
+    scene: Scene,
+    variants: Vec<(String, Variant)>,
+) -> Case {
+    Case {
+        name,
+        what,
+        scene,
+        variants,
+    }
+}
+
+/// A room scene with `lights` and the default camera at `size`.
+fn lit_room(name: &str, size: (u32, u32), lights: Vec<Light>) -> Scene {
+    let m = room();
+    let cam = default_camera(&m);
+    scene(name, size, m, lights, cam)
+}
+
+/// Every stress case.
+pub fn all() -> Vec<Case> {
+    let mut cases = Vec::new();
+    let base_lights = || lattice(27, 3.0);
+
+    // Cameras.
+    {
+        let m = room();
+        let eye = DVec3::new(0.0, 3.0, 7.0);
+        let cam = camera(eye, DVec3::new(0.0, 0.8, 0.0), 60.0, 1e-4, 1e6);
+        cases.push(case(
+            "near_1e-4_far_1e6",
+            "near plane 1e-4, far plane 1e6: 10 decades of depth in the slices",
+            scene("near_1e-4_far_1e6", SIZE, m, base_lights(), cam),
+            pipelines(),
+        ));
+    }
+    cases.push(case(
+        "reversed_z_infinite_far",
+        "reversed-Z with an infinite far plane, 32-bit float depth",
+        lit_room("reversed_z_infinite_far", SIZE, base_lights()),
+        reversed(),
+    ));
+    for (name, fov, what) in [
+        (
+            "fov_1_degree",
+            1.0,
+            "a 1 degree field of view: tiles a few thousandths wide",
+        ),
+        (
+            "fov_170_degrees",
+            170.0,
+            "a 170 degree field of view: tan(fov/2) = 11.4",
+        ),
+    ] {
+        let m = room();
+        let eye = DVec3::new(0.0, 3.0, 7.0);
+        let cam = camera(
+            eye,
+            DVec3::new(0.0, 0.8, 0.0),
+            fov,
+            0.1,
+            Scene::far_plane_for(&m.vertices, eye),
+        );
+        cases.push(case(
+            name,
+            what,
+            scene(name, SIZE, m, base_lights(), cam),
+            pipelines(),
+        ));
+    }
+    for (name, size, what) in [
+        ("size_1x1", (1, 1), "a single pixel"),
+        (
+            "size_3x7",
+            (3, 7),
+            "3x7 pixels: a grid that does not divide the size",
+        ),
+        ("size_1x4096", (1, 4096), "one column of 4096 pixels"),
+        ("size_4096x1", (4096, 1), "one row of 4096 pixels"),
+    ] {
+        cases.push(case(
+            name,
+            what,
+            lit_room(name, size, base_lights()),
+            pipelines(),
+        ));
+    }
+
+    // Lights.
+    cases.push(case(
+        "no_lights",
+        "0 lights: ambient only, empty lists everywhere",
+        lit_room("no_lights", SIZE, vec![]),
+        pipelines(),
+    ));
+    cases.push(case(
+        "one_light",
+        "1 light",
+        lit_room(
+            "one_light",
+            SIZE,
+            vec![light(DVec3::new(0.0, 2.5, 0.0), 6.0, 20.0)],
+        ),
+        pipelines(),
+    ));
+    cases.push(case(
+        "lights_65536",
+        "65536 small lights on a lattice",
+        lit_room("lights_65536", SIZE, lattice(65536, 0.4)),
+        pipelines(),
+    ));
+    cases.push(case(
+        "radius_zero",
+        "lights of radius 0: they light nothing",
+        lit_room("radius_zero", SIZE, lattice(64, 0.0)),
+        pipelines(),
+    ));
+    cases.push(case(
+        "radius_1e-4",
+        "lights of radius 1e-4, some on surfaces",
+        lit_room(
+            "radius_1e-4",
+            SIZE,
+            lattice(64, 1e-4)
+                .into_iter()
+                .chain([light(DVec3::new(0.0, 0.0, 0.0), 1e-4, 1.0)])
+                .collect(),
+        ),
+        pipelines(),
+    ));
+    cases.push(case(
+        "light_covers_every_cluster",
+        "one light whose sphere holds the whole frustum",
+        lit_room(
+            "light_covers_every_cluster",
+            SIZE,
+            vec![light(DVec3::new(0.0, 1.0, 0.0), 1e4, 1e3)],
+        ),
+        pipelines(),
+    ));
+    {
+        let m = room();
+        let cam = default_camera(&m);
+        let view = cam.view();
+        let world_from_view = view.inverse();
+        let grid = (8u32, 6u32, 12u32);
+        // Centres exactly on the exponential slice boundaries along the view axis and
+        // off it, and exactly on tile boundary planes.
+        let mut on_slices = Vec::new();
+        for k in 1..grid.2 {
+            let z = zslice::slice_start(Scheme::Exponential, k, cam.near, cam.far, grid.2);
+            for x in [-0.5, 0.0, 0.5] {
+                let p = world_from_view.transform_point3(DVec3::new(x * z, 0.0, -z));
+                on_slices.push(light(p, 0.8, 2.0));
+            }
+        }
+        cases.push(case(
+            "lights_on_slice_boundaries",
+            "light centres exactly on z-slice boundaries",
+            scene("lights_on_slice_boundaries", SIZE, room(), on_slices, cam),
+            clustered(),
+        ));
+        let tan = (cam.fov_y / 2.0).tan();
+        let aspect = SIZE.0 as f64 / SIZE.1 as f64;
+        let mut on_tiles = Vec::new();
+        for i in 0..=grid.0 {
+            for z in [2.0, 5.0, 8.0] {
+                let x = (2.0 * i as f64 / grid.0 as f64 - 1.0) * tan * aspect * z;
+                let p = world_from_view.transform_point3(DVec3::new(x, 0.0, -z));
+                on_tiles.push(light(p, 0.7, 2.0));
+            }
+        }
+        for j in 0..=grid.1 {
+            let z = 4.0;
+            let y = (2.0 * j as f64 / grid.1 as f64 - 1.0) * tan * z;
+            let p = world_from_view.transform_point3(DVec3::new(0.3, y, -z));
+            on_tiles.push(light(p, 0.7, 2.0));
+        }
+        cases.push(case(
+            "lights_on_tile_boundaries",
+            "light centres exactly on tile boundary planes",
+            scene("lights_on_tile_boundaries", SIZE, room(), on_tiles, cam),
+            clustered(),
+        ));
+        let behind: Vec<Light> = (0..8)
+            .map(|i| {
+                let p = world_from_view.transform_point3(DVec3::new(
+                    i as f64 - 3.5,
+                    0.0,
+                    1.0 + i as f64 * 0.3,
+                ));
+                light(p, 6.0, 10.0)
+            })
+            .collect();
+        cases.push(case(
+            "lights_behind_camera",
+            "light centres behind the camera, spheres reaching into the view",
+            scene("lights_behind_camera", SIZE, room(), behind, cam),
+            pipelines(),
+        ));
+        let straddle: Vec<Light> = (0..8)
+            .map(|i| {
+                let p = world_from_view.transform_point3(DVec3::new(
+                    (i as f64 - 3.5) * 0.02,
+                    0.0,
+                    -cam.near,
+                ));
+                light(p, 3.0 + i as f32 * 0.5, 5.0)
+            })
+            .collect();
+        cases.push(case(
+            "lights_straddling_near_plane",
+            "light centres on the near plane",
+            scene("lights_straddling_near_plane", SIZE, room(), straddle, cam),
+            pipelines(),
+        ));
+        let at_far: Vec<Light> = (0..8)
+            .map(|i| {
+                let p = world_from_view.transform_point3(DVec3::new(i as f64 - 3.5, 0.5, -cam.far));
+                light(p, (cam.far * 0.9) as f32, 50.0)
+            })
+            .collect();
+        cases.push(case(
+            "lights_at_far_plane",
+            "light centres on the far plane, radii reaching the room",
+            scene("lights_at_far_plane", SIZE, room(), at_far, cam),
+            pipelines(),
+        ));
+    }
+    cases.push(case(
+        "many_lights_at_one_point",
+        "1000 lights at one position",
+        lit_room(
+            "many_lights_at_one_point",
+            SIZE,
+            (0..1000)
+                .map(|_| light(DVec3::new(0.5, 1.5, 1.0), 4.0, 0.05))
+                .collect(),
+        ),
+        pipelines(),
+    ));
+    cases.push(case(
+        "intensity_zero",
+        "lights of intensity 0",
+        lit_room(
+            "intensity_zero",
+            SIZE,
+            lattice(27, 3.0)
+                .into_iter()
+                .map(|mut l| {
+                    l.intensity = 0.0;
+                    l
+                })
+                .collect(),
+        ),
+        pipelines(),
+    ));
+    cases.push(case(
+        "intensity_1e6",
+        "lights of intensity 1e6: HDR far above display white",
+        lit_room(
+            "intensity_1e6",
+            SIZE,
+            lattice(8, 3.0)
+                .into_iter()
+                .map(|mut l| {
+                    l.intensity = 1e6;
+                    l
+                })
+                .collect(),
+        ),
+        pipelines(),
+    ));
+    cases.push(case(
+        "positions_at_1e6",
+        "lights 1e6 away with radii that reach the room",
+        lit_room(
+            "positions_at_1e6",
+            SIZE,
+            [
+                DVec3::new(1e6, 0.0, 0.0),
+                DVec3::new(0.0, 1e6, 0.0),
+                DVec3::new(-7e5, 7e5, 1e3),
+            ]
+            .into_iter()
+            .map(|p| light(p, 1.5e6, 1e13))
+            .collect(),
+        ),
+        pipelines(),
+    ));
+
+    // Geometry.
+    {
+        // Inside a box, looking towards +z: floor, ceiling, both side walls and the far
+        // wall have normals exactly along the axes (+y, -y, +x, -x, -z).
+        let mut m = MeshBuilder::default();
+        m.cuboid_inside(
+            DVec3::new(-4.0, 0.0, -4.0),
+            DVec3::new(4.0, 4.0, 4.0),
+            STONE,
+        );
+        let eye = DVec3::new(0.3, 2.0, -3.5);
+        let cam = camera(
+            eye,
+            DVec3::new(0.0, 1.8, 4.0),
+            80.0,
+            0.1,
+            Scene::far_plane_for(&m.vertices, eye),
+        );
+        let lights = vec![
+            light(DVec3::new(0.0, 3.5, 2.0), 8.0, 30.0),
+            light(DVec3::new(-3.0, 1.0, 3.0), 5.0, 10.0),
+            light(DVec3::new(3.0, 1.0, 1.0), 5.0, 10.0),
+        ];
+        cases.push(case(
+            "normals_along_axes",
+            "surfaces whose normals are exactly +-x, +-y and -z",
+            scene("normals_along_axes", SIZE, m, lights, cam),
+            with_codecs(),
+        ));
+    }
+    {
+        // A sphere seen from above the pole, and a ring of quads whose normals lie on the
+        // octahedron's seams (z = 0, and x = +-y).
+        let mut m = MeshBuilder::default();
+        m.sphere(DVec3::ZERO, 1.5, 24, 48, STONE);
+        let eye = DVec3::new(0.01, 0.02, 5.0);
+        let cam = camera(eye, DVec3::ZERO, 50.0, 0.1, 10.0);
+        cases.push(case(
+            "normals_near_octahedron_poles",
+            "a sphere seen down the z axis: normals near (0, 0, +-1)",
+            scene(
+                "normals_near_octahedron_poles",
+                SIZE,
+                m,
+                vec![light(DVec3::new(0.5, 0.5, 4.0), 8.0, 20.0)],
+                cam,
+            ),
+            with_codecs(),
+        ));
+        let mut m = MeshBuilder::default();
+        for i in 0..8 {
+            let a = i as f64 * std::f64::consts::FRAC_PI_4;
+            let n = DVec3::new(a.cos(), a.sin(), 0.0);
+            let t = DVec3::Z;
+            let b = n.cross(t);
+            let c = n * 3.0;
+            m.quad(
+                [c - b - t, c + b - t, c + b + t, c - b + t],
+                n,
+                if i % 2 == 0 { RED } else { BLUE },
+            );
+        }
+        m.axis_rect(2, -1.0, [-4.0, -4.0], [4.0, 4.0], true, STONE);
+        let eye = DVec3::new(0.0, 0.0, 1.0);
+        let cam = camera(eye, DVec3::new(1.0, 0.3, 0.0), 100.0, 0.05, 10.0);
+        cases.push(case(
+            "normals_on_octahedron_seams",
+            "a ring of walls with normals in the z = 0 plane, on x = +-y among them",
+            scene(
+                "normals_on_octahedron_seams",
+                SIZE,
+                m,
+                vec![
+                    light(DVec3::new(0.0, 0.0, 0.5), 6.0, 20.0),
+                    light(DVec3::new(1.5, -1.0, 0.0), 3.0, 5.0),
+                ],
+                cam,
+            ),
+            with_codecs(),
+        ));
+    }
+    {
+        // Degenerate triangles (all three corners at one point, and collinear ones) whose
+        // vertex normals are zero, on top of the room.
+        let mut m = room();
+        let base = m.vertices.len() as u32;
+        let zero = |p: [f32; 3]| Vertex {
+            position: p,
+            normal: [0.0; 3],
+            albedo: RED,
+        };
+        m.vertices.extend([
+            zero([0.0, 0.5, 2.0]),
+            zero([0.0, 0.5, 2.0]),
+            zero([0.0, 0.5, 2.0]),
+            zero([-1.0, 0.2, 2.5]),
+            zero([0.0, 0.2, 2.5]),
+            zero([1.0, 0.2, 2.5]),
+        ]);
+        m.indices
+            .extend([base, base + 1, base + 2, base + 3, base + 4, base + 5]);
+        // And a real quad whose vertex normals are zero (the shading sees a zero normal).
+        let b = m.vertices.len() as u32;
+        m.vertices.extend([
+            zero([-1.0, 0.01, 3.0]),
+            zero([1.0, 0.01, 3.0]),
+            zero([1.0, 0.01, 4.0]),
+            zero([-1.0, 0.01, 4.0]),
+        ]);
+        m.indices.extend([b, b + 2, b + 1, b, b + 3, b + 2]);
+        let cam = default_camera(&m);
+        cases.push(case(
+            "zero_length_normals",
+            "degenerate triangles and a quad with zero vertex normals",
+            scene("zero_length_normals", SIZE, m, base_lights(), cam),
+            with_codecs(),
+        ));
+    }
+    {
+        let mut m = MeshBuilder::default();
+        m.axis_rect(1, 0.0, [-50.0, -50.0], [50.0, 50.0], true, STONE);
+        let eye = DVec3::new(0.0, 0.02, 10.0);
+        let cam = camera(
+            eye,
+            DVec3::new(0.0, 0.0, -40.0),
+            60.0,
+            0.01,
+            Scene::far_plane_for(&m.vertices, eye),
+        );
+        cases.push(case(
+            "grazing_angles",
+            "a floor seen 2 cm above it: n.v near 0 across the image",
+            scene("grazing_angles", SIZE, m, lattice(64, 6.0), cam),
+            pipelines(),
+        ));
+    }
+    {
+        let mut m = room();
+        let cam = default_camera(&m);
+        let f = (cam.target - cam.eye).normalize();
+        let c = cam.eye + f * (cam.near * 1.001);
+        let right = f.cross(DVec3::Y).normalize() * 0.05;
+        let up = right.cross(f).normalize() * 0.03;
+        m.quad(
+            [
+                c - right - up,
+                c + right - up,
+                c + right + up,
+                c - right + up,
+            ],
+            -f,
+            BLUE,
+        );
+        cases.push(case(
+            "surface_at_near_plane",
+            "a quad 0.1% beyond the near plane over the middle of the image",
+            scene("surface_at_near_plane", SIZE, m, base_lights(), cam),
+            pipelines(),
+        ));
+    }
+
+    // Grids.
+    cases.push(case(
+        "grid_1x1x1",
+        "one cluster holding every light",
+        lit_room("grid_1x1x1", SIZE, lattice(64, 2.0)),
+        with_grid((1, 1, 1)),
+    ));
+    cases.push(case(
+        "grid_64x64x64",
+        "262144 clusters, most smaller than a pixel",
+        lit_room("grid_64x64x64", SIZE, lattice(64, 2.0)),
+        with_grid((64, 64, 64)),
+    ));
+    cases.push(case(
+        "dynamic_range_previous_frame",
+        "slices fitted to the previous frame's depth range: the deepest pixel sits on the far end",
+        lit_room("dynamic_range_previous_frame", SIZE, base_lights()),
+        with_slicing(
+            ZSlicing::DynamicRange {
+                source: DepthRangeSource::PreviousFrame,
+            },
+            "dynamic_previous",
+        ),
+    ));
+    cases.push(case(
+        "olsson_slices_run_out",
+        "Olsson's cubic slices at a 30 degree field of view: 12 slices end long before the far plane, the last holds the rest",
+        {
+            let m = room();
+            let eye = DVec3::new(0.0, 3.0, 7.0);
+            let cam = camera(
+                eye,
+                DVec3::new(0.0, 0.8, 0.0),
+                30.0,
+                0.1,
+                Scene::far_plane_for(&m.vertices, eye),
+            );
+            scene("olsson_slices_run_out", SIZE, m, base_lights(), cam)
+        },
+        with_slicing(ZSlicing::OlssonCubic, "olsson"),
+    ));
+    cases
+}

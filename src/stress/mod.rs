@@ -1,0 +1,275 @@
+//! `clusterlab stress`: adversarial cases (see `cases`) run on every pipeline they apply to,
+//! each checked for non-finite pixels, cluster indices outside the grid, lights left out of
+//! a cluster they touch, error against the reference, and GPU validation errors.
+
+mod cases;
+
+pub use cases::{Case, SIZE, all as cases};
+
+use serde::Serialize;
+
+use crate::compose::Composer;
+use crate::cpu::clusters::{self as cpu, Grid};
+use crate::gpu::Gpu;
+use crate::render::Renderer;
+use crate::run::{CellOptions, run_scene};
+use crate::scene::Scene;
+use crate::variant::{LoadedVariant, NormalCodec, Variant};
+
+/// One check of one run.
+#[derive(Clone, Debug, Serialize)]
+pub struct Check {
+    pub check: &'static str,
+    pub ok: bool,
+    /// What was found, and where when it failed.
+    pub detail: String,
+}
+
+/// A case run with one variant.
+#[derive(Clone, Debug, Serialize)]
+pub struct CaseRun {
+    pub case: String,
+    pub variant: String,
+    pub what: String,
+    pub ok: bool,
+    pub checks: Vec<Check>,
+}
+
+/// Largest 8-bit error a variant may have against the reference: 1 LSB when the G-buffer
+/// keeps full precision, more for the packed normal codecs (bounded by their angular error
+/// at 16 bits per component). Scissor deferred adds each light by blending; into a 16-bit
+/// float target (OpenGL) every blend rounds the sum to 11 bits, so its bound grows with the
+/// lights that overlap: 1 LSB per 32 lights (1000 lights at one point measure 17 LSB).
+pub fn error_bound(v: &Variant, hdr_format: wgpu::TextureFormat, lights: usize) -> u32 {
+    let accumulation = if v.pipeline == crate::variant::Pipeline::DeferredScissor
+        && hdr_format == wgpu::TextureFormat::Rgba16Float
+    {
+        (lights / 32) as u32
+    } else {
+        0
+    };
+    let codec = if !v.pipeline.is_deferred() {
+        1
+    } else {
+        match v.normal_codec() {
+            NormalCodec::Xyz => 1,
+            NormalCodec::Octahedral { .. } | NormalCodec::Polar { .. } => 2,
+            NormalCodec::Spheremap { .. } => 3,
+        }
+    };
+    codec + accumulation
+}
+
+fn check(check: &'static str, ok: bool, detail: String) -> Check {
+    Check { check, ok, detail }
+}
+
+/// Run one case with one variant and check everything.
+pub fn run_case(gpu: &Gpu, composer: &Composer, case: &Case, name: &str, v: &Variant) -> CaseRun {
+    let loaded = LoadedVariant {
+        name: name.to_string(),
+        path: "built-in".into(),
+        variant: v.clone(),
+    };
+    let mut checks = Vec::new();
+    let cell = run_scene(
+        gpu,
+        composer,
+        &loaded,
+        &case.scene,
+        CellOptions {
+            warmup: 0,
+            frames: 1,
+            ..Default::default()
+        },
+    );
+    match cell {
+        Err(e) => checks.push(check("renders", false, e.to_string())),
+        Ok(cell) => {
+            checks.push(check("renders", true, "no GPU validation error".into()));
+            let f = &cell.frame;
+            let w = f.width as usize;
+            let bad: Vec<usize> = (0..f.hdr.len())
+                .filter(|&i| f.hdr[i][..3].iter().any(|c| !c.is_finite()))
+                .collect();
+            checks.push(check(
+                "finite",
+                bad.is_empty(),
+                match bad.first() {
+                    None => "no NaN or infinite pixel".into(),
+                    Some(&i) => format!(
+                        "{} pixels not finite; first at pixel ({}, {}): {:?}",
+                        bad.len(),
+                        i % w,
+                        i / w,
+                        &f.hdr[i][..3]
+                    ),
+                },
+            ));
+            let stats = cell.report.stats.clone().unwrap_or_default();
+            if v.pipeline.is_clustered() {
+                checks.push(check(
+                    "cluster index in grid",
+                    stats.clusters_out_of_grid == 0,
+                    match stats.first_out_of_grid {
+                        None => format!("every pixel's cluster is one of {}", stats.clusters),
+                        Some([x, y, c]) => format!(
+                            "{} pixels looked up a cluster outside the grid; first at pixel ({x}, {y}): cluster {c} of {}",
+                            stats.clusters_out_of_grid, stats.clusters
+                        ),
+                    },
+                ));
+                checks.push(match missing_light(gpu, composer, v, &case.scene) {
+                    Ok(None) => check(
+                        "no dropped light",
+                        stats.dropped_lights == 0,
+                        format!(
+                            "{} dropped; every light that touches a cluster is in its list",
+                            stats.dropped_lights
+                        ),
+                    ),
+                    Ok(Some(why)) => check("no dropped light", false, why),
+                    Err(e) => check("no dropped light", false, e),
+                });
+            }
+            let bound = error_bound(v, gpu.hdr_format, case.scene.lights.len());
+            let e = &cell.report.error;
+            let worst = (0..f.ldr.len())
+                .max_by_key(|&i| {
+                    (0..3)
+                        .map(|c| f.ldr[i][c].abs_diff(cell.reference.ldr[i][c]))
+                        .max()
+                        .unwrap_or(0)
+                })
+                .unwrap_or(0);
+            checks.push(check(
+                "error within bound",
+                e.max_abs_8bit <= bound,
+                format!(
+                    "max {} LSB (bound {bound}), {} pixels over 1 LSB; worst at pixel ({}, {}): GPU {:?}, reference {:?}",
+                    e.max_abs_8bit,
+                    e.pixels_over_1lsb,
+                    worst % w,
+                    worst / w,
+                    &f.ldr.get(worst).map(|p| [p[0], p[1], p[2]]),
+                    cell.reference.ldr.get(worst)
+                ),
+            ));
+        }
+    }
+    CaseRun {
+        case: case.name.to_string(),
+        variant: name.to_string(),
+        what: case.what.to_string(),
+        ok: checks.iter().all(|c| c.ok),
+        checks,
+    }
+}
+
+/// A light that clearly touches a cluster (still with its radius 1e-4 smaller) but is not in
+/// the GPU's list for it, named with the cluster; None when there is none.
+fn missing_light(
+    gpu: &Gpu,
+    composer: &Composer,
+    v: &Variant,
+    scene: &Scene,
+) -> Result<Option<String>, String> {
+    let mut r = Renderer::new(gpu, composer, v, scene).map_err(|e| e.to_string())?;
+    // Twice: with the previous frame's depth range, the second frame's lists are built on
+    // the range the first left, which is the range read back after it.
+    for _ in 0..2 {
+        r.render().map_err(|e| e.to_string())?;
+    }
+    let lists = r
+        .cluster_lists()
+        .map_err(|e| e.to_string())?
+        .ok_or("no cluster lists")?;
+    let range = r
+        .cluster_range()
+        .map_err(|e| e.to_string())?
+        .ok_or("no cluster range")?;
+    let mut grid = Grid::of(v, scene);
+    grid.range = (range.near as f64, range.far as f64);
+    let bounds = cpu::cluster_bounds(&grid);
+    let lights = cpu::view_lights(&scene.lights, scene.camera.view());
+    for (c, b) in bounds.iter().enumerate() {
+        let Some(b) = b else { continue };
+        let listed = lists.list(c);
+        let (x, y) = (c as u32 % grid.x, (c as u32 / grid.x) % grid.y);
+        for (i, &(center, radius)) in lights.iter().enumerate() {
+            if !listed.contains(&(i as u32))
+                && cpu::sphere_touches_cluster(&grid, center, radius * (1.0 - 1e-4), b, x, y)
+            {
+                let k = c as u32 / (grid.x * grid.y);
+                return Ok(Some(format!(
+                    "light {i} (view-space centre {:.4?}, radius {radius}) touches cluster {c} (tile {x}, {y}, slice {k}) but is not in its list of {}",
+                    center.to_array(),
+                    listed.len()
+                )));
+            }
+        }
+    }
+    Ok(None)
+}
+
+/// Run every case whose name contains `filter` (all without one) on each of its variants.
+pub fn run(
+    gpu: &Gpu,
+    composer: &Composer,
+    filter: Option<&str>,
+    progress: &dyn Fn(&str),
+) -> Vec<CaseRun> {
+    let mut out = Vec::new();
+    for case in cases() {
+        if filter.is_some_and(|f| !case.name.contains(f)) {
+            continue;
+        }
+        for (name, v) in &case.variants {
+            progress(&format!("{} / {name}", case.name));
+            let run = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+                run_case(gpu, composer, &case, name, v)
+            }))
+            .unwrap_or_else(|_| CaseRun {
+                case: case.name.to_string(),
+                variant: name.clone(),
+                what: case.what.to_string(),
+                ok: false,
+                checks: vec![check("renders", false, "panicked".into())],
+            });
+            out.push(run);
+        }
+    }
+    out
+}
+
+/// One line per run, and the failed checks under it.
+pub fn report(runs: &[CaseRun]) -> String {
+    use std::fmt::Write as _;
+    let mut s = String::new();
+    let mut case = "";
+    for r in runs {
+        if r.case != case {
+            case = &r.case;
+            let _ = writeln!(s, "{}: {}", r.case, r.what);
+        }
+        let _ = writeln!(
+            s,
+            "  {} {}",
+            if r.ok { "ok    " } else { "FAILED" },
+            r.variant
+        );
+        for c in r.checks.iter().filter(|c| !c.ok) {
+            let _ = writeln!(s, "         {}: {}", c.check, c.detail);
+        }
+    }
+    let failed = runs.iter().filter(|r| !r.ok).count();
+    let cases: std::collections::BTreeSet<&str> = runs.iter().map(|r| r.case.as_str()).collect();
+    let _ = writeln!(
+        s,
+        "{} cases, {} runs, {} failed",
+        cases.len(),
+        runs.len(),
+        failed
+    );
+    s
+}

@@ -1,0 +1,68 @@
+//! The stress suite at its small sizes (as CI runs it): every adversarial case on every
+//! pipeline it applies to passes every check.
+
+mod common;
+
+use clusterlab::compose::Composer;
+use clusterlab::stress;
+
+#[test]
+fn the_stress_suite_passes() {
+    let gpu = common::gpu();
+    let runs = stress::run(&gpu, &Composer::default(), None, &|_| {});
+    let cases: std::collections::BTreeSet<&str> = runs.iter().map(|r| r.case.as_str()).collect();
+    assert!(cases.len() >= 30, "{} cases", cases.len());
+    for pipeline in [
+        "naive_forward",
+        "forward_plus",
+        "clustered_deferred",
+        "deferred_scissor",
+    ] {
+        assert!(runs.iter().any(|r| r.variant == pipeline), "{pipeline}");
+    }
+    let report = stress::report(&runs);
+    assert!(runs.iter().all(|r| r.ok), "{report}");
+}
+
+#[test]
+fn a_failed_check_names_the_case_and_where() {
+    // Lists capped at one light, where a thousand lights share a point: lights are left out.
+    let gpu = common::gpu();
+    let case = stress::cases()
+        .into_iter()
+        .find(|c| c.name == "many_lights_at_one_point")
+        .expect("case");
+    let mut v = case
+        .variants
+        .iter()
+        .find(|(n, _)| n == "forward_plus")
+        .unwrap()
+        .1
+        .clone();
+    v.clusters.as_mut().unwrap().lists =
+        clusterlab::variant::LightLists::Capped { max_per_cluster: 1 };
+    let run = stress::run_case(&gpu, &Composer::default(), &case, "capped", &v);
+    assert!(!run.ok);
+    let dropped = run
+        .checks
+        .iter()
+        .find(|c| c.check == "no dropped light")
+        .unwrap();
+    assert!(!dropped.ok);
+    assert!(
+        dropped.detail.contains("touches cluster") && dropped.detail.contains("light "),
+        "{}",
+        dropped.detail
+    );
+    let error = run
+        .checks
+        .iter()
+        .find(|c| c.check == "error within bound")
+        .unwrap();
+    assert!(
+        !error.ok && error.detail.contains("worst at pixel ("),
+        "{}",
+        error.detail
+    );
+    assert!(stress::report(&[run]).contains("many_lights_at_one_point"));
+}
