@@ -103,7 +103,9 @@ pub fn spheremap_decode(q: [u32; 2], bits: u32) -> DVec3 {
     DVec3::new(e.x * g, e.y * g, 1.0 - f / 2.0).normalize()
 }
 
-/// Angle in degrees between two unit vectors.
+/// Angle in degrees between two directions. atan2 of the cross and dot products stays exact
+/// for tiny angles and for vectors a few ULP off unit length (f32 decodes), where
+/// acos(dot) would read a length error of 1e-7 as an angle of 0.03 degrees.
 pub fn angle_degrees(a: DVec3, b: DVec3) -> f64 {
-    a.dot(b).clamp(-1.0, 1.0).acos().to_degrees()
+    a.cross(b).length().atan2(a.dot(b)).to_degrees()
 }

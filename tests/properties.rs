@@ -1,0 +1,343 @@
+//! Property tests (proptest) on the CPU twins and, through the twin kernels, the GPU: codec
+//! round trips, z-slicing, cluster bounds and the light-cluster test, for any input.
+
+mod common;
+
+use clusterlab::compose::Composer;
+use clusterlab::cpu::clusters::{self as cpu, Grid};
+use clusterlab::cpu::normals as codec;
+use clusterlab::cpu::zslice::{self, Scheme};
+use clusterlab::twins::{SliceParams, gpu_codecs, gpu_zslices};
+use glam::DVec3;
+use proptest::prelude::*;
+use proptest::test_runner::{Config, TestRunner};
+
+/// A component: anything in [-1, 1], often exactly 0, -0 or +-1 (the codecs' edge cases).
+fn component() -> impl Strategy<Value = f64> {
+    prop_oneof![
+        3 => -1.0..=1.0f64,
+        1 => Just(0.0),
+        1 => Just(-0.0),
+        1 => Just(1.0),
+        1 => Just(-1.0),
+        1 => -1e-6..1e-6f64,
+    ]
+}
+
+/// Any unit vector, signed zeros and axis directions included.
+fn unit() -> impl Strategy<Value = DVec3> {
+    (component(), component(), component())
+        .prop_filter("not zero", |(x, y, z)| x * x + y * y + z * z > 1e-20)
+        .prop_map(|(x, y, z)| DVec3::new(x, y, z).normalize())
+}
+
+/// Angle of one code step at `bits` bits per component, in degrees.
+fn step_degrees(bits: u32) -> f64 {
+    (4.0 / ((1u64 << bits) - 1) as f64).to_degrees()
+}
+
+/// The worst angle each codec may turn a normal by at `bits` bits per component. The
+/// spheremap is singular at (0, 0, -1) (a normal facing straight away from the camera), so
+/// its bound holds for n.z >= -0.9 only.
+fn roundtrips(n: DVec3, bits: u32) -> Vec<(&'static str, DVec3, f64)> {
+    let mut out = vec![
+        (
+            "octahedral",
+            codec::oct_decode(codec::oct_encode(n, bits), bits),
+            1.5 * step_degrees(bits),
+        ),
+        (
+            "octahedral precise",
+            codec::oct_decode(codec::oct_encode_precise(n, bits), bits),
+            step_degrees(bits),
+        ),
+        (
+            "polar",
+            codec::polar_decode(codec::polar_encode(n, bits), bits),
+            step_degrees(bits),
+        ),
+    ];
+    if n.z >= -0.9 {
+        out.push((
+            "spheremap",
+            codec::spheremap_decode(codec::spheremap_encode(n, bits), bits),
+            4.0 * step_degrees(bits),
+        ));
+    }
+    out
+}
+
+proptest! {
+    #![proptest_config(Config::with_cases(2000))]
+
+    #[test]
+    fn every_codec_round_trip_is_a_unit_vector_within_its_angle(n in unit(), bits in prop_oneof![Just(8u32), Just(10), Just(12), Just(16)]) {
+        for (name, back, bound) in roundtrips(n, bits) {
+            prop_assert!((back.length() - 1.0).abs() < 1e-9, "{name}: |{back:?}| at {bits} bits");
+            let angle = codec::angle_degrees(n, back);
+            prop_assert!(angle <= bound, "{name}: {n:?} turned {angle} degrees at {bits} bits (bound {bound})");
+        }
+    }
+
+    #[test]
+    fn signed_zeros_round_trip_alike(x in component(), y in component(), z in component(), bits in 8u32..=16) {
+        let n = DVec3::new(x, y, z);
+        prop_assume!(n.length_squared() > 1e-20);
+        let n = n.normalize();
+        // The same direction with every zero's sign flipped (polar's atan2 then lands on
+        // the other side of its seam: another code, the same direction).
+        let flip = |v: f64| if v == 0.0 { -v } else { v };
+        let m = DVec3::new(flip(n.x), flip(n.y), flip(n.z));
+        for ((name, a, bound), (_, b, _)) in roundtrips(n, bits).into_iter().zip(roundtrips(m, bits)) {
+            let apart = codec::angle_degrees(a, b);
+            prop_assert!(apart <= bound, "{name}: {n:?} and {m:?} decode {apart} degrees apart");
+        }
+    }
+}
+
+/// A scheme with its parameters, a near plane and a far plane.
+fn slicing() -> impl Strategy<Value = (Scheme, f64, f64, u32)> {
+    (
+        1e-4..10.0f64,
+        (1.5f64..1e6),
+        1u32..=64,
+        0u32..4,
+        (0.01f64..0.99),
+        (5.0f64..170.0),
+        1u32..=64,
+    )
+        .prop_map(|(near, ratio, slices, kind, split, fov, tiles_y)| {
+            let far = near * ratio;
+            let scheme = match kind {
+                0 => Scheme::Linear,
+                1 => Scheme::Exponential,
+                2 if slices >= 2 => Scheme::NearThenExponential {
+                    near_end: near + (far - near) * split,
+                },
+                2 => Scheme::Exponential,
+                _ => Scheme::Olsson {
+                    tan_half_fov_y: (fov.to_radians() / 2.0).tan(),
+                    tiles_y,
+                },
+            };
+            (scheme, near, far, slices)
+        })
+}
+
+fn grid_of(
+    scheme: Scheme,
+    near: f64,
+    far: f64,
+    slices: u32,
+    tan: f64,
+    aspect: f64,
+    tiles: (u32, u32),
+) -> Grid {
+    Grid {
+        x: tiles.0,
+        y: tiles.1,
+        z: slices,
+        scheme,
+        range: (near, far),
+        near,
+        far,
+        tan_half_fov_y: tan,
+        aspect,
+    }
+}
+
+proptest! {
+    #![proptest_config(Config::with_cases(1000))]
+
+    #[test]
+    fn z_slicing_is_monotone_and_covers_near_to_far((scheme, near, far, slices) in slicing(), a in 0.0..=1.0f64, b in 0.0..=1.0f64) {
+        let z = |t: f64| near + (far - near) * t;
+        let (lo, hi) = (z(a.min(b)), z(a.max(b)));
+        let (k_lo, k_hi) = (zslice::slice(scheme, lo, near, far, slices), zslice::slice(scheme, hi, near, far, slices));
+        prop_assert!(k_lo <= k_hi, "{scheme:?}: slice({lo}) = {k_lo} > slice({hi}) = {k_hi}");
+        prop_assert!(k_hi < slices);
+        prop_assert_eq!(zslice::slice(scheme, near, near, far, slices), 0);
+        // The grid's slices tile [near, far] without gaps, and each holds its depths.
+        let grid = grid_of(scheme, near, far, slices, 0.5, 1.5, (4, 4));
+        prop_assert_eq!(grid.slice_depths(0).0, near);
+        prop_assert_eq!(grid.slice_depths(slices - 1).1, far);
+        for k in 1..slices {
+            prop_assert_eq!(grid.slice_depths(k - 1).1, grid.slice_depths(k).0);
+        }
+        for depth in [lo, hi] {
+            let k = zslice::slice(scheme, depth, near, far, slices);
+            let (s, e) = grid.slice_depths(k);
+            let tol = 1e-9 * depth;
+            prop_assert!(s - tol <= depth && depth <= e + tol, "{scheme:?}: {depth} in slice {k} = [{s}, {e}]");
+        }
+    }
+}
+
+/// A camera and grid, and a point in its frustum given in NDC x, y and a depth fraction.
+fn frustum_point() -> impl Strategy<Value = (Grid, DVec3)> {
+    (
+        slicing(),
+        (10.0f64..150.0),
+        (0.3f64..3.0),
+        (1u32..=32, 1u32..=32),
+        (-1.0..=1.0f64, -1.0..=1.0f64, 0.0..=1.0f64),
+    )
+        .prop_map(
+            |((scheme, near, far, slices), fov, aspect, tiles, (x, y, t))| {
+                let tan = (fov.to_radians() / 2.0).tan();
+                let scheme = match scheme {
+                    Scheme::Olsson { .. } => Scheme::Olsson {
+                        tan_half_fov_y: tan,
+                        tiles_y: tiles.1,
+                    },
+                    s => s,
+                };
+                let grid = grid_of(scheme, near, far, slices, tan, aspect, tiles);
+                let z = near + (far - near) * t;
+                (grid, DVec3::new(x * tan * aspect * z, y * tan * z, -z))
+            },
+        )
+}
+
+/// The cluster a view-space point maps to (as the shaders pick it from the pixel).
+fn cluster_of(g: &Grid, p: DVec3) -> (u32, u32, u32) {
+    let z = -p.z;
+    let ndc_x = p.x / (z * g.tan_half_fov_y * g.aspect);
+    let ndc_y = p.y / (z * g.tan_half_fov_y);
+    let tile = |t: f64, n: u32| ((t * n as f64).floor() as i64).clamp(0, n as i64 - 1) as u32;
+    (
+        tile((ndc_x + 1.0) / 2.0, g.x),
+        tile((1.0 - ndc_y) / 2.0, g.y),
+        zslice::slice(g.scheme, z, g.range.0, g.range.1, g.z),
+    )
+}
+
+proptest! {
+    #![proptest_config(Config::with_cases(1000))]
+
+    #[test]
+    fn cluster_bounds_hold_every_point_that_maps_into_the_cluster((grid, p) in frustum_point()) {
+        let (x, y, k) = cluster_of(&grid, p);
+        let b = cpu::cluster_bounds(&grid)[grid.index(x, y, k)].expect("every cluster has a box");
+        prop_assert!(
+            p.cmpge(b.min).all() && p.cmple(b.max).all(),
+            "{p:?} maps to cluster ({x}, {y}, {k}) but lies outside {b:?}"
+        );
+    }
+
+    #[test]
+    fn the_light_test_never_rejects_a_light_that_touches_the_cluster(
+        (grid, p) in frustum_point(),
+        offset in (-1.0..=1.0f64, -1.0..=1.0f64, -1.0..=1.0f64),
+        scale in 0.0..2.0f64,
+    ) {
+        // A sphere that holds a point of the cluster: centred near it, radius reaching it.
+        let (x, y, k) = cluster_of(&grid, p);
+        let b = cpu::cluster_bounds(&grid)[grid.index(x, y, k)].expect("box");
+        let size = (b.max - b.min).length().max(1e-6);
+        let center = p + DVec3::new(offset.0, offset.1, offset.2) * size * scale;
+        let radius = center.distance(p) * (1.0 + 1e-9) + 1e-12;
+        prop_assert!(
+            cpu::sphere_touches_cluster(&grid, center, radius, &b, x, y),
+            "light at {center:?} radius {radius} holds {p:?} of cluster ({x}, {y}, {k}) but is rejected"
+        );
+    }
+}
+
+/// The GPU's codecs and z-slicing on batches of generated inputs.
+#[test]
+fn gpu_kernels_keep_the_properties() {
+    let gpu = common::gpu();
+    let composer = Composer::default();
+    let mut runner = TestRunner::new(Config::with_cases(12));
+    let batch = proptest::collection::vec(unit(), 256);
+    runner
+        .run(
+            &(batch, prop_oneof![Just(8u32), Just(12), Just(16)]),
+            |(normals, bits)| {
+                let input: Vec<[f32; 4]> = normals
+                    .iter()
+                    .map(|n| [n.x as f32, n.y as f32, n.z as f32, 0.0])
+                    .collect();
+                let zeros = vec![[0u32; 2]; normals.len()];
+                let codes = gpu_codecs(&gpu, &composer, bits, &input, &zeros)
+                    .expect("codec kernel")
+                    .codes;
+                // Decode the GPU's octahedral and polar codes on the GPU.
+                for (which, slot, bound) in [
+                    ("octahedral", 0usize, 1.5 * step_degrees(bits)),
+                    // WGSL lets acos and atan2 be off by 4096 ULP (about 1e-3 rad).
+                    ("polar", 2, step_degrees(bits) + 0.06),
+                ] {
+                    let mine: Vec<[u32; 2]> = codes.iter().map(|c| c[slot]).collect();
+                    let decoded = gpu_codecs(&gpu, &composer, bits, &input, &mine)
+                        .expect("codec kernel")
+                        .decoded;
+                    for (n, d) in normals.iter().zip(&decoded) {
+                        let back = d[if which == "octahedral" { 0 } else { 1 }];
+                        let back = DVec3::new(back[0] as f64, back[1] as f64, back[2] as f64);
+                        prop_assert!((back.length() - 1.0).abs() < 1e-5, "{which}: |{back:?}|");
+                        let angle = codec::angle_degrees(*n, back);
+                        // f32 arithmetic adds rounding of a few 1e-5 degrees.
+                        prop_assert!(
+                            angle <= bound + 1e-4,
+                            "{which}: {n:?} turned {angle} at {bits} bits"
+                        );
+                    }
+                }
+                Ok(())
+            },
+        )
+        .unwrap_or_else(|e| panic!("{e}"));
+
+    let mut runner = TestRunner::new(Config::with_cases(12));
+    runner
+        .run(
+            &(slicing(), proptest::collection::vec(0.0..=1.0f64, 256)),
+            |((scheme, near, far, slices), ts)| {
+                let (near, far) = (near as f32, far as f32);
+                let mut depths: Vec<f32> =
+                    ts.iter().map(|t| near + (far - near) * *t as f32).collect();
+                depths.push(near);
+                depths.push(far);
+                depths.sort_by(f32::total_cmp);
+                let (near_end, tan, tiles_y) = match scheme {
+                    Scheme::NearThenExponential { near_end } => (near_end as f32, 0.5, 8),
+                    Scheme::Olsson {
+                        tan_half_fov_y,
+                        tiles_y,
+                    } => (near * 2.0, tan_half_fov_y as f32, tiles_y),
+                    _ => (near * 2.0, 0.5, 8),
+                };
+                let params = SliceParams {
+                    near,
+                    far,
+                    near_end,
+                    tan_half_fov_y: tan,
+                    slices,
+                    tiles_y,
+                    count: 0,
+                    _pad: 0,
+                };
+                let out = gpu_zslices(&gpu, &composer, params, &depths).expect("z-slice kernel");
+                for scheme_index in 0..4 {
+                    // A near slice needs another after it (variants check z >= 2).
+                    if scheme_index == 2 && slices < 2 {
+                        continue;
+                    }
+                    let ks: Vec<u32> = out.slices.iter().map(|s| s[scheme_index]).collect();
+                    prop_assert!(
+                        ks.windows(2).all(|w| w[0] <= w[1]),
+                        "scheme {scheme_index}: not monotone: {ks:?}"
+                    );
+                    prop_assert!(
+                        ks.iter().all(|&k| k < slices),
+                        "scheme {scheme_index}: outside the grid"
+                    );
+                    prop_assert_eq!(ks[0], 0, "scheme {}: near is not in slice 0", scheme_index);
+                }
+                Ok(())
+            },
+        )
+        .unwrap_or_else(|e| panic!("{e}"));
+}
