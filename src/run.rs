@@ -50,6 +50,9 @@ pub struct RenderReport {
     pub stats: Option<FrameStats>,
     /// CPU milliseconds spent in the frame outside the GPU (light assignment on the CPU).
     pub cpu_ms: Map<String, Value>,
+    /// Passes of the variant the last timed frame did not need and did not run (bloom_blur
+    /// there ran no workgroup: no pixel passed the threshold).
+    pub skipped_passes: Vec<String>,
     /// Files written, when an output folder was given.
     pub images: Vec<PathBuf>,
 }
@@ -213,6 +216,7 @@ pub fn run_scene(
         error,
         stats,
         cpu_ms,
+        skipped_passes: frame.skipped.clone(),
         images,
     };
     Ok(CellResult {

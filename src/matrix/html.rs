@@ -129,7 +129,7 @@ fn summary(h: &mut String, results: &Results) {
             "<h3>{}</h3><table><tr><th class=\"name\">variant</th><th>GPU ms</th><th>spread</th>\
              <th>× naive</th><th>max 8-bit</th><th>PSNR dB</th><th>mean FLIP</th>\
              <th>useful / evaluated</th><th>bytes/px</th><th>cluster KiB</th><th>dropped</th>\
-             <th class=\"name\">vs baseline</th></tr>",
+             <th class=\"name\">skipped</th><th class=\"name\">vs baseline</th></tr>",
             esc(&group)
         );
         for c in cells {
@@ -144,7 +144,7 @@ fn row(h: &mut String, c: &CellRecord) {
     if let Some(why) = &c.failure {
         let _ = write!(
             h,
-            "<tr class=\"failed\"><td class=\"name\">{name}</td><td colspan=\"11\" class=\"name\"><span class=\"failure\">{}</span></td></tr>",
+            "<tr class=\"failed\"><td class=\"name\">{name}</td><td colspan=\"12\" class=\"name\"><span class=\"failure\">{}</span></td></tr>",
             esc(why)
         );
         return;
@@ -163,7 +163,7 @@ fn row(h: &mut String, c: &CellRecord) {
     let _ = write!(
         h,
         "<tr{class}><td class=\"name\">{name}</td><td>{:.2}</td><td>{spread}</td><td>{}</td>\
-         <td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td class=\"name\">{}</td></tr>",
+         <td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td class=\"name\">{}</td><td class=\"name\">{}</td></tr>",
         c.total_ms().unwrap_or(f64::NAN),
         c.speedup_vs_naive
             .map_or("–".into(), |x| format!("{x:.1}×")),
@@ -183,6 +183,7 @@ fn row(h: &mut String, c: &CellRecord) {
             s.cluster_bytes as f64 / 1024.0
         )),
         s.map_or("–".into(), |s| s.dropped_lights.to_string()),
+        esc(&c.skipped_passes.join(", ")),
         c.vs_baseline.as_ref().map_or(String::new(), |b| format!(
             "time ×{:.2}, max8 {:+}, RMSE8 {:+.3}",
             b.time_ratio, b.max_abs_8bit_change, b.rmse_8bit_change

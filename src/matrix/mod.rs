@@ -54,6 +54,9 @@ pub struct CellRecord {
     pub pareto: bool,
     /// Change against `--baseline` (a cell with the same id there).
     pub vs_baseline: Option<BaselineChange>,
+    /// Passes the last timed frame skipped (not needed by this scene and variant).
+    #[serde(default)]
+    pub skipped_passes: Vec<String>,
 }
 
 #[derive(Clone, Debug, Default, Serialize, Deserialize)]
@@ -98,6 +101,7 @@ impl CellRecord {
             speedup_vs_naive: None,
             pareto: false,
             vs_baseline: None,
+            skipped_passes: Vec::new(),
         }
     }
 }
@@ -316,6 +320,7 @@ fn run_one(
         speedup_vs_naive: None,
         pareto: false,
         vs_baseline: None,
+        skipped_passes: r.skipped_passes,
     }
 }
 

@@ -17,10 +17,12 @@ pub enum Sweep {
     Radius(Vec<(f32, f32)>),
     /// Cluster grids; applies to clustered variants only.
     Grid(Vec<(u32, u32, u32)>),
+    /// `skip_unneeded` on and off: what skipping saves on the same frame.
+    Skipping(Vec<bool>),
 }
 
-/// Parse `lights=64,256`, `radius=1,2..4` (a single value r means r..r) or
-/// `grid=16x9x24,32x18x48`.
+/// Parse `lights=64,256`, `radius=1,2..4` (a single value r means r..r),
+/// `grid=16x9x24,32x18x48` or `skipping=on,off`.
 pub fn parse_sweep(s: &str) -> Result<Sweep, String> {
     let (name, values) = s
         .split_once('=')
@@ -81,8 +83,17 @@ pub fn parse_sweep(s: &str) -> Result<Sweep, String> {
             })
             .collect::<Result<_, _>>()
             .map(Sweep::Grid),
+        "skipping" => items
+            .iter()
+            .map(|v| match *v {
+                "on" => Ok(true),
+                "off" => Ok(false),
+                _ => Err(bad(v, "on or off")),
+            })
+            .collect::<Result<_, _>>()
+            .map(Sweep::Skipping),
         other => Err(format!(
-            "`{other}` cannot be swept; sweep lights, radius or grid"
+            "`{other}` cannot be swept; sweep lights, radius, grid or skipping"
         )),
     }
 }
@@ -274,6 +285,7 @@ struct Point {
     lights: Option<u32>,
     radius: Option<(f32, f32)>,
     grid: Option<(u32, u32, u32)>,
+    skipping: Option<bool>,
 }
 
 fn sweep_points(sweeps: &[Sweep]) -> Vec<Point> {
@@ -292,6 +304,10 @@ fn sweep_points(sweeps: &[Sweep]) -> Vec<Point> {
                 })),
                 Sweep::Grid(v) => next.extend(v.iter().map(|&g| Point {
                     grid: Some(g),
+                    ..p.clone()
+                })),
+                Sweep::Skipping(v) => next.extend(v.iter().map(|&on| Point {
+                    skipping: Some(on),
                     ..p.clone()
                 })),
             }
@@ -320,6 +336,12 @@ fn make_cell(
     }
     let mut loaded = entry.loaded.clone();
     let mut grid = None;
+    if let Some(on) = point.skipping {
+        sweep.insert("skipping".into(), if on { "on" } else { "off" }.into());
+        if let Ok(v) = &mut loaded {
+            v.variant.skip_unneeded = on;
+        }
+    }
     // A grid sweep leaves unclustered variants alone: their cells for every grid share one
     // id, and `expand` keeps the first.
     if let Ok(v) = &mut loaded
@@ -511,7 +533,8 @@ mod tests {
             ("radius=4..2", "MIN is above MAX"),
             ("grid=16x9", "is not a grid XxYxZ"),
             ("grid=0x1x1", "whole numbers >= 1"),
-            ("fov=60", "sweep lights, radius or grid"),
+            ("fov=60", "sweep lights, radius, grid or skipping"),
+            ("skipping=maybe", "is not on or off"),
         ] {
             let e = parse_sweep(bad).unwrap_err();
             assert!(e.contains(says), "{bad}: {e}");

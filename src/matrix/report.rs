@@ -71,6 +71,7 @@ fn csv(results: &Results) -> Result<Vec<u8>, String> {
         "frame_bytes_per_pixel",
         "cluster_bytes",
         "passes",
+        "skipped_passes",
     ];
     w.write_record(header).map_err(|e| e.to_string())?;
     for c in &results.cells {
@@ -123,6 +124,7 @@ fn csv(results: &Results) -> Result<Vec<u8>, String> {
             opt(st.map(|s| s.frame_bytes_per_pixel.to_string())),
             opt(st.map(|s| s.cluster_bytes.to_string())),
             passes.join(";"),
+            c.skipped_passes.join(";"),
         ];
         w.write_record(&row).map_err(|e| e.to_string())?;
     }

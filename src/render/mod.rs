@@ -76,6 +76,8 @@ pub struct FrameOutput {
     pub wall_ms: f64,
     /// CPU light assignment time, for variants with `assignment: Cpu`.
     pub cpu_assign_ms: Option<f64>,
+    /// Passes of the variant this frame did not run (see `Variant::skip_unneeded`).
+    pub skipped: Vec<String>,
 }
 
 /// Exact counters of a frame, from an instrumented run of it.
@@ -223,6 +225,38 @@ pub struct Renderer<'g> {
     bounds_built: bool,
     cpu_assignment: Option<CpuAssignment>,
     reallocations: u32,
+    skips: Skips,
+    /// Frames rendered (not counting instrumented ones).
+    frames_done: u32,
+}
+
+/// What this renderer's frames may leave out (all false when the variant skips nothing).
+#[derive(Clone, Debug, Default)]
+struct Skips {
+    /// The scene has no lights: no clustering at all.
+    no_lights: bool,
+    /// Neither lights nor camera move: after two frames (the second settles a depth range
+    /// taken from the previous frame) the lists, boxes and range stay valid.
+    static_scene: bool,
+    /// Passes left out of every frame (motion blur with a still camera).
+    always: Vec<&'static str>,
+    /// Skipping is on at all.
+    on: bool,
+}
+
+/// The passes that build clusters and their light lists.
+fn builds_clusters(name: &str) -> bool {
+    matches!(
+        name,
+        "depth_range" | "mark_active" | "cluster_bounds" | "light_assign"
+    )
+}
+
+/// What running a frame returned.
+struct FrameRun {
+    timings: Timings,
+    cpu_ms: Option<f64>,
+    skipped: Vec<String>,
 }
 
 /// Lights per row of the per-light dispatches (`LIGHTS_PER_ROW` in light_assign.wesl).
@@ -243,7 +277,19 @@ impl<'g> Renderer<'g> {
     ) -> Result<Self, RenderError> {
         let (width, height) = (scene.params.width, scene.params.height);
         gpu.check_size(width, height)?;
-        let passes = compose::passes(variant);
+        let mut passes = compose::passes(variant);
+        let still_camera = scene.camera == scene.prev_camera;
+        let skips = Skips {
+            no_lights: variant.skip_unneeded && scene.lights.is_empty(),
+            static_scene: variant.skip_unneeded && still_camera && !scene.lights_move,
+            always: if variant.skip_unneeded && still_camera {
+                vec!["motion_blur"]
+            } else {
+                vec![]
+            },
+            on: variant.skip_unneeded,
+        };
+        passes.retain(|p| !skips.always.contains(&p.name));
         if let Some(p) = passes.iter().find(|p| !runnable(p.name)) {
             return Err(RenderError::NotRunnable(format!(
                 "pass `{}` composes and validates, but this version of clusterlab cannot run it yet",
@@ -412,6 +458,8 @@ impl<'g> Renderer<'g> {
                 bounds_built: false,
                 cpu_assignment: None,
                 reallocations: 0,
+                skips,
+                frames_done: 0,
             }
         })?;
         renderer.remake_cluster_groups();
@@ -572,7 +620,15 @@ impl<'g> Renderer<'g> {
     /// Render one frame (timed) and read back its images.
     pub fn render(&mut self) -> Result<FrameOutput, RenderError> {
         let start = Instant::now();
-        let (timings, cpu_assign_ms) = self.run_fitted(false)?;
+        let FrameRun {
+            timings,
+            cpu_ms: cpu_assign_ms,
+            mut skipped,
+        } = self.run_fitted(false)?;
+        self.frames_done += 1;
+        if self.post.blur_skipped(self.gpu)? {
+            skipped.push("bloom_blur".into());
+        }
         let wall_ms = start.elapsed().as_secs_f64() * 1e3;
         let hdr = read_hdr(self.gpu, self.post.output(&self.targets.hdr))?;
         let ldr = read_texture(self.gpu, &self.targets.ldr, 4)?;
@@ -584,6 +640,7 @@ impl<'g> Renderer<'g> {
             timings,
             wall_ms,
             cpu_assign_ms,
+            skipped,
         })
     }
 
@@ -713,7 +770,7 @@ impl<'g> Renderer<'g> {
     /// Run the frame until its light lists fit: the index buffer grows to the exact total a
     /// frame reports, so one re-run fits; lists that still do not fit are an error, never a
     /// picture with lights missing.
-    fn run_fitted(&mut self, instrumented: bool) -> Result<(Timings, Option<f64>), RenderError> {
+    fn run_fitted(&mut self, instrumented: bool) -> Result<FrameRun, RenderError> {
         let mut frame = self.run_frame(instrumented)?;
         let mut runs = 1;
         while self.grow_lists_if_needed()? {
@@ -728,9 +785,30 @@ impl<'g> Renderer<'g> {
         Ok(frame)
     }
 
-    /// Encode and run every pass of the frame; returns pass timings and the CPU assignment
-    /// time.
-    fn run_frame(&mut self, instrumented: bool) -> Result<(Timings, Option<f64>), RenderError> {
+    /// Whether this frame can leave out pass `name`.
+    fn skips_pass(&self, name: &str, instrumented: bool) -> bool {
+        let s = &self.skips;
+        if !s.on {
+            return false;
+        }
+        if s.no_lights && builds_clusters(name) {
+            return true;
+        }
+        // Instrumented frames rebuild the lists: their counters come from assignment.
+        if s.static_scene && !instrumented && self.frames_done >= 2 && builds_clusters(name) {
+            return true;
+        }
+        // Boxes depend on the projection, the size and the z-range, and with sample bounds
+        // on this frame's depth.
+        let clusters = self.variant.clusters();
+        let static_bounds =
+            !matches!(clusters.slicing, ZSlicing::DynamicRange { .. }) && !clusters.sample_bounds;
+        name == "cluster_bounds" && self.bounds_built && static_bounds
+    }
+
+    /// Encode and run every pass of the frame (but those it can skip); returns pass timings,
+    /// the CPU assignment time and the passes skipped.
+    fn run_frame(&mut self, instrumented: bool) -> Result<FrameRun, RenderError> {
         let gpu = self.gpu;
         // Counters start at zero in every run of a frame (a re-run must not add up twice).
         gpu.scoped("clearing counters", || {
@@ -745,18 +823,26 @@ impl<'g> Renderer<'g> {
             }
             gpu.queue.submit([e.finish()]);
         })?;
-        let cpu_ms = self.assign_on_cpu()?;
-        // Boxes depend on the projection, the size and the z-range, and with sample bounds
-        // on this frame's depth.
-        let clusters = self.variant.clusters();
-        let static_bounds =
-            !matches!(clusters.slicing, ZSlicing::DynamicRange { .. }) && !clusters.sample_bounds;
-        let skip_bounds = self.bounds_built && static_bounds;
+        // CPU assignment is the light_assign pass of its variants.
+        let cpu_ms = if self.skips_pass("light_assign", instrumented) {
+            None
+        } else {
+            self.assign_on_cpu()?
+        };
         let passes = self.passes.clone();
+        let mut skipped: Vec<String> = self.skips.always.iter().map(|s| s.to_string()).collect();
+        if self.cpu_assignment.is_some() && cpu_ms.is_none() {
+            skipped.push("light_assign".into());
+        }
+        for p in &passes {
+            if self.skips_pass(p.name, instrumented) && !skipped.iter().any(|s| s == p.name) {
+                skipped.push(p.name.to_string());
+            }
+        }
         let timings = gpu.scoped("rendering a frame", || -> Result<Timings, GpuError> {
             let mut runner = PassRunner::new(gpu, passes.len() as u32 + 2);
             for pass in &passes {
-                if pass.name == "cluster_bounds" && skip_bounds {
+                if self.skips_pass(pass.name, instrumented) {
                     continue;
                 }
                 runner.pass(pass.name, |encoder, slot| {
@@ -766,7 +852,11 @@ impl<'g> Renderer<'g> {
             runner.finish()
         })??;
         self.bounds_built = true;
-        Ok((timings, cpu_ms))
+        Ok(FrameRun {
+            timings,
+            cpu_ms,
+            skipped,
+        })
     }
 
     /// Build and upload the light lists on the CPU (variants with `assignment: Cpu`).

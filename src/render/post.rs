@@ -155,6 +155,10 @@ pub struct PostChain {
     output: Image,
     width: u32,
     height: u32,
+    /// The blur's workgroup counts, written by the bright pass.
+    blur_dispatch: Option<wgpu::Buffer>,
+    /// Dispatch the blur indirectly (skipping it when nothing is bright).
+    indirect_blur: bool,
 }
 
 /// The chain's inputs from the rest of the frame.
@@ -189,34 +193,18 @@ impl PostChain {
             image("bloom 0", Image::Bloom(0)),
             image("bloom 1", Image::Bloom(1)),
         ];
-        let io_layout = |extra: bool| {
-            let mut entries = vec![
-                texture_entry(0, wgpu::TextureSampleType::Float { filterable: false }),
-                wgpu::BindGroupLayoutEntry {
-                    binding: 1,
-                    visibility: wgpu::ShaderStages::COMPUTE,
-                    ty: wgpu::BindingType::StorageTexture {
-                        access: wgpu::StorageTextureAccess::WriteOnly,
-                        format: POST_FORMAT,
-                        view_dimension: wgpu::TextureViewDimension::D2,
-                    },
-                    count: None,
-                },
-            ];
-            if extra {
-                // Depth binds as unfilterable float, like the other passes that read it.
-                entries.push(texture_entry(
-                    2,
-                    wgpu::TextureSampleType::Float { filterable: false },
-                ));
-            }
-            gpu.device
-                .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-                    label: Some("post images"),
-                    entries: &entries,
-                })
-        };
-        let layouts = [io_layout(false), io_layout(true)];
+        let any_bloom = plan.iter().any(|s| s.pass == "bloom_threshold");
+        let blur_dispatch = any_bloom.then(|| {
+            gpu.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("bloom blur dispatch"),
+                size: 12,
+                usage: wgpu::BufferUsages::STORAGE
+                    | wgpu::BufferUsages::INDIRECT
+                    | wgpu::BufferUsages::COPY_DST
+                    | wgpu::BufferUsages::COPY_SRC,
+                mapped_at_creation: false,
+            })
+        });
         let mut modules = HashMap::new();
         let mut steps = Vec::new();
         for s in &plan {
@@ -226,13 +214,14 @@ impl PostChain {
             let module = modules
                 .entry(s.pass)
                 .or_insert_with(|| super::shader_module(gpu, composed));
-            let io = &layouts[s.extra.is_some() as usize];
+            let dispatch = dispatch_access(s.pass);
+            let io = io_layout(gpu, s.extra.is_some(), dispatch);
             let view_layout = uses_view(s.pass).then_some(inputs.frame_layout);
             let layout = gpu
                 .device
                 .create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
                     label: Some(s.pass),
-                    bind_group_layouts: &[view_layout, Some(io)],
+                    bind_group_layouts: &[view_layout, Some(&io)],
                     immediate_size: 0,
                 });
             let texture = |i: Image| -> &wgpu::Texture {
@@ -248,7 +237,7 @@ impl PostChain {
                 .flatten()
                 .map(|i| texture(i).create_view(&Default::default()))
                 .collect();
-            let entries: Vec<wgpu::BindGroupEntry> = views
+            let mut entries: Vec<wgpu::BindGroupEntry> = views
                 .iter()
                 .enumerate()
                 .map(|(b, view)| wgpu::BindGroupEntry {
@@ -256,12 +245,20 @@ impl PostChain {
                     resource: wgpu::BindingResource::TextureView(view),
                 })
                 .collect();
+            if dispatch.is_some()
+                && let Some(buffer) = &blur_dispatch
+            {
+                entries.push(wgpu::BindGroupEntry {
+                    binding: entries.len() as u32,
+                    resource: buffer.as_entire_binding(),
+                });
+            }
             steps.push(Step {
                 pass: s.pass,
                 pipeline: compute_pipeline(gpu, module, s.entry, &layout, s.entry),
                 group: gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
                     label: Some(s.entry),
-                    layout: io,
+                    layout: &io,
                     entries: &entries,
                 }),
             });
@@ -273,6 +270,20 @@ impl PostChain {
             output,
             width,
             height,
+            blur_dispatch,
+            indirect_blur: v.skip_unneeded,
+        }
+    }
+
+    /// Whether the last frame's bloom blur ran no workgroup (no pixel passed the
+    /// threshold). Reads back 4 bytes.
+    pub fn blur_skipped(&self, gpu: &Gpu) -> Result<bool, crate::gpu::GpuError> {
+        match &self.blur_dispatch {
+            Some(b) if self.indirect_blur => {
+                let x = crate::gpu::read_buffer(gpu, b, 0, 4)?;
+                Ok(bytemuck::cast_slice::<u8, u32>(&x)[0] == 0)
+            }
+            _ => Ok(false),
         }
     }
 
@@ -298,6 +309,11 @@ impl PostChain {
         slot: Option<TimestampSlot<'_>>,
         frame: &wgpu::BindGroup,
     ) {
+        if name == "bloom_threshold"
+            && let Some(b) = &self.blur_dispatch
+        {
+            encoder.clear_buffer(b, 0, None);
+        }
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some(name),
             timestamp_writes: TimestampSlot::compute(slot),
@@ -308,9 +324,60 @@ impl PostChain {
             }
             pass.set_bind_group(1, &s.group, &[]);
             pass.set_pipeline(&s.pipeline);
-            pass.dispatch_workgroups(self.width.div_ceil(8), self.height.div_ceil(8), 1);
+            match &self.blur_dispatch {
+                Some(b) if name == "bloom_blur" && self.indirect_blur => {
+                    pass.dispatch_workgroups_indirect(b, 0)
+                }
+                _ => pass.dispatch_workgroups(self.width.div_ceil(8), self.height.div_ceil(8), 1),
+            }
         }
     }
+}
+
+/// How a post pass uses the blur's dispatch buffer (bound after its images): the bright
+/// pass writes it, the composite reads it.
+fn dispatch_access(pass: &str) -> Option<bool> {
+    match pass {
+        "bloom_threshold" => Some(false),
+        "bloom_composite" => Some(true),
+        _ => None,
+    }
+}
+
+/// The images of a step: input (0), output (1), an extra texture (2) when it reads one,
+/// then the dispatch buffer when `dispatch` says how it uses it (read-only or not).
+fn io_layout(gpu: &Gpu, extra: bool, dispatch: Option<bool>) -> wgpu::BindGroupLayout {
+    let mut entries = vec![
+        texture_entry(0, wgpu::TextureSampleType::Float { filterable: false }),
+        wgpu::BindGroupLayoutEntry {
+            binding: 1,
+            visibility: wgpu::ShaderStages::COMPUTE,
+            ty: wgpu::BindingType::StorageTexture {
+                access: wgpu::StorageTextureAccess::WriteOnly,
+                format: POST_FORMAT,
+                view_dimension: wgpu::TextureViewDimension::D2,
+            },
+            count: None,
+        },
+    ];
+    if extra {
+        // Depth binds as unfilterable float, like the other passes that read it.
+        entries.push(texture_entry(
+            2,
+            wgpu::TextureSampleType::Float { filterable: false },
+        ));
+    }
+    if let Some(read_only) = dispatch {
+        entries.push(wgpu::BindGroupLayoutEntry {
+            visibility: wgpu::ShaderStages::COMPUTE,
+            ..super::resources::storage_entry(entries.len() as u32, read_only)
+        });
+    }
+    gpu.device
+        .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("post images"),
+            entries: &entries,
+        })
 }
 
 fn storage_image(gpu: &Gpu, label: &str, width: u32, height: u32) -> wgpu::Texture {

@@ -193,6 +193,8 @@ fn finish(
         lights,
         camera: cams.0,
         prev_camera: cams.1,
+        // Built-in lights orbit their base positions with time.
+        lights_move: true,
     }
 }
 

@@ -89,6 +89,9 @@ pub struct Scene {
     pub camera: Camera,
     /// The camera one frame earlier (`time - FRAME_DT`).
     pub prev_camera: Camera,
+    /// Whether the lights move from frame to frame (their lists must then be rebuilt every
+    /// frame); the geometry never moves.
+    pub lights_move: bool,
 }
 
 impl Scene {

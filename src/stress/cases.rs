@@ -212,6 +212,7 @@ fn scene(
         lights,
         camera: cam,
         prev_camera: cam,
+        lights_move: false,
     }
 }
 

@@ -35,6 +35,12 @@ pub struct Variant {
     pub post: Post,
     /// Replace the shaded image with a diagnostic view.
     pub debug_view: DebugView,
+    /// Skip the work a frame does not need: clustering with no lights, light assignment
+    /// when neither lights nor camera moved since the last frame, cluster bounds while the
+    /// projection holds, the bloom blur when no pixel passes the threshold (decided on the
+    /// GPU), motion blur when the camera did not move. `false` runs every pass every frame,
+    /// to measure what skipping saves.
+    pub skip_unneeded: bool,
 }
 
 impl Default for Variant {
@@ -50,6 +56,7 @@ impl Default for Variant {
             shading: Shading::default(),
             post: Post::default(),
             debug_view: DebugView::Off,
+            skip_unneeded: true,
         }
     }
 }

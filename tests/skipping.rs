@@ -1,0 +1,129 @@
+//! Skipping what a frame does not need changes the cost, never the picture: each skip is
+//! taken where it applies, listed in the frame, and the image equals the one rendered with
+//! `skip_unneeded: false`.
+
+mod common;
+
+use clusterlab::compose::Composer;
+use clusterlab::render::{FrameOutput, Renderer};
+use clusterlab::scene::{self, Scene};
+use clusterlab::variant::*;
+use common::{gpu, load, small};
+
+/// The third frame (skips that wait for a settled frame have begun), with skipping on and
+/// off.
+fn both(gpu: &clusterlab::gpu::Gpu, v: &Variant, scene: &Scene) -> (FrameOutput, FrameOutput) {
+    let run = |skip: bool| {
+        let mut v = v.clone();
+        v.skip_unneeded = skip;
+        let mut r = Renderer::new(gpu, &Composer::default(), &v, scene).expect("renderer");
+        r.render().unwrap();
+        r.render().unwrap();
+        r.render().unwrap()
+    };
+    (run(true), run(false))
+}
+
+/// Equal within f32 rounding: a motion blur of a still pixel averages N copies of it, which
+/// may round in the last place.
+fn assert_same_image(a: &FrameOutput, b: &FrameOutput, what: &str) {
+    let close = |x: &[f32; 4], y: &[f32; 4]| {
+        x.iter()
+            .zip(y)
+            .all(|(p, q)| (p - q).abs() <= 1e-6 * p.abs().max(q.abs()))
+    };
+    let differ: Vec<usize> = (0..a.hdr.len())
+        .filter(|&i| !close(&a.hdr[i], &b.hdr[i]))
+        .collect();
+    assert!(
+        differ.is_empty(),
+        "{what}: skipping changed {} pixels, first {:?}: {:?} against {:?}",
+        differ.len(),
+        differ.first(),
+        differ.first().map(|&i| a.hdr[i]),
+        differ.first().map(|&i| b.hdr[i])
+    );
+}
+
+fn skipped(f: &FrameOutput) -> Vec<&str> {
+    f.skipped.iter().map(String::as_str).collect()
+}
+
+fn static_scene(name: &str) -> Scene {
+    clusterlab::stress::cases()
+        .into_iter()
+        .find(|c| c.name == name)
+        .expect("stress case")
+        .scene
+}
+
+#[test]
+fn no_lights_means_no_clustering() {
+    let gpu = gpu();
+    let scene = scene::generate("empty", small("empty", 64, 36, None)).unwrap();
+    for name in [
+        "forward_plus",
+        "clustered_deferred_16x16x24",
+        "forward_plus_cpu_assignment",
+    ] {
+        let v = load(name).variant;
+        let (on, off) = both(&gpu, &v, &scene);
+        assert_same_image(&on, &off, name);
+        assert!(
+            skipped(&on).contains(&"light_assign"),
+            "{name}: {:?}",
+            on.skipped
+        );
+        assert!(on.timings.get("light_assign") == 0.0 && on.cpu_assign_ms.is_none());
+        assert!(off.skipped.is_empty(), "{name}: {:?}", off.skipped);
+    }
+}
+
+#[test]
+fn a_still_scene_keeps_its_lists_and_a_moving_one_rebuilds_them() {
+    let gpu = gpu();
+    let still = static_scene("one_light");
+    let v = load("clustered_deferred_16x16x24").variant;
+    let (on, off) = both(&gpu, &v, &still);
+    assert_same_image(&on, &off, "still");
+    assert!(skipped(&on).contains(&"light_assign"), "{:?}", on.skipped);
+    assert!(!off.timings.passes.is_empty() && off.timings.get("light_assign") >= 0.0);
+    assert!(off.timings.passes.iter().any(|(n, _)| n == "light_assign"));
+
+    let moving = scene::generate("atrium", small("atrium", 64, 36, Some(32))).unwrap();
+    let (on, _) = both(&gpu, &v, &moving);
+    assert!(!skipped(&on).contains(&"light_assign"), "{:?}", on.skipped);
+}
+
+#[test]
+fn bloom_blur_runs_only_when_a_pixel_is_bright() {
+    let gpu = gpu();
+    let scene = scene::generate("atrium", small("atrium", 64, 36, Some(32))).unwrap();
+    let mut v = load("clustered_deferred_bloom_separable").variant;
+    let (on, off) = both(&gpu, &v, &scene);
+    assert!(
+        !skipped(&on).contains(&"bloom_blur"),
+        "atrium has bright pixels"
+    );
+    assert_same_image(&on, &off, "bright");
+    v.post.bloom.as_mut().unwrap().threshold = 1e9;
+    let (on, off) = both(&gpu, &v, &scene);
+    assert!(skipped(&on).contains(&"bloom_blur"), "{:?}", on.skipped);
+    assert!(!skipped(&off).contains(&"bloom_blur"));
+    assert_same_image(&on, &off, "nothing bright");
+}
+
+#[test]
+fn motion_blur_needs_a_moving_camera() {
+    let gpu = gpu();
+    let v = load("clustered_deferred_motion_blur").variant;
+    let still = static_scene("one_light");
+    let (on, off) = both(&gpu, &v, &still);
+    assert!(skipped(&on).contains(&"motion_blur"));
+    assert!(on.timings.passes.iter().all(|(n, _)| n != "motion_blur"));
+    assert!(off.timings.passes.iter().any(|(n, _)| n == "motion_blur"));
+    assert_same_image(&on, &off, "still camera");
+    let moving = scene::generate("atrium", small("atrium", 64, 36, Some(32))).unwrap();
+    let (on, _) = both(&gpu, &v, &moving);
+    assert!(!skipped(&on).contains(&"motion_blur"));
+}
