@@ -341,3 +341,49 @@ fn gpu_kernels_keep_the_properties() {
         )
         .unwrap_or_else(|e| panic!("{e}"));
 }
+
+/// The GPU's light assignment never leaves a light out of a cluster it touches, for any
+/// set of lights (positions anywhere around and inside the frustum, any radius).
+#[test]
+fn gpu_light_assignment_keeps_every_touching_light() {
+    use clusterlab::scene::Light;
+    let gpu = common::gpu();
+    let composer = Composer::default();
+    let base = clusterlab::stress::cases()
+        .into_iter()
+        .find(|c| c.name == "one_light")
+        .expect("case")
+        .scene;
+    let light = (
+        (-12.0..12.0f64, -4.0..10.0f64, -12.0..14.0f64),
+        prop_oneof![1 => Just(0.0f32), 4 => 0.01..8.0f32],
+    )
+        .prop_map(|((x, y, z), radius)| Light {
+            position: [x as f32, y as f32, z as f32],
+            radius,
+            color: [1.0; 3],
+            intensity: 1.0,
+        });
+    let variants: Vec<_> = clusterlab::stress::cases()
+        .into_iter()
+        .find(|c| c.name == "one_light")
+        .expect("case")
+        .variants
+        .into_iter()
+        .filter(|(_, v)| v.pipeline.is_clustered())
+        .collect();
+    let mut runner = TestRunner::new(Config::with_cases(8));
+    runner
+        .run(&proptest::collection::vec(light, 1..200), |lights| {
+            let mut scene = base.clone();
+            scene.params.lights = lights.len() as u32;
+            scene.lights = lights;
+            for (name, v) in &variants {
+                let missing = clusterlab::stress::missing_light(&gpu, &composer, v, &scene)
+                    .map_err(TestCaseError::fail)?;
+                prop_assert!(missing.is_none(), "{name}: {}", missing.unwrap_or_default());
+            }
+            Ok(())
+        })
+        .unwrap_or_else(|e| panic!("{e}"));
+}

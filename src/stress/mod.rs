@@ -168,7 +168,7 @@ pub fn run_case(gpu: &Gpu, composer: &Composer, case: &Case, name: &str, v: &Var
 
 /// A light that clearly touches a cluster (still with its radius 1e-4 smaller) but is not in
 /// the GPU's list for it, named with the cluster; None when there is none.
-fn missing_light(
+pub fn missing_light(
     gpu: &Gpu,
     composer: &Composer,
     v: &Variant,
