@@ -257,16 +257,6 @@ fn quiet_mesa_wsi() {
     }
 }
 
-/// A variant argument: a path, or a name in variants/.
-fn variant_path(arg: &str) -> PathBuf {
-    let path = PathBuf::from(arg);
-    if path.exists() {
-        return path;
-    }
-    let in_folder = Path::new("variants").join(format!("{arg}.ron"));
-    if in_folder.exists() { in_folder } else { path }
-}
-
 fn validate(paths: &[PathBuf]) -> Result<bool, String> {
     let composer = Composer::default();
     let (mut ok, mut failed) = (0, 0);
@@ -309,7 +299,7 @@ fn validate(paths: &[PathBuf]) -> Result<bool, String> {
 }
 
 fn wgsl(arg: &str, only: Option<&str>) -> Result<bool, String> {
-    let loaded = variant::load(&variant_path(arg)).map_err(|e| e.to_string())?;
+    let loaded = variant::load(&variant::resolve(arg)).map_err(|e| e.to_string())?;
     let all = passes(&loaded.variant);
     let selected: Vec<_> = all
         .iter()
@@ -350,7 +340,7 @@ fn scenes() {
 }
 
 fn render(args: &RenderArgs) -> Result<bool, String> {
-    let mut loaded = variant::load(&variant_path(&args.variant)).map_err(|e| e.to_string())?;
+    let mut loaded = variant::load(&variant::resolve(&args.variant)).map_err(|e| e.to_string())?;
     if let Some(view) = args.debug_view {
         loaded.variant.debug_view = view;
         let problems = variant::check(&loaded.variant);

@@ -380,17 +380,25 @@ pub fn write_images(
     Ok(vec![image_path, heat_path])
 }
 
-/// Write an RGB8 PNG through a temporary file, so a failed write never leaves half a file.
+/// Write `bytes` to `path` through a temporary file in the same folder (named with this
+/// process's id), so an interrupted or failed write never leaves half a file.
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), RunError> {
+    let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("");
+    let tmp = path.with_extension(format!("{ext}.tmp{}", std::process::id()));
+    std::fs::write(&tmp, bytes)
+        .and_then(|()| std::fs::rename(&tmp, path))
+        .map_err(|e| {
+            let _ = std::fs::remove_file(&tmp);
+            RunError::Io(format!("{}: cannot write: {e}", path.display()))
+        })
+}
+
+/// Write an RGB8 PNG atomically.
 pub fn write_png(path: &Path, width: u32, height: u32, rgb: &[u8]) -> Result<(), RunError> {
-    let tmp = path.with_extension("png.tmp");
-    image::save_buffer_with_format(
-        &tmp,
-        rgb,
-        width,
-        height,
-        image::ColorType::Rgb8,
-        image::ImageFormat::Png,
-    )
-    .and_then(|()| std::fs::rename(&tmp, path).map_err(image::ImageError::IoError))
-    .map_err(|e| RunError::Io(format!("{}: cannot write: {e}", path.display())))
+    use image::ImageEncoder;
+    let mut png = Vec::new();
+    image::codecs::png::PngEncoder::new(&mut png)
+        .write_image(rgb, width, height, image::ExtendedColorType::Rgb8)
+        .map_err(|e| RunError::Io(format!("{}: cannot encode: {e}", path.display())))?;
+    write_atomic(path, &png)
 }

@@ -123,13 +123,7 @@ impl VariantEntry {
 pub fn find_variants(args: &[String]) -> Result<Vec<VariantEntry>, String> {
     let mut out = Vec::new();
     for arg in args {
-        let mut path = PathBuf::from(arg);
-        if !path.exists() {
-            let named = Path::new("variants").join(format!("{arg}.ron"));
-            if named.exists() {
-                path = named;
-            }
-        }
+        let path = variant::resolve(arg);
         let files = variant::find_files(&path).map_err(|e| e.to_string())?;
         if files.is_empty() {
             return Err(format!("{}: no .ron variant files there", path.display()));

@@ -7,19 +7,8 @@ use std::path::Path;
 
 use super::{CellRecord, Results, html, plots};
 
-/// Write `bytes` to `path` through a temporary file in the same folder.
-pub(crate) fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), String> {
-    let tmp = path.with_extension(format!(
-        "{}.tmp{}",
-        path.extension().and_then(|e| e.to_str()).unwrap_or(""),
-        std::process::id()
-    ));
-    std::fs::write(&tmp, bytes)
-        .and_then(|()| std::fs::rename(&tmp, path))
-        .map_err(|e| {
-            let _ = std::fs::remove_file(&tmp);
-            format!("{}: cannot write: {e}", path.display())
-        })
+fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), String> {
+    crate::run::write_atomic(path, bytes).map_err(|e| e.to_string())
 }
 
 /// Write results.json, results.csv, the plots and index.html into `dir`.

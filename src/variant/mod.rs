@@ -133,6 +133,18 @@ pub fn parse(path: &Path, text: &str) -> Result<Variant, VariantError> {
     }
 }
 
+/// A variant argument: a path, or the name of a file in `variants/` (`forward_plus` is
+/// `variants/forward_plus.ron`). An unknown name comes back as the path it was, so that
+/// reading it names what was asked for.
+pub fn resolve(arg: &str) -> PathBuf {
+    let path = PathBuf::from(arg);
+    if path.exists() {
+        return path;
+    }
+    let in_folder = Path::new("variants").join(format!("{arg}.ron"));
+    if in_folder.exists() { in_folder } else { path }
+}
+
 /// The variant files under `path` (a file, or a folder searched for `*.ron`), sorted.
 pub fn find_files(path: &Path) -> std::io::Result<Vec<PathBuf>> {
     if path.is_dir() {
