@@ -15,5 +15,6 @@ pub mod render;
 pub mod run;
 pub mod scene;
 pub mod stress;
+pub mod study;
 pub mod twins;
 pub mod variant;

@@ -60,6 +60,34 @@ enum Command {
         #[arg(long)]
         backend: Option<String>,
     },
+    /// Run an accuracy study against published numbers: codecs (normal codec angular
+    /// error, GPU and CPU), depth (view depth rebuilt from the depth buffer), slicing
+    /// (culling efficiency of each z-slicing scheme and grid on each built-in scene).
+    Study {
+        /// Which study.
+        name: clusterlab::study::StudyName,
+        /// Print the rows as JSON (the table goes to stderr).
+        #[arg(long)]
+        json: bool,
+        /// Folder for NAME.csv, NAME.json, NAME.md and the plot.
+        #[arg(long, default_value = "out/study")]
+        out: PathBuf,
+        /// Codecs: uniform unit vectors to sample.
+        #[arg(long, default_value_t = 1 << 20)]
+        samples: usize,
+        /// Slicing: image size, WIDTHxHEIGHT.
+        #[arg(long, default_value = "640x360", value_parser = parse_size)]
+        size: (u32, u32),
+        /// Slicing: comma-separated built-in scenes (default: all).
+        #[arg(long, value_delimiter = ',')]
+        scenes: Vec<String>,
+        /// Slicing: timed frames per run (the median is reported).
+        #[arg(long, default_value_t = 3)]
+        frames: u32,
+        /// GPU backend: vulkan, gl, metal, dx12 (default: WGPU_BACKEND, else Vulkan first).
+        #[arg(long)]
+        backend: Option<String>,
+    },
     /// Combine matrix result folders (shards of one study) into one report.
     Merge {
         /// Result folders (each with a results.json).
@@ -236,6 +264,27 @@ fn main() -> ExitCode {
             json,
             backend,
         } => stress(filter.as_deref(), json, backend.as_deref()),
+        Command::Study {
+            name,
+            json,
+            out,
+            samples,
+            size,
+            scenes,
+            frames,
+            backend,
+        } => {
+            let mut options = clusterlab::study::StudyOptions {
+                samples,
+                size,
+                frames,
+                ..Default::default()
+            };
+            if !scenes.is_empty() {
+                options.scenes = scenes;
+            }
+            study(name, &options, json, &out, backend.as_deref())
+        }
     };
     match result {
         Ok(true) => ExitCode::SUCCESS,
@@ -597,4 +646,49 @@ fn stress(filter: Option<&str>, json: bool, backend: Option<&str>) -> Result<boo
         print!("{}", clusterlab::stress::report(&runs));
     }
     Ok(runs.iter().all(|r| r.ok))
+}
+
+fn study(
+    name: clusterlab::study::StudyName,
+    options: &clusterlab::study::StudyOptions,
+    json: bool,
+    out: &Path,
+    backend: Option<&str>,
+) -> Result<bool, String> {
+    let gpu = clusterlab::gpu::Gpu::new(backend).map_err(|e| e.to_string())?;
+    eprintln!(
+        "study {} on {} ({}, {})",
+        name.as_str(),
+        gpu.adapter.name,
+        gpu.adapter.backend,
+        gpu.adapter.driver
+    );
+    let started = std::time::Instant::now();
+    let result = clusterlab::study::run(name, &gpu, &Composer::default(), options)
+        .map_err(|e| e.to_string())?;
+    let command: Vec<String> = std::env::args().collect();
+    let command = format!("clusterlab {}", command[1..].join(" "));
+    let files = clusterlab::study::write(out, &result, &gpu.adapter, &command)
+        .map_err(|e| e.to_string())?;
+    if json {
+        eprint!("{}", result.table.terminal());
+        let doc = clusterlab::study::json(&result, &gpu.adapter, &command);
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&doc).map_err(|e| e.to_string())?
+        );
+    } else {
+        print!("{}", result.table.terminal());
+    }
+    eprintln!(
+        "\n{} in {:.1} s; wrote {}",
+        if result.ok { "done" } else { "FAILED" },
+        started.elapsed().as_secs_f64(),
+        files
+            .iter()
+            .map(|p| p.display().to_string())
+            .collect::<Vec<_>>()
+            .join(", ")
+    );
+    Ok(result.ok)
 }

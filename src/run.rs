@@ -293,7 +293,7 @@ pub fn reference_frame(
     );
     let post = PostParams::of(&variant.variant);
     if post.any() {
-        let cams = CameraPair::of(scene, variant.variant.depth.reversed_z);
+        let cams = CameraPair::of(scene, variant.variant.depth.mapping());
         post_process(
             &mut reference,
             &post,

@@ -7,6 +7,7 @@ use wgpu::util::DeviceExt;
 use crate::compose::Composer;
 use crate::gpu::{Gpu, read_buffer};
 use crate::render::RenderError;
+use crate::variant::{NormalCodec, Pipeline, Variant};
 
 /// Run entry point `entry` of test kernel `root` once per input (64 a workgroup). Group 0
 /// binds `inputs` (read-only storage) at 0.., then read-write outputs of the given byte
@@ -22,12 +23,43 @@ pub fn run_kernel(
 ) -> Result<Vec<Vec<u8>>, RenderError> {
     // Kernels call functions directly, but every module's flags and constants must still be
     // defined: take those of the default variant.
-    let v = crate::variant::Variant::default();
+    let inputs: Vec<KernelInput> = inputs.iter().map(|b| KernelInput::Bytes(b)).collect();
+    run_kernel_for(
+        gpu,
+        composer,
+        &Variant::default(),
+        root,
+        entry,
+        invocations,
+        &inputs,
+        output_sizes,
+    )
+}
+
+/// What a kernel reads: a read-only storage buffer, or a depth texture.
+pub enum KernelInput<'a> {
+    Bytes(&'a [u8]),
+    Depth(&'a wgpu::Texture),
+}
+
+/// `run_kernel` with the flags and constants of `variant` (kernels that call the variant's
+/// own functions, such as `encode_normal`), and inputs that may be depth textures.
+#[allow(clippy::too_many_arguments)]
+pub fn run_kernel_for(
+    gpu: &Gpu,
+    composer: &Composer,
+    variant: &Variant,
+    root: &str,
+    entry: &str,
+    invocations: u32,
+    inputs: &[KernelInput],
+    output_sizes: &[u64],
+) -> Result<Vec<Vec<u8>>, RenderError> {
     let pass = composer.compose_root(
         root,
         &format!("passes::{root}"),
-        &crate::compose::feature_flags(&v),
-        &crate::compose::constants_module(&v),
+        &crate::compose::feature_flags(variant),
+        &crate::compose::constants_module(variant),
     )?;
     let outputs = gpu.scoped(root, || {
         let module = crate::render::shader_module(gpu, &pass);
@@ -41,17 +73,26 @@ pub fn run_kernel(
                 compilation_options: Default::default(),
                 cache: None,
             });
-        let input_buffers: Vec<wgpu::Buffer> = inputs
+        let input_resources: Vec<InputResource> = inputs
             .iter()
-            .map(|bytes| {
-                // Storage bindings may not be empty.
-                let contents: &[u8] = if bytes.is_empty() { &[0; 16] } else { bytes };
-                gpu.device
-                    .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                        label: Some("kernel input"),
-                        contents,
-                        usage: wgpu::BufferUsages::STORAGE,
-                    })
+            .map(|input| match input {
+                KernelInput::Bytes(bytes) => {
+                    // Storage bindings may not be empty.
+                    let contents: &[u8] = if bytes.is_empty() { &[0; 16] } else { bytes };
+                    InputResource::Buffer(gpu.device.create_buffer_init(
+                        &wgpu::util::BufferInitDescriptor {
+                            label: Some("kernel input"),
+                            contents,
+                            usage: wgpu::BufferUsages::STORAGE,
+                        },
+                    ))
+                }
+                KernelInput::Depth(texture) => {
+                    InputResource::Texture(texture.create_view(&wgpu::TextureViewDescriptor {
+                        aspect: wgpu::TextureAspect::DepthOnly,
+                        ..Default::default()
+                    }))
+                }
             })
             .collect();
         let output_buffers: Vec<wgpu::Buffer> = output_sizes
@@ -65,13 +106,17 @@ pub fn run_kernel(
                 })
             })
             .collect();
-        let entries: Vec<wgpu::BindGroupEntry> = input_buffers
+        let entries: Vec<wgpu::BindGroupEntry> = input_resources
             .iter()
-            .chain(&output_buffers)
+            .map(|r| match r {
+                InputResource::Buffer(b) => b.as_entire_binding(),
+                InputResource::Texture(view) => wgpu::BindingResource::TextureView(view),
+            })
+            .chain(output_buffers.iter().map(|b| b.as_entire_binding()))
             .enumerate()
-            .map(|(i, b)| wgpu::BindGroupEntry {
+            .map(|(i, resource)| wgpu::BindGroupEntry {
                 binding: i as u32,
-                resource: b.as_entire_binding(),
+                resource,
             })
             .collect();
         let group = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
@@ -96,6 +141,11 @@ pub fn run_kernel(
         .zip(output_sizes)
         .map(|(b, &size)| Ok(read_buffer(gpu, b, 0, size.max(16))?[..size as usize].to_vec()))
         .collect()
+}
+
+enum InputResource {
+    Buffer(wgpu::Buffer),
+    Texture(wgpu::TextureView),
 }
 
 /// Parameters of the z-slicing kernel. Mirrors `SliceParams` in twin_zslice.wesl.
@@ -181,5 +231,91 @@ pub fn gpu_codecs(
     Ok(CodecResults {
         codes: bytemuck::cast_slice(&out[0]).to_vec(),
         decoded: bytemuck::cast_slice(&out[1]).to_vec(),
+    })
+}
+
+/// Round trips of `normals` through the G-buffer's own path with `codec`: `encode_normal`,
+/// `pack_code`, `unpack_code` and `decode_normal` of `shaders/packing/normals.wesl`, composed
+/// as a deferred variant with that codec composes them. Returns each normal's packed code and
+/// its decode. `codec` must not be `Xyz` (no code to pack).
+pub fn gpu_codec_round_trip(
+    gpu: &Gpu,
+    composer: &Composer,
+    codec: NormalCodec,
+    normals: &[[f32; 4]],
+) -> Result<(Vec<u32>, Vec<[f32; 4]>), RenderError> {
+    assert!(
+        codec != NormalCodec::Xyz,
+        "xyz floats are stored, not packed"
+    );
+    let variant = Variant {
+        pipeline: Pipeline::ClusteredDeferred,
+        gbuffer: Some(crate::variant::GBuffer {
+            layout: crate::variant::GBufferLayout::Packed,
+        }),
+        normals: Some(codec),
+        ..Variant::default()
+    };
+    let (mut codes, mut decoded) = (Vec::new(), Vec::new());
+    // Batches keep the storage buffers well under the binding size limit.
+    for batch in normals.chunks(1 << 18) {
+        let n = batch.len();
+        let params = [n as u32, 0, 0, 0];
+        let out = run_kernel_for(
+            gpu,
+            composer,
+            &variant,
+            "twin_codec_round_trip",
+            "round_trip_main",
+            n as u32,
+            &[
+                KernelInput::Bytes(bytemuck::cast_slice(&params)),
+                KernelInput::Bytes(bytemuck::cast_slice(batch)),
+            ],
+            &[n as u64 * 4, n as u64 * 16],
+        )?;
+        codes.extend_from_slice(bytemuck::cast_slice(&out[0]));
+        decoded.extend_from_slice(bytemuck::cast_slice(&out[1]));
+    }
+    Ok((codes, decoded))
+}
+
+/// A depth buffer as the GPU reads it: each texel's stored value, and the view depth that
+/// `view_depth_from_device` (with `variant`'s depth mapping) rebuilds from it.
+pub struct DepthSamples {
+    pub device: Vec<f32>,
+    pub view_depth: Vec<f32>,
+}
+
+/// Read `depth` (any depth format, Depth24Plus included, which cannot be copied out) with a
+/// compute pass that loads each texel.
+pub fn gpu_depth_samples(
+    gpu: &Gpu,
+    composer: &Composer,
+    variant: &Variant,
+    depth: &wgpu::Texture,
+    near: f32,
+    far: f32,
+) -> Result<DepthSamples, RenderError> {
+    let (w, h) = (depth.width(), depth.height());
+    let n = w * h;
+    let params: [u32; 4] = [w, h, near.to_bits(), far.to_bits()];
+    let out = run_kernel_for(
+        gpu,
+        composer,
+        variant,
+        "twin_depth",
+        "depth_main",
+        n,
+        &[
+            KernelInput::Bytes(bytemuck::cast_slice(&params)),
+            KernelInput::Depth(depth),
+        ],
+        &[n as u64 * 8],
+    )?;
+    let pairs: &[[f32; 2]] = bytemuck::cast_slice(&out[0]);
+    Ok(DepthSamples {
+        device: pairs.iter().map(|p| p[0]).collect(),
+        view_depth: pairs.iter().map(|p| p[1]).collect(),
     })
 }

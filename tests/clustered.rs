@@ -64,15 +64,21 @@ fn exact_variants() -> Vec<LoadedVariant> {
             ));
         }
     }
-    for (format, reversed_z) in [
-        (DepthFormat::Unorm24, false),
-        (DepthFormat::Float32, true),
-        (DepthFormat::Unorm24, true),
+    for (format, reversed_z, infinite_far) in [
+        (DepthFormat::Unorm24, false, None),
+        (DepthFormat::Float32, true, None),
+        (DepthFormat::Unorm24, true, None),
+        (DepthFormat::Float32, false, Some(true)),
+        (DepthFormat::Float32, true, Some(false)),
     ] {
         let mut v = clustered(Pipeline::ClusteredDeferred, ZSlicing::Exponential);
-        v.depth = Depth { format, reversed_z };
+        v.depth = Depth {
+            format,
+            reversed_z,
+            infinite_far,
+        };
         out.push(loaded(
-            &format!("deferred {format:?} reversed {reversed_z}"),
+            &format!("deferred {format:?} reversed {reversed_z} infinite far {infinite_far:?}"),
             v,
         ));
     }

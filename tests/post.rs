@@ -76,7 +76,7 @@ fn every_effect_matches_its_cpu_twin_on_the_gpu_input() {
         let v = load(name).variant;
         let params = PostParams::of(&v);
         let run = run_chain(&gpu, &v, &scene);
-        let cams = CameraPair::of(&scene, v.depth.reversed_z);
+        let cams = CameraPair::of(&scene, v.depth.mapping());
         let g =
             Geometry::from_device_depth(scene.params.width, scene.params.height, &run.depth, &cams);
         let twin = post::apply(&params, &run.input, &g);

@@ -24,6 +24,7 @@ pub fn feature_flags(v: &Variant) -> Vec<(&'static str, bool)> {
         ("deferred", deferred),
         ("depth_prepass", v.depth_prepass),
         ("reversed_z", v.depth.reversed_z),
+        ("infinite_far", v.depth.mapping().infinite_far),
         ("slice_linear", slicing == ZSlicing::Linear),
         ("slice_exponential", slicing == ZSlicing::Exponential),
         (

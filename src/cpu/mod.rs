@@ -3,6 +3,7 @@
 
 pub mod clusters;
 pub mod color;
+pub mod depth;
 pub mod normals;
 pub mod post;
 pub mod reference;

@@ -73,7 +73,7 @@ pub fn oct_encode_precise(n: DVec3, bits: u32) -> [u32; 2] {
 
 /// Polar angle from +z over pi, azimuth over 2 pi (shifted to [0, 1]).
 pub fn polar_encode(n: DVec3, bits: u32) -> [u32; 2] {
-    let theta = n.z.clamp(-1.0, 1.0).acos();
+    let theta = n.x.hypot(n.y).atan2(n.z);
     let phi = n.y.atan2(n.x);
     use std::f64::consts::PI;
     quantize(DVec2::new(theta / PI, phi / (2.0 * PI) + 0.5), bits)

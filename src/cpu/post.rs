@@ -7,6 +7,8 @@
 
 use glam::{DMat4, DVec2, DVec3, DVec4};
 
+use super::depth::DepthMapping;
+
 use super::reference::RasterTruth;
 use crate::scene::{Camera, Scene};
 use crate::variant::{ToonMode, Variant};
@@ -114,11 +116,11 @@ pub struct CameraPair {
     pub aspect: f64,
     pub world_from_view: DMat4,
     pub prev_clip_from_world: DMat4,
-    pub reversed_z: bool,
+    pub mapping: DepthMapping,
 }
 
 impl CameraPair {
-    pub fn of(scene: &Scene, reversed_z: bool) -> Self {
+    pub fn of(scene: &Scene, mapping: DepthMapping) -> Self {
         let aspect = scene.aspect();
         let c: &Camera = &scene.camera;
         let p = &scene.prev_camera;
@@ -128,20 +130,15 @@ impl CameraPair {
             tan_half_fov_y: (c.fov_y / 2.0).tan(),
             aspect,
             world_from_view: c.view().inverse(),
-            prev_clip_from_world: p.projection(aspect, reversed_z) * p.view(),
-            reversed_z,
+            prev_clip_from_world: p.projection(aspect, mapping) * p.view(),
+            mapping,
         }
     }
 
     /// Positive view depth of a depth-buffer value (twin of `view_depth_from_device`);
     /// None for the clear value.
     pub fn view_depth_from_device(&self, d: f64) -> Option<f64> {
-        let (n, f) = (self.near, self.far);
-        if self.reversed_z {
-            (d > 0.0).then(|| n / d)
-        } else {
-            (d < 1.0).then(|| n * f / (f - d * (f - n)))
-        }
+        self.mapping.view_depth(d, self.near, self.far)
     }
 
     /// Pixels that the world point seen at pixel centre `xy` moved since the previous frame.
@@ -467,34 +464,5 @@ mod tests {
         // Samples at 4 + 4 * (-3/8, -1/8, 1/8, 3/8) = 2.5, 3.5, 4.5, 5.5 -> 2, 4, 4, 6.
         let b = motion_blur(&img, &g, 4);
         assert_eq!(b.pixels[4].x, (2.0 + 4.0 + 4.0 + 6.0) / 4.0);
-    }
-
-    #[test]
-    fn depth_reconstruction_inverts_both_projections() {
-        for reversed_z in [false, true] {
-            let cams = CameraPair {
-                near: 0.1,
-                far: 50.0,
-                tan_half_fov_y: 0.5,
-                aspect: 1.5,
-                world_from_view: DMat4::IDENTITY,
-                prev_clip_from_world: DMat4::IDENTITY,
-                reversed_z,
-            };
-            let proj = Camera {
-                eye: DVec3::ZERO,
-                target: DVec3::NEG_Z,
-                up: DVec3::Y,
-                fov_y: 2.0 * 0.5f64.atan(),
-                near: 0.1,
-                far: 50.0,
-            }
-            .projection(1.5, reversed_z);
-            for z in [0.2, 1.0, 7.5, 49.0] {
-                let clip = proj * DVec4::new(0.0, 0.0, -z, 1.0);
-                let back = cams.view_depth_from_device(clip.z / clip.w).unwrap();
-                assert!((back - z).abs() < 1e-9 * z, "{reversed_z} {z} {back}");
-            }
-        }
     }
 }

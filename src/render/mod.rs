@@ -95,6 +95,13 @@ pub struct FrameStats {
     pub assigned_clusters: u64,
     pub clusters: u64,
     pub max_lights_per_cluster: u32,
+    /// Mean lights per cluster over the clusters that hold a visible sample (what shading
+    /// loops over).
+    #[serde(default)]
+    pub mean_lights_per_visible_cluster: f64,
+    /// Most lights in a cluster that holds a visible sample.
+    #[serde(default)]
+    pub max_lights_per_visible_cluster: u32,
     /// Entries in all light lists together.
     pub light_list_entries: u64,
     /// Bytes of cluster data on the GPU (bounds, counts, offsets, indices, ...).
@@ -331,7 +338,7 @@ impl<'g> Renderer<'g> {
         let light_count = scene.lights.len() as u32;
 
         let mut renderer = gpu.scoped("creating pipelines and resources", || {
-            let scene_buffers = SceneBuffers::upload(gpu, scene, depth.reversed);
+            let scene_buffers = SceneBuffers::upload(gpu, scene, depth.mapping);
             let targets = Targets {
                 depth: target(gpu, "depth", width, height, depth.format),
                 hdr: target(gpu, "hdr", width, height, gpu.hdr_format),
@@ -691,6 +698,22 @@ impl<'g> Renderer<'g> {
                 let w = self.width as usize;
                 [(i % w) as u32, (i / w) as u32, v - 1]
             });
+            // Pixels record their cluster index + 1 (0: background).
+            let mut visible: Vec<u32> = used
+                .iter()
+                .filter(|&&v| v > 0 && v <= c.clusters)
+                .map(|&v| v - 1)
+                .collect();
+            visible.sort_unstable();
+            visible.dedup();
+            let counts = c.read_counts(gpu)?;
+            let lights: Vec<u32> = visible.iter().map(|&k| counts[k as usize]).collect();
+            stats.max_lights_per_visible_cluster = lights.iter().copied().max().unwrap_or(0);
+            stats.mean_lights_per_visible_cluster = if lights.is_empty() {
+                0.0
+            } else {
+                lights.iter().map(|&n| n as f64).sum::<f64>() / lights.len() as f64
+            };
         }
         Ok(stats)
     }
@@ -1087,6 +1110,11 @@ impl<'g> Renderer<'g> {
             Some(c) => Ok(Some(c.read_lists(self.gpu)?)),
             None => Ok(None),
         }
+    }
+
+    /// The depth buffer of the last frame (read it with `twins::gpu_depth_samples`).
+    pub fn depth_texture(&self) -> &wgpu::Texture {
+        &self.targets.depth
     }
 
     /// The clustered depth range after the last frame (clustered variants).

@@ -5,6 +5,7 @@ use bytemuck::{Pod, Zeroable};
 use glam::DMat4;
 use wgpu::util::DeviceExt;
 
+use crate::cpu::depth::DepthMapping;
 use crate::gpu::Gpu;
 use crate::scene::{Light, Scene, Vertex};
 use crate::variant::{DepthFormat, Variant};
@@ -35,12 +36,12 @@ fn mat(m: DMat4) -> [[f32; 4]; 4] {
 }
 
 impl ViewUniform {
-    pub fn new(scene: &Scene, reversed_z: bool) -> Self {
+    pub fn new(scene: &Scene, mapping: DepthMapping) -> Self {
         let aspect = scene.aspect();
         let cam = &scene.camera;
         let view = cam.view();
-        let proj = cam.projection(aspect, reversed_z);
-        let prev = scene.prev_camera.projection(aspect, reversed_z) * scene.prev_camera.view();
+        let proj = cam.projection(aspect, mapping);
+        let prev = scene.prev_camera.projection(aspect, mapping) * scene.prev_camera.view();
         Self {
             clip_from_world: mat(proj * view),
             view_from_world: mat(view),
@@ -72,7 +73,7 @@ pub struct SceneBuffers {
 }
 
 impl SceneBuffers {
-    pub fn upload(gpu: &Gpu, scene: &Scene, reversed_z: bool) -> Self {
+    pub fn upload(gpu: &Gpu, scene: &Scene, mapping: DepthMapping) -> Self {
         let init = |label: &str, contents: &[u8], usage: wgpu::BufferUsages| {
             gpu.device
                 .create_buffer_init(&wgpu::util::BufferInitDescriptor {
@@ -108,7 +109,7 @@ impl SceneBuffers {
             ),
             view: init(
                 "view",
-                bytemuck::bytes_of(&ViewUniform::new(scene, reversed_z)),
+                bytemuck::bytes_of(&ViewUniform::new(scene, mapping)),
                 wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             ),
             light_count: scene.lights.len() as u32,
@@ -137,6 +138,7 @@ pub const LDR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
 pub struct DepthSetup {
     pub format: wgpu::TextureFormat,
     pub reversed: bool,
+    pub mapping: DepthMapping,
 }
 
 impl DepthSetup {
@@ -147,6 +149,7 @@ impl DepthSetup {
                 DepthFormat::Float32 => wgpu::TextureFormat::Depth32Float,
             },
             reversed: v.depth.reversed_z,
+            mapping: v.depth.mapping(),
         }
     }
 

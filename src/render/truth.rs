@@ -44,7 +44,7 @@ pub fn raster_truth(
     };
     let depth = DepthSetup::of(variant);
     let textures = gpu.scoped("raster truth", || {
-        let buffers = SceneBuffers::upload(gpu, scene, depth.reversed);
+        let buffers = SceneBuffers::upload(gpu, scene, depth.mapping);
         let layout = frame_layout(gpu);
         let group = frame_bind_group(gpu, &layout, &buffers);
         let pipeline_layout = pipeline_layout(gpu, &[&layout]);

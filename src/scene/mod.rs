@@ -10,6 +10,8 @@ pub use mesh::MeshBuilder;
 use bytemuck::{Pod, Zeroable};
 use glam::{DMat4, DVec3};
 
+use crate::cpu::depth::DepthMapping;
+
 /// One vertex as the raster passes read it. Mirrors `shaders/common/mesh.wesl`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
@@ -48,14 +50,9 @@ impl Camera {
         DMat4::look_at_rh(self.eye, self.target, self.up)
     }
 
-    /// Projection to wgpu clip space (depth 0..1): standard (near 0, far 1) or reversed-Z
-    /// with an infinite far plane (near 1, infinity 0).
-    pub fn projection(&self, aspect: f64, reversed_z: bool) -> DMat4 {
-        if reversed_z {
-            DMat4::perspective_infinite_reverse_rh(self.fov_y, aspect, self.near)
-        } else {
-            DMat4::perspective_rh(self.fov_y, aspect, self.near, self.far)
-        }
+    /// Projection to wgpu clip space (depth 0..1) with the given depth mapping.
+    pub fn projection(&self, aspect: f64, mapping: DepthMapping) -> DMat4 {
+        mapping.projection(self.fov_y, aspect, self.near, self.far)
     }
 }
 

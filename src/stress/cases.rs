@@ -117,15 +117,25 @@ fn with_slicing(slicing: ZSlicing, tag: &str) -> Vec<(String, Variant)> {
         .collect()
 }
 
+/// Every pipeline with each depth mapping other than the standard finite one.
 fn reversed() -> Vec<(String, Variant)> {
+    let mappings = [
+        ("reversed_z", true, None),
+        ("reversed_z_finite_far", true, Some(false)),
+        ("infinite_far", false, Some(true)),
+    ];
     pipelines()
         .into_iter()
-        .map(|(n, mut v)| {
-            v.depth = Depth {
-                format: DepthFormat::Float32,
-                reversed_z: true,
-            };
-            (format!("{n}_reversed_z"), v)
+        .flat_map(|(n, v)| {
+            mappings.map(|(tag, reversed_z, infinite_far)| {
+                let mut v = v.clone();
+                v.depth = Depth {
+                    format: DepthFormat::Float32,
+                    reversed_z,
+                    infinite_far,
+                };
+                (format!("{n}_{tag}"), v)
+            })
         })
         .collect()
 }
@@ -256,7 +266,7 @@ pub fn all() -> Vec<Case> {
     }
     cases.push(case(
         "reversed_z_infinite_far",
-        "reversed-Z with an infinite far plane, 32-bit float depth",
+        "reversed-Z (infinite and finite far plane) and an infinite far plane, 32-bit float depth",
         lit_room("reversed_z_infinite_far", SIZE, base_lights()),
         reversed(),
     ));

@@ -4,6 +4,7 @@
 //! the user-facing documentation: `clusterlab explain` prints them from the JSON schema
 //! that `schemars` derives from these types.
 
+use crate::cpu::depth::DepthMapping;
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
@@ -217,8 +218,11 @@ pub enum GBufferLayout {
 pub struct Depth {
     /// Storage format.
     pub format: DepthFormat,
-    /// Reversed-Z with an infinite far plane (near maps to 1, infinity to 0).
+    /// Reversed-Z: near maps to 1, the far plane (or infinity) to 0.
     pub reversed_z: bool,
+    /// Put the projection's far plane at infinity (the camera's far plane still bounds the
+    /// clusters). Default: true with reversed-Z, false without.
+    pub infinite_far: Option<bool>,
 }
 
 impl Default for Depth {
@@ -226,6 +230,17 @@ impl Default for Depth {
         Self {
             format: DepthFormat::Float32,
             reversed_z: false,
+            infinite_far: None,
+        }
+    }
+}
+
+impl Depth {
+    /// The depth mapping these settings give.
+    pub fn mapping(&self) -> DepthMapping {
+        DepthMapping {
+            reversed: self.reversed_z,
+            infinite_far: self.infinite_far.unwrap_or(self.reversed_z),
         }
     }
 }

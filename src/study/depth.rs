@@ -1,0 +1,457 @@
+//! `clusterlab study depth`: how well view depth comes back from the depth buffer, for each
+//! format and depth mapping, read from rendered frames of planes at known depths.
+
+use glam::DVec3;
+use serde::Serialize;
+
+use super::table::{Table, sig};
+use super::{Plot, StudyError};
+use crate::compose::Composer;
+use crate::cpu::depth::DepthMapping;
+use crate::gpu::Gpu;
+use crate::render::Renderer;
+use crate::scene::MeshBuilder;
+use crate::scene::{Camera, Scene, SceneParams};
+use crate::variant::{Depth, DepthFormat, Pipeline, Variant};
+
+pub const NEAR: f64 = 0.05;
+/// The finite far plane; the planes reach 1e4.
+pub const FAR: f64 = 2e4;
+const NEAREST: f64 = 0.1;
+const FARTHEST: f64 = 1e4;
+/// Decades of distance the table reports.
+const BINS: [(f64, f64); 5] = [
+    (0.1, 1.0),
+    (1.0, 10.0),
+    (10.0, 100.0),
+    (100.0, 1e3),
+    (1e3, 1e4),
+];
+
+/// One depth setup of the study.
+#[derive(Clone, Copy, Debug)]
+pub struct Setup {
+    pub format: DepthFormat,
+    pub mapping: DepthMapping,
+}
+
+impl Setup {
+    pub fn all() -> Vec<Setup> {
+        let mut out = Vec::new();
+        for format in [DepthFormat::Unorm24, DepthFormat::Float32] {
+            for reversed in [false, true] {
+                for infinite_far in [false, true] {
+                    out.push(Setup {
+                        format,
+                        mapping: DepthMapping {
+                            reversed,
+                            infinite_far,
+                        },
+                    });
+                }
+            }
+        }
+        out
+    }
+
+    pub fn name(&self) -> String {
+        format!(
+            "{} {} {}",
+            match self.format {
+                DepthFormat::Unorm24 => "24-bit",
+                DepthFormat::Float32 => "float32",
+            },
+            if self.mapping.reversed {
+                "reversed-Z"
+            } else {
+                "standard"
+            },
+            if self.mapping.infinite_far {
+                "infinite far"
+            } else {
+                "finite far"
+            }
+        )
+    }
+
+    fn variant(&self) -> Variant {
+        Variant {
+            description: self.name(),
+            pipeline: Pipeline::NaiveForward,
+            depth: Depth {
+                format: self.format,
+                reversed_z: self.mapping.reversed,
+                infinite_far: Some(self.mapping.infinite_far),
+            },
+            ..Variant::default()
+        }
+    }
+
+    /// Reed 2015's model: the stored value is the exact d(z) rounded to the nearest
+    /// representable one, so depth is off by at most half a step of the format at d(z),
+    /// divided by the slope dd/dz; relative to z.
+    pub fn model_relative_error(&self, z: f64) -> f64 {
+        let d = self.mapping.device_depth(z, NEAR, FAR);
+        let step = match self.format {
+            DepthFormat::Unorm24 => 1.0 / ((1u32 << 24) - 1) as f64,
+            DepthFormat::Float32 => f32_spacing(d),
+        };
+        0.5 * step / (self.mapping.slope(z, NEAR, FAR) * z)
+    }
+}
+
+/// Distance between `x` (in [0, 1]) and the next f32.
+fn f32_spacing(x: f64) -> f64 {
+    let f = x as f32;
+    if f <= 0.0 {
+        return f32::from_bits(1) as f64;
+    }
+    (f32::from_bits(f.to_bits() + 1) - f) as f64
+}
+
+/// The frame: `columns` fronto-parallel strips, one per pixel column, at view depths spaced
+/// evenly in log from 0.1 to 1e4, `rows` pixels high. Returns the scene and each column's
+/// exact view depth (that of its f32 vertices).
+pub fn planes_scene(columns: u32, rows: u32) -> (Scene, Vec<f64>) {
+    let fov_y = 60f64.to_radians();
+    let aspect = columns as f64 / rows as f64;
+    let tan = (fov_y / 2.0).tan();
+    let mut mesh = MeshBuilder::default();
+    let mut depths = Vec::with_capacity(columns as usize);
+    for i in 0..columns {
+        let t = i as f64 / (columns - 1) as f64;
+        let z = (NEAREST * (FARTHEST / NEAREST).powf(t)) as f32 as f64;
+        // Cover the middle of pixel column i (its centre is at i + 0.5) at depth z.
+        let ndc = |px: f64| (px / columns as f64) * 2.0 - 1.0;
+        let (x0, x1) = (ndc(i as f64 + 0.2), ndc(i as f64 + 0.8));
+        let (sx, sy) = (z * tan * aspect, z * tan * 1.2);
+        mesh.quad(
+            [
+                DVec3::new(x0 * sx, -sy, -z),
+                DVec3::new(x1 * sx, -sy, -z),
+                DVec3::new(x1 * sx, sy, -z),
+                DVec3::new(x0 * sx, sy, -z),
+            ],
+            DVec3::Z,
+            [0.5, 0.5, 0.5],
+        );
+        // The vertices store -z as f32; z was rounded to f32 above, so this is exact.
+        depths.push(-(mesh.vertices.last().expect("a vertex").position[2] as f64));
+    }
+    let camera = Camera {
+        eye: DVec3::ZERO,
+        target: DVec3::NEG_Z,
+        up: DVec3::Y,
+        fov_y,
+        near: NEAR,
+        far: FAR,
+    };
+    let scene = Scene {
+        name: "depth_planes".into(),
+        params: SceneParams {
+            width: columns,
+            height: rows,
+            lights: 0,
+            radius_range: (1.0, 1.0),
+            seed: 0,
+            time: 0.0,
+        },
+        vertices: mesh.vertices,
+        indices: mesh.indices,
+        lights: Vec::new(),
+        camera,
+        prev_camera: camera,
+        lights_move: false,
+    };
+    (scene, depths)
+}
+
+/// Errors of one setup over one decade of distance.
+#[derive(Clone, Debug, Serialize)]
+pub struct DepthRow {
+    pub setup: String,
+    pub format: String,
+    pub reversed_z: bool,
+    pub infinite_far: bool,
+    pub from: f64,
+    pub to: f64,
+    /// Max and mean |z' - z| / z, z' rebuilt on the GPU (f32, `view_depth_from_device`).
+    pub max_relative_gpu: f64,
+    pub mean_relative_gpu: f64,
+    /// Max relative error of z' rebuilt in f64 from the stored value: the storage alone.
+    pub max_relative_stored: f64,
+    /// Reed 2015's model (half a storage step at the exact d(z)), max over the decade.
+    pub max_relative_model: f64,
+    /// Pixels measured in the decade.
+    pub samples: u64,
+    /// Pixels that showed background (a strip missed).
+    pub missing: u64,
+}
+
+/// Per column: the largest relative error of the GPU rebuild, for the plot.
+pub struct DepthCurve {
+    pub setup: String,
+    pub points: Vec<(f64, f64)>,
+}
+
+/// What the study measured.
+pub struct DepthStudy {
+    pub rows: Vec<DepthRow>,
+    pub curves: Vec<DepthCurve>,
+    /// How the adapter stores Depth24Plus, judged from the stored values.
+    pub unorm24_storage: String,
+}
+
+pub fn run(
+    gpu: &Gpu,
+    composer: &Composer,
+    columns: u32,
+    rows: u32,
+) -> Result<DepthStudy, StudyError> {
+    let (scene, truth) = planes_scene(columns, rows);
+    let mut out = DepthStudy {
+        rows: Vec::new(),
+        curves: Vec::new(),
+        unorm24_storage: String::new(),
+    };
+    for setup in Setup::all() {
+        let variant = setup.variant();
+        let mut renderer = Renderer::new(gpu, composer, &variant, &scene)?;
+        renderer.render()?;
+        let samples = crate::twins::gpu_depth_samples(
+            gpu,
+            composer,
+            &variant,
+            renderer.depth_texture(),
+            NEAR as f32,
+            FAR as f32,
+        )?;
+        // Per column: (z, max GPU error, sum of GPU errors, max stored error, count, missing).
+        let w = columns as usize;
+        let mut per_column = vec![(0.0f64, 0.0f64, 0.0f64, 0u64, 0u64); w];
+        for (i, (&d, &rebuilt)) in samples.device.iter().zip(&samples.view_depth).enumerate() {
+            let c = &mut per_column[i % w];
+            let z = truth[i % w];
+            if setup.mapping.is_background(d as f64) {
+                c.4 += 1;
+                continue;
+            }
+            let gpu_err = (rebuilt as f64 - z).abs() / z;
+            let stored = setup
+                .mapping
+                .view_depth(d as f64, NEAR, FAR)
+                .unwrap_or(f64::INFINITY);
+            c.0 = c.0.max(gpu_err);
+            c.1 += gpu_err;
+            c.2 = c.2.max((stored - z).abs() / z);
+            c.3 += 1;
+        }
+        if setup.format == DepthFormat::Unorm24
+            && setup.mapping
+                == (DepthMapping {
+                    reversed: true,
+                    infinite_far: true,
+                })
+        {
+            out.unorm24_storage = unorm24_storage(&samples.device);
+        }
+        for &(from, to) in &BINS {
+            let in_bin: Vec<usize> = (0..w)
+                .filter(|&i| {
+                    truth[i] >= from && (truth[i] < to || (to == FARTHEST && truth[i] <= to))
+                })
+                .collect();
+            let count: u64 = in_bin.iter().map(|&i| per_column[i].3).sum();
+            out.rows.push(DepthRow {
+                setup: setup.name(),
+                format: format!("{:?}", setup.format),
+                reversed_z: setup.mapping.reversed,
+                infinite_far: setup.mapping.infinite_far,
+                from,
+                to,
+                max_relative_gpu: in_bin.iter().map(|&i| per_column[i].0).fold(0.0, f64::max),
+                mean_relative_gpu: in_bin.iter().map(|&i| per_column[i].1).sum::<f64>()
+                    / count.max(1) as f64,
+                max_relative_stored: in_bin.iter().map(|&i| per_column[i].2).fold(0.0, f64::max),
+                max_relative_model: in_bin
+                    .iter()
+                    .map(|&i| setup.model_relative_error(truth[i]))
+                    .fold(0.0, f64::max),
+                samples: count,
+                missing: in_bin.iter().map(|&i| per_column[i].4).sum(),
+            });
+        }
+        out.curves.push(DepthCurve {
+            setup: setup.name(),
+            points: (0..w).map(|i| (truth[i], per_column[i].0)).collect(),
+        });
+    }
+    Ok(out)
+}
+
+/// "24-bit unorm" when the small stored values sit on the 1/(2^24 - 1) grid (reversed-Z puts
+/// distant planes there), else "32-bit float": Depth24Plus may be either.
+fn unorm24_storage(device: &[f32]) -> String {
+    let scale = ((1u32 << 24) - 1) as f64;
+    let small: Vec<f64> = device
+        .iter()
+        .map(|&d| d as f64)
+        .filter(|&d| d > 0.0 && d < 1e-4)
+        .collect();
+    if small.is_empty() {
+        return "unknown (no small values to judge from)".into();
+    }
+    let off_grid = small
+        .iter()
+        // Below 1e-4 (k < 1678), f32 holds k / (2^24 - 1) to within 1e-4 of a code.
+        .filter(|&&d| ((d * scale) - (d * scale).round()).abs() > 1e-2)
+        .count();
+    if off_grid == 0 {
+        "24-bit unorm".into()
+    } else {
+        format!(
+            "32-bit float ({off_grid} of {} small values off the 24-bit grid)",
+            small.len()
+        )
+    }
+}
+
+/// The table: per setup, the max relative error of the GPU rebuild in each decade, with
+/// Reed's model in parentheses.
+pub fn table(study: &DepthStudy) -> Table {
+    let mut columns = vec!["setup".to_string()];
+    columns.extend(
+        BINS.iter()
+            .map(|(a, b)| format!("{}..{}", sig(*a, 1), sig(*b, 1))),
+    );
+    let refs: Vec<&str> = columns.iter().map(|s| s.as_str()).collect();
+    let mut t = Table::new(
+        "Depth: max relative error of view depth rebuilt from the depth buffer, measured (Reed 2015 model)",
+        &refs,
+    );
+    let mut setups: Vec<&str> = study.rows.iter().map(|r| r.setup.as_str()).collect();
+    setups.dedup();
+    for s in setups {
+        let mut cells = vec![s.to_string()];
+        for r in study.rows.iter().filter(|r| r.setup == s) {
+            cells.push(format!(
+                "{} ({})",
+                sig(r.max_relative_gpu, 2),
+                sig(r.max_relative_model, 2)
+            ));
+        }
+        t.row(cells);
+    }
+    let missing: u64 = study.rows.iter().map(|r| r.missing).sum();
+    t.notes.push(format!(
+        "Planes at 0.1..1e4 (one pixel column each, log spaced), near {NEAR}, finite far \
+         {FAR}; view depth rebuilt by the shaders' `view_depth_from_device` in f32 and \
+         compared with the planes' exact depth in f64. Model (Reed 2015): the exact d(z) \
+         rounded to the format, half a step over the slope dd/dz. Depth24Plus is stored on \
+         this adapter as: {}. Pixels that missed their plane: {missing}.",
+        study.unorm24_storage
+    ));
+    t
+}
+
+/// Relative error against distance, per setup (log-log).
+pub fn plot(study: &DepthStudy) -> Option<Plot> {
+    use plotters::prelude::*;
+    const FLOOR: f64 = 1e-9;
+    let mut svg = String::new();
+    {
+        let area = SVGBackend::with_string(&mut svg, (880, 560)).into_drawing_area();
+        area.fill(&WHITE).ok()?;
+        let mut chart = ChartBuilder::on(&area)
+            .caption(
+                "Depth: relative error of rebuilt view depth",
+                ("sans-serif", 20),
+            )
+            .margin(12)
+            .x_label_area_size(40)
+            .y_label_area_size(70)
+            .build_cartesian_2d((0.1f64..1e4).log_scale(), (FLOOR..1.0).log_scale())
+            .ok()?;
+        chart
+            .configure_mesh()
+            .x_desc("view depth (near 0.05)")
+            .y_desc("max relative error")
+            .draw()
+            .ok()?;
+        for (i, curve) in study.curves.iter().enumerate() {
+            let color = Palette99::pick(i).to_rgba();
+            let points: Vec<(f64, f64)> = curve
+                .points
+                .iter()
+                .map(|&(z, e)| (z, e.max(FLOOR)))
+                .collect();
+            chart
+                .draw_series(LineSeries::new(points, color.stroke_width(1)))
+                .ok()?
+                .label(curve.setup.clone())
+                .legend(move |(x, y)| PathElement::new([(x, y), (x + 16, y)], color));
+        }
+        chart
+            .configure_series_labels()
+            .position(SeriesLabelPosition::UpperLeft)
+            .background_style(WHITE.mix(0.8))
+            .border_style(BLACK)
+            .draw()
+            .ok()?;
+        area.present().ok()?;
+    }
+    Some(Plot {
+        file: "depth.svg".into(),
+        svg,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn planes_cover_the_range_at_exact_f32_depths() {
+        let (scene, z) = planes_scene(64, 2);
+        assert_eq!(z.len(), 64);
+        assert!((z[0] - 0.1).abs() < 1e-8 && (z[63] - 1e4).abs() < 1e-3);
+        assert!(z.windows(2).all(|w| w[1] > w[0]));
+        assert_eq!(scene.vertices.len(), 64 * 4);
+        assert!(z.iter().all(|&d| d as f32 as f64 == d));
+    }
+
+    #[test]
+    fn model_follows_reed() {
+        let s = |format, reversed, infinite_far| Setup {
+            format,
+            mapping: DepthMapping {
+                reversed,
+                infinite_far,
+            },
+        };
+        // Fixed point: the error grows linearly with distance, standard or reversed.
+        let u = s(DepthFormat::Unorm24, false, true);
+        let r = u.model_relative_error(1000.0) / u.model_relative_error(10.0);
+        assert!((r - 100.0).abs() < 1.0, "{r}");
+        let ur = s(DepthFormat::Unorm24, true, true);
+        assert!(
+            (ur.model_relative_error(100.0) / u.model_relative_error(100.0) - 1.0).abs() < 1e-9
+        );
+        // Reversed float: about 2^-24 relative (half an ULP of d = n/z) at every distance.
+        let f = s(DepthFormat::Float32, true, true);
+        for z in [0.1, 3.0, 700.0, 1e4] {
+            let e = f.model_relative_error(z);
+            assert!(e > 2f64.powi(-26) && e < 1.01 * 2f64.powi(-24), "{z} {e}");
+        }
+        // Standard float is no better than 24-bit far away (d is near 1, ULP 2^-24).
+        let fs = s(DepthFormat::Float32, false, true);
+        let ratio = fs.model_relative_error(1e4) / u.model_relative_error(1e4);
+        assert!((0.9..1.1).contains(&ratio), "{ratio}");
+    }
+
+    #[test]
+    fn spacing_of_f32() {
+        assert_eq!(f32_spacing(1.0), 2f64.powi(-23));
+        assert_eq!(f32_spacing(0.75), 2f64.powi(-24));
+    }
+}

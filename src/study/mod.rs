@@ -1,0 +1,234 @@
+//! Accuracy studies against published numbers (`clusterlab study NAME`): normal codecs,
+//! depth reconstruction, z-slicing efficiency. Each writes a table (terminal, Markdown, CSV,
+//! JSON) and a plot, from the same code that renders the frames.
+
+pub mod codecs;
+pub mod depth;
+pub mod slicing;
+pub mod table;
+
+use std::fmt;
+use std::path::{Path, PathBuf};
+
+use serde::Serialize;
+
+use crate::compose::Composer;
+use crate::gpu::{AdapterSummary, Gpu, GpuError};
+use crate::render::RenderError;
+pub use table::Table;
+
+/// The studies.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum StudyName {
+    /// Angular error of every normal codec at every bit count, GPU and CPU.
+    Codecs,
+    /// Relative error of view depth rebuilt from the depth buffer.
+    Depth,
+    /// Culling efficiency of each z-slicing scheme and grid on each built-in scene.
+    Slicing,
+}
+
+impl StudyName {
+    pub fn as_str(self) -> &'static str {
+        match self {
+            StudyName::Codecs => "codecs",
+            StudyName::Depth => "depth",
+            StudyName::Slicing => "slicing",
+        }
+    }
+}
+
+/// A plot as SVG.
+pub struct Plot {
+    pub file: String,
+    pub svg: String,
+}
+
+#[derive(Debug)]
+pub enum StudyError {
+    Render(RenderError),
+    Usage(String),
+    Io(String),
+}
+
+impl fmt::Display for StudyError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            StudyError::Render(e) => write!(f, "{e}"),
+            StudyError::Usage(m) | StudyError::Io(m) => write!(f, "{m}"),
+        }
+    }
+}
+
+impl std::error::Error for StudyError {}
+
+impl From<RenderError> for StudyError {
+    fn from(e: RenderError) -> Self {
+        StudyError::Render(e)
+    }
+}
+
+impl From<GpuError> for StudyError {
+    fn from(e: GpuError) -> Self {
+        StudyError::Render(RenderError::Gpu(e))
+    }
+}
+
+/// What a study may be asked for.
+#[derive(Clone, Debug)]
+pub struct StudyOptions {
+    /// Codecs: uniform unit vectors (at least 1M for the published comparison).
+    pub samples: usize,
+    pub seed: u64,
+    /// Slicing: scenes and image size, timed frames per run.
+    pub scenes: Vec<String>,
+    pub size: (u32, u32),
+    pub frames: u32,
+    /// Depth: pixel columns (one distance each) and rows of the frame.
+    pub depth_columns: u32,
+    pub depth_rows: u32,
+}
+
+impl Default for StudyOptions {
+    fn default() -> Self {
+        Self {
+            samples: 1 << 20,
+            seed: 1,
+            scenes: crate::scene::SCENES
+                .iter()
+                .map(|s| s.name.to_string())
+                .collect(),
+            size: (640, 360),
+            frames: 3,
+            depth_columns: 1000,
+            depth_rows: 4,
+        }
+    }
+}
+
+/// A study's results.
+pub struct StudyOutput {
+    pub name: StudyName,
+    pub table: Table,
+    /// The typed rows, as JSON.
+    pub rows: serde_json::Value,
+    pub csv: String,
+    pub plot: Option<Plot>,
+    /// False when the study found a disagreement it exists to rule out (codecs: GPU and
+    /// CPU differ at the printed precision; slicing: a run failed).
+    pub ok: bool,
+}
+
+fn csv_of<T: Serialize>(rows: &[T]) -> Result<String, StudyError> {
+    let mut w = csv::Writer::from_writer(Vec::new());
+    for r in rows {
+        w.serialize(r).map_err(|e| StudyError::Io(e.to_string()))?;
+    }
+    let bytes = w.into_inner().map_err(|e| StudyError::Io(e.to_string()))?;
+    String::from_utf8(bytes).map_err(|e| StudyError::Io(e.to_string()))
+}
+
+fn output<T: Serialize>(
+    name: StudyName,
+    table: Table,
+    rows: &[T],
+    plot: Option<Plot>,
+    ok: bool,
+) -> Result<StudyOutput, StudyError> {
+    Ok(StudyOutput {
+        name,
+        table,
+        rows: serde_json::to_value(rows).map_err(|e| StudyError::Io(e.to_string()))?,
+        csv: csv_of(rows)?,
+        plot,
+        ok,
+    })
+}
+
+/// Run study `name`.
+pub fn run(
+    name: StudyName,
+    gpu: &Gpu,
+    composer: &Composer,
+    options: &StudyOptions,
+) -> Result<StudyOutput, StudyError> {
+    match name {
+        StudyName::Codecs => {
+            if options.samples == 0 {
+                return Err(StudyError::Usage("--samples must be at least 1".into()));
+            }
+            let rows = codecs::run(gpu, composer, options.samples, options.seed)?;
+            let ok = codecs::all_agree(&rows);
+            output(name, codecs::table(&rows), &rows, codecs::plot(&rows), ok)
+        }
+        StudyName::Depth => {
+            if options.depth_columns < 2 || options.depth_rows == 0 {
+                return Err(StudyError::Usage(
+                    "the depth study needs at least 2 columns and 1 row".into(),
+                ));
+            }
+            let study = depth::run(gpu, composer, options.depth_columns, options.depth_rows)?;
+            let ok = study.rows.iter().all(|r| r.missing == 0);
+            output(
+                name,
+                depth::table(&study),
+                &study.rows,
+                depth::plot(&study),
+                ok,
+            )
+        }
+        StudyName::Slicing => {
+            let scenes: Vec<&str> = options.scenes.iter().map(|s| s.as_str()).collect();
+            let rows = slicing::run(gpu, composer, &scenes, options.size, options.frames)?;
+            let ok = rows.iter().all(|r| r.error.is_none());
+            output(name, slicing::table(&rows), &rows, slicing::plot(&rows), ok)
+        }
+    }
+}
+
+/// The JSON document of a study: what ran where, and its rows.
+pub fn json(out: &StudyOutput, adapter: &AdapterSummary, command: &str) -> serde_json::Value {
+    serde_json::json!({
+        "study": out.name.as_str(),
+        "ok": out.ok,
+        "adapter": adapter,
+        "command": command,
+        "clusterlab": env!("CARGO_PKG_VERSION"),
+        "notes": out.table.notes,
+        "rows": out.rows,
+    })
+}
+
+/// Write NAME.csv, NAME.json, NAME.md and the plot into `dir` (each file atomically).
+pub fn write(
+    dir: &Path,
+    out: &StudyOutput,
+    adapter: &AdapterSummary,
+    command: &str,
+) -> Result<Vec<PathBuf>, StudyError> {
+    std::fs::create_dir_all(dir)
+        .map_err(|e| StudyError::Io(format!("cannot create {}: {e}", dir.display())))?;
+    let name = out.name.as_str();
+    let doc = serde_json::to_string_pretty(&json(out, adapter, command))
+        .map_err(|e| StudyError::Io(e.to_string()))?;
+    let markdown = format!(
+        "{}\nAdapter: {} ({}, {}). Command: `{command}`.\n",
+        out.table.markdown(),
+        adapter.name,
+        adapter.backend,
+        adapter.driver
+    );
+    let mut files = vec![
+        (dir.join(format!("{name}.csv")), out.csv.clone()),
+        (dir.join(format!("{name}.json")), doc),
+        (dir.join(format!("{name}.md")), markdown),
+    ];
+    if let Some(p) = &out.plot {
+        files.push((dir.join(&p.file), p.svg.clone()));
+    }
+    for (path, text) in &files {
+        crate::run::write_atomic(path, text.as_bytes())
+            .map_err(|e| StudyError::Io(e.to_string()))?;
+    }
+    Ok(files.into_iter().map(|(p, _)| p).collect())
+}
