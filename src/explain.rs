@@ -117,6 +117,15 @@ fn type_name(prop: &Value) -> String {
             .collect();
         return format!("optional {}", inner.join(" | "));
     }
+    // A plain optional: `"type": ["boolean", "null"]`.
+    if let Some(types) = prop["type"].as_array() {
+        let inner: Vec<String> = types
+            .iter()
+            .filter(|t| *t != "null")
+            .map(|t| type_name(&serde_json::json!({ "type": t, "format": prop["format"] })))
+            .collect();
+        return format!("optional {}", inner.join(" | "));
+    }
     match (prop["type"].as_str(), prop["format"].as_str()) {
         (Some("boolean"), _) => "bool".into(),
         (Some("string"), _) => "string".into(),

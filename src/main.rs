@@ -81,6 +81,9 @@ enum Command {
         /// Slicing: comma-separated built-in scenes (default: all).
         #[arg(long, value_delimiter = ',')]
         scenes: Vec<String>,
+        /// Slicing: lights in every scene (default: each scene's own).
+        #[arg(long)]
+        lights: Option<u32>,
         /// Slicing: timed frames per run (the median is reported).
         #[arg(long, default_value_t = 3)]
         frames: u32,
@@ -271,12 +274,14 @@ fn main() -> ExitCode {
             samples,
             size,
             scenes,
+            lights,
             frames,
             backend,
         } => {
             let mut options = clusterlab::study::StudyOptions {
                 samples,
                 size,
+                lights,
                 frames,
                 ..Default::default()
             };

@@ -376,7 +376,7 @@ pub fn table(rows: &[CodecRow]) -> Table {
             "max",
             "adversarial max",
             "GPU = CPU",
-            "published mean / max",
+            "published (mean / max)",
             "covering bound",
         ],
     );
@@ -392,11 +392,15 @@ pub fn table(rows: &[CodecRow]) -> Table {
             continue;
         };
         let same = row_agrees(g, c);
-        let published = TYLER_OCT
-            .iter()
-            .find(|p| g.codec == "octahedral" && g.sampling == "cube" && 2 * p.0 == g.bits)
-            .map(|p| format!("{} / {}", degrees(p.1), degrees(p.2)))
-            .unwrap_or_else(|| "-".into());
+        let published = if g.codec == "octahedral precise" {
+            format!("Meyer: max {}", degrees(meyer_octahedral_max_deg(g.bits)))
+        } else {
+            TYLER_OCT
+                .iter()
+                .find(|p| g.codec == "octahedral" && g.sampling == "cube" && 2 * p.0 == g.bits)
+                .map(|p| format!("Tyler: {} / {}", degrees(p.1), degrees(p.2)))
+                .unwrap_or_else(|| "-".into())
+        };
         t.row(vec![
             if g.sampling == "uniform" {
                 g.codec.clone()
@@ -430,7 +434,7 @@ pub fn table(rows: &[CodecRow]) -> Table {
             sig(x.max_deg, 2),
             sig(x.adversarial_max_deg, 2),
             "CPU only".into(),
-            format!("Meyer: {}", sig(meyer_f32_max_deg(), 2)),
+            format!("Meyer: max {}", sig(meyer_f32_max_deg(), 2)),
             sig(covering_bound_deg(96.0), 2),
         ]);
     }
@@ -441,13 +445,22 @@ pub fn table(rows: &[CodecRow]) -> Table {
              equator, diagonals). Error: atan2(|a x b|, a.b) between the f64 vector and the \
              decode of its f32 rounding. Cube sampling: points uniform in [-1, 1]^3, \
              normalized, as Tyler 2024 samples (1M vectors, plain octahedral; the published \
-             figures). Covering bound: no code of that many bits has a smaller max error. \
-             Meyer 2010: f32 normals are as fine as 2^50.2 uniform normals, whose covering \
-             radius is printed.",
+             figures). Covering bound: no code of that many bits has a smaller max error, \
+             2 asin(2^(-bits/2)). Meyer 2010: octahedron normals need one bit more than the \
+             optimal discretisation with the same error (printed: the covering bound of one \
+             bit fewer); f32 normals are as fine as 2^50.2 uniform normals (printed: their \
+             covering radius).",
             r.samples, r.adversarial_samples
         ));
     }
     t
+}
+
+/// Meyer et al. 2010: octahedron normal vectors need one bit more than the optimal
+/// discretisation with the same error; so at `bits` their max error is the covering bound
+/// of `bits - 1` bits.
+pub fn meyer_octahedral_max_deg(bits: u32) -> f64 {
+    covering_bound_deg(bits as f64 - 1.0)
 }
 
 /// Meyer et al. 2010: the discretisation error of f32 normals equals that of 2^50.2

@@ -354,7 +354,30 @@ pub fn table(study: &DepthStudy) -> Table {
     t
 }
 
-/// Relative error against distance, per setup (log-log).
+/// The envelope of a curve: the largest error in each of `bins` log-spaced distance bins
+/// (single columns swing between 0 and the max as planes fall on or between stored values).
+fn envelope(points: &[(f64, f64)], bins: usize) -> Vec<(f64, f64)> {
+    let bin = |z: f64| {
+        let t = (z / NEAREST).ln() / (FARTHEST / NEAREST).ln();
+        ((t * bins as f64) as usize).min(bins - 1)
+    };
+    let mut out: Vec<(f64, f64)> = Vec::new();
+    let mut current = None;
+    for &(z, e) in points {
+        let b = bin(z);
+        if current == Some(b) {
+            let last = out.last_mut().expect("a point per bin");
+            last.1 = last.1.max(e);
+        } else {
+            current = Some(b);
+            out.push((z, e));
+        }
+    }
+    out
+}
+
+/// Relative error against distance, per setup (log-log): the measured envelope as lines,
+/// Reed's model as dashes.
 pub fn plot(study: &DepthStudy) -> Option<Plot> {
     use plotters::prelude::*;
     const FLOOR: f64 = 1e-9;
@@ -376,21 +399,46 @@ pub fn plot(study: &DepthStudy) -> Option<Plot> {
             .configure_mesh()
             .x_desc("view depth (near 0.05)")
             .y_desc("max relative error")
+            .x_label_formatter(&|v| format!("{v:e}"))
+            .y_label_formatter(&|v| format!("{v:.0e}"))
             .draw()
             .ok()?;
         for (i, curve) in study.curves.iter().enumerate() {
             let color = Palette99::pick(i).to_rgba();
-            let points: Vec<(f64, f64)> = curve
-                .points
-                .iter()
-                .map(|&(z, e)| (z, e.max(FLOOR)))
+            let points: Vec<(f64, f64)> = envelope(&curve.points, 60)
+                .into_iter()
+                .map(|(z, e)| (z, e.max(FLOOR)))
                 .collect();
             chart
-                .draw_series(LineSeries::new(points, color.stroke_width(1)))
+                .draw_series(LineSeries::new(points, color.stroke_width(2)))
                 .ok()?
                 .label(curve.setup.clone())
                 .legend(move |(x, y)| PathElement::new([(x, y), (x + 16, y)], color));
         }
+        // Reed's model for the three distinct cases: fixed point (either direction),
+        // standard float, reversed float.
+        let model = |format, reversed| {
+            let setup = Setup {
+                format,
+                mapping: DepthMapping {
+                    reversed,
+                    infinite_far: true,
+                },
+            };
+            let points: Vec<(f64, f64)> = (0..=60)
+                .map(|k| {
+                    let z = NEAREST * (FARTHEST / NEAREST).powf(k as f64 / 60.0);
+                    (z, setup.model_relative_error(z))
+                })
+                .collect();
+            DashedLineSeries::new(points, 6, 4, BLACK.stroke_width(1))
+        };
+        chart
+            .draw_series(model(DepthFormat::Unorm24, false))
+            .ok()?
+            .label("Reed 2015 model")
+            .legend(|(x, y)| PathElement::new([(x, y), (x + 16, y)], BLACK));
+        chart.draw_series(model(DepthFormat::Float32, true)).ok()?;
         chart
             .configure_series_labels()
             .position(SeriesLabelPosition::UpperLeft)

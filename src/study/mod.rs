@@ -83,6 +83,8 @@ pub struct StudyOptions {
     /// Slicing: scenes and image size, timed frames per run.
     pub scenes: Vec<String>,
     pub size: (u32, u32),
+    /// Slicing: lights in every scene instead of each scene's default.
+    pub lights: Option<u32>,
     pub frames: u32,
     /// Depth: pixel columns (one distance each) and rows of the frame.
     pub depth_columns: u32,
@@ -99,6 +101,7 @@ impl Default for StudyOptions {
                 .map(|s| s.name.to_string())
                 .collect(),
             size: (640, 360),
+            lights: None,
             frames: 3,
             depth_columns: 1000,
             depth_rows: 4,
@@ -179,7 +182,14 @@ pub fn run(
         }
         StudyName::Slicing => {
             let scenes: Vec<&str> = options.scenes.iter().map(|s| s.as_str()).collect();
-            let rows = slicing::run(gpu, composer, &scenes, options.size, options.frames)?;
+            let rows = slicing::run(
+                gpu,
+                composer,
+                &scenes,
+                options.size,
+                options.lights,
+                options.frames,
+            )?;
             let ok = rows.iter().all(|r| r.error.is_none());
             output(name, slicing::table(&rows), &rows, slicing::plot(&rows), ok)
         }

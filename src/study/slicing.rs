@@ -75,6 +75,8 @@ pub struct SlicingRow {
     pub efficiency: f64,
     /// Median GPU time of the frame over the timed frames, ms.
     pub gpu_ms: f64,
+    /// Median time of the shading pass (the light loop), ms.
+    pub shading_ms: f64,
     pub timing_source: String,
     /// Set when the run failed; the other figures are then zero.
     pub error: Option<String>,
@@ -140,28 +142,40 @@ fn measure(
     variant: &Variant,
     scene: &Scene,
     frames: u32,
-) -> Result<(crate::render::FrameStats, f64, bool), StudyError> {
+) -> Result<Measured, StudyError> {
     let mut renderer = Renderer::new(gpu, composer, variant, scene)?;
     renderer.render()?;
-    let mut times = Vec::new();
+    let (mut frame, mut shading) = (Vec::new(), Vec::new());
     let mut timestamps = false;
     for _ in 0..frames.max(1) {
         let f = renderer.render()?;
         timestamps = f.timings.gpu_timestamps;
-        times.push(f.timings.total_ms());
+        frame.push(f.timings.total_ms());
+        shading.push(f.timings.get("forward"));
     }
-    times.sort_by(f64::total_cmp);
-    let stats = renderer.stats()?;
-    Ok((stats, times[times.len() / 2], timestamps))
+    Ok(Measured {
+        stats: renderer.stats()?,
+        frame_ms: crate::run::median(frame),
+        shading_ms: crate::run::median(shading),
+        timestamps,
+    })
 }
 
-/// Run every scheme and grid on each scene (built-in scenes at `width` x `height` with
+struct Measured {
+    stats: crate::render::FrameStats,
+    frame_ms: f64,
+    shading_ms: f64,
+    timestamps: bool,
+}
+
+/// Run every scheme and grid on each scene (built-in scenes at `size`, with `lights` or
 /// their default lights).
 pub fn run(
     gpu: &Gpu,
     composer: &Composer,
     scenes: &[&str],
     size: (u32, u32),
+    lights: Option<u32>,
     frames: u32,
 ) -> Result<Vec<SlicingRow>, StudyError> {
     let mut rows = Vec::new();
@@ -173,6 +187,7 @@ pub fn run(
         let params = SceneParams {
             width: size.0,
             height: size.1,
+            lights: lights.unwrap_or(info.defaults.lights),
             ..info.defaults
         };
         let scene =
@@ -203,12 +218,18 @@ pub fn run(
                     useful_evaluations: 0,
                     efficiency: 0.0,
                     gpu_ms: 0.0,
+                    shading_ms: 0.0,
                     timing_source: String::new(),
                     error: None,
                 };
                 // One failing run is reported in its row; the others go on.
                 match measure(gpu, composer, &v, &scene, frames) {
-                    Ok((s, ms, timestamps)) => {
+                    Ok(Measured {
+                        stats: s,
+                        frame_ms,
+                        shading_ms,
+                        timestamps,
+                    }) => {
                         row.occupied_clusters = s.active_clusters;
                         row.mean_lights_per_occupied = s.mean_lights_per_visible_cluster;
                         row.max_lights_per_occupied = s.max_lights_per_visible_cluster;
@@ -219,7 +240,8 @@ pub fn run(
                         } else {
                             1.0
                         };
-                        row.gpu_ms = ms;
+                        row.gpu_ms = frame_ms;
+                        row.shading_ms = shading_ms;
                         row.timing_source = if timestamps {
                             "timestamps"
                         } else {
@@ -239,16 +261,21 @@ pub fn run(
 /// Olsson 2012, Fig. 1: shading time of tiled over clustered shading, 17.7 ms / 5.6 ms.
 pub const OLSSON_SHADING_RATIO: f64 = 17.7 / 5.6;
 
-/// On scene `s`: tiled shading's light evaluations over Olsson's clustered shading's.
-pub fn tiled_over_clustered(rows: &[SlicingRow], s: &str) -> Option<f64> {
-    let evals = |scheme: &str| {
+/// On scene `s`: tiled shading's light evaluations and shading time over those of Olsson's
+/// clustered shading.
+pub fn tiled_over_clustered(rows: &[SlicingRow], s: &str) -> Option<(f64, f64)> {
+    let find = |scheme: &str| {
         rows.iter()
             .find(|r| r.scene == s && r.scheme == scheme && r.error.is_none())
-            .map(|r| r.evaluations)
     };
-    let tiled = evals("tiled, per-tile depth bounds")?;
-    let clustered = evals("Olsson cubic, explicit bounds")?;
-    (clustered > 0).then(|| tiled as f64 / clustered as f64)
+    let tiled = find("tiled, per-tile depth bounds")?;
+    let clustered = find("Olsson cubic, explicit bounds")?;
+    (clustered.evaluations > 0 && clustered.shading_ms > 0.0).then(|| {
+        (
+            tiled.evaluations as f64 / clustered.evaluations as f64,
+            tiled.shading_ms / clustered.shading_ms,
+        )
+    })
 }
 
 /// The table, each scene's rows ranked by culling efficiency (best first).
@@ -265,7 +292,8 @@ pub fn table(rows: &[SlicingRow]) -> Table {
             "evaluations",
             "useful",
             "useful / performed",
-            "GPU ms",
+            "shading ms",
+            "frame ms",
         ],
     );
     let mut scenes: Vec<&str> = rows.iter().map(|r| r.scene.as_str()).collect();
@@ -286,7 +314,7 @@ pub fn table(rows: &[SlicingRow]) -> Table {
                         format!("FAILED: {e}"),
                     ]
                     .into_iter()
-                    .chain(std::iter::repeat_n(String::new(), 7))
+                    .chain(std::iter::repeat_n(String::new(), 8))
                     .collect(),
                 );
                 continue;
@@ -301,6 +329,7 @@ pub fn table(rows: &[SlicingRow]) -> Table {
                 r.evaluations.to_string(),
                 r.useful_evaluations.to_string(),
                 format!("{:.1}%", 100.0 * r.efficiency),
+                sig(r.shading_ms, 3),
                 sig(r.gpu_ms, 3),
             ]);
         }
@@ -312,12 +341,13 @@ pub fn table(rows: &[SlicingRow]) -> Table {
         .into_iter()
         .rev()
     {
-        if let Some(ratio) = tiled_over_clustered(rows, s) {
+        if let Some((evaluations, time)) = tiled_over_clustered(rows, s) {
             t.notes.push(format!(
                 "{s}: tiled shading performs {}x the light evaluations of Olsson's clustered \
-                 shading (Olsson 2012, Fig. 1: shading 17.7 ms tiled against 5.6 ms clustered, \
-                 {}x, ~2400 lights, 32-pixel tiles).",
-                sig(ratio, 3),
+                 shading and takes {}x its shading time (Olsson 2012, Fig. 1: shading 17.7 ms \
+                 tiled against 5.6 ms clustered, {}x, ~2400 lights, 32-pixel tiles).",
+                sig(evaluations, 3),
+                sig(time, 3),
                 sig(OLSSON_SHADING_RATIO, 3)
             ));
         }
@@ -325,32 +355,40 @@ pub fn table(rows: &[SlicingRow]) -> Table {
     t.notes.dedup();
     if let Some(r) = rows.first() {
         t.notes.push(format!(
-            "Built-in scenes at {}x{} with their default lights; median of the timed frames \
-             ({} on this adapter). Occupied: clusters holding a visible sample. Lights per \
+            "Built-in scenes at {}x{} with {}; times are medians of the \
+             timed frames ({} on this adapter); shading is the light loop's pass, the frame \
+             adds the pre-pass, clustering and tonemapping. Occupied: clusters holding a visible sample. Lights per \
              cluster over the occupied clusters. Useful: evaluations where the surface is \
              within the light's radius. Olsson's slice count is his formula \
              ceil(ln(far/near) / ln(1 + 2 tan(fov/2) / tiles_y)), capped at the grid.",
-            r.width, r.height, r.timing_source
+            r.width,
+            r.height,
+            if rows.iter().all(|x| x.lights == r.lights) {
+                format!("{} lights", r.lights)
+            } else {
+                "their default lights".into()
+            },
+            r.timing_source
         ));
     }
     t
 }
 
-/// Useful fraction against GPU time, one point per run, coloured by scheme.
+/// Useful fraction against shading time, one point per run, coloured by scheme.
 pub fn plot(rows: &[SlicingRow]) -> Option<Plot> {
     use plotters::prelude::*;
     let ok: Vec<&SlicingRow> = rows
         .iter()
         .filter(|r| r.error.is_none() && r.evaluations > 0)
         .collect();
-    let max_ms = ok.iter().map(|r| r.gpu_ms).fold(1.0, f64::max) * 1.1;
+    let max_ms = ok.iter().map(|r| r.shading_ms).fold(1.0, f64::max) * 1.1;
     let mut svg = String::new();
     {
         let area = SVGBackend::with_string(&mut svg, (880, 520)).into_drawing_area();
         area.fill(&WHITE).ok()?;
         let mut chart = ChartBuilder::on(&area)
             .caption(
-                "Z-slicing: useful fraction of light evaluations against GPU time",
+                "Z-slicing: useful fraction of light evaluations against shading time",
                 ("sans-serif", 20),
             )
             .margin(12)
@@ -360,7 +398,7 @@ pub fn plot(rows: &[SlicingRow]) -> Option<Plot> {
             .ok()?;
         chart
             .configure_mesh()
-            .x_desc("GPU ms (median)")
+            .x_desc("shading pass, ms (median)")
             .y_desc("useful / performed (%)")
             .draw()
             .ok()?;
@@ -370,7 +408,7 @@ pub fn plot(rows: &[SlicingRow]) -> Option<Plot> {
             let points: Vec<(f64, f64)> = ok
                 .iter()
                 .filter(|r| r.scheme == *name)
-                .map(|r| (r.gpu_ms, 100.0 * r.efficiency))
+                .map(|r| (r.shading_ms, 100.0 * r.efficiency))
                 .collect();
             chart
                 .draw_series(points.iter().map(|&p| Circle::new(p, 4, color.filled())))
