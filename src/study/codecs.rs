@@ -472,11 +472,8 @@ pub fn meyer_f32_max_deg() -> f64 {
 /// Max error against bits per codec (GPU), with the covering bound.
 pub fn plot(rows: &[CodecRow]) -> Option<Plot> {
     use plotters::prelude::*;
-    let mut svg = String::new();
-    {
-        let area = SVGBackend::with_string(&mut svg, (880, 520)).into_drawing_area();
-        area.fill(&WHITE).ok()?;
-        let mut chart = ChartBuilder::on(&area)
+    super::svg_plot("codecs.svg", (880, 520), |area| {
+        let mut chart = ChartBuilder::on(area)
             .caption("Normal codecs: max angular error (GPU)", ("sans-serif", 20))
             .margin(12)
             .x_label_area_size(40)
@@ -519,17 +516,7 @@ pub fn plot(rows: &[CodecRow]) -> Option<Plot> {
             .ok()?
             .label("covering bound")
             .legend(|(x, y)| PathElement::new([(x, y), (x + 16, y)], BLACK));
-        chart
-            .configure_series_labels()
-            .background_style(WHITE.mix(0.8))
-            .border_style(BLACK)
-            .draw()
-            .ok()?;
-        area.present().ok()?;
-    }
-    Some(Plot {
-        file: "codecs.svg".into(),
-        svg,
+        super::legend(&mut chart, SeriesLabelPosition::MiddleRight)
     })
 }
 

@@ -381,11 +381,8 @@ fn envelope(points: &[(f64, f64)], bins: usize) -> Vec<(f64, f64)> {
 pub fn plot(study: &DepthStudy) -> Option<Plot> {
     use plotters::prelude::*;
     const FLOOR: f64 = 1e-9;
-    let mut svg = String::new();
-    {
-        let area = SVGBackend::with_string(&mut svg, (880, 560)).into_drawing_area();
-        area.fill(&WHITE).ok()?;
-        let mut chart = ChartBuilder::on(&area)
+    super::svg_plot("depth.svg", (880, 560), |area| {
+        let mut chart = ChartBuilder::on(area)
             .caption(
                 "Depth: relative error of rebuilt view depth",
                 ("sans-serif", 20),
@@ -439,18 +436,7 @@ pub fn plot(study: &DepthStudy) -> Option<Plot> {
             .label("Reed 2015 model")
             .legend(|(x, y)| PathElement::new([(x, y), (x + 16, y)], BLACK));
         chart.draw_series(model(DepthFormat::Float32, true)).ok()?;
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::UpperLeft)
-            .background_style(WHITE.mix(0.8))
-            .border_style(BLACK)
-            .draw()
-            .ok()?;
-        area.present().ok()?;
-    }
-    Some(Plot {
-        file: "depth.svg".into(),
-        svg,
+        super::legend(&mut chart, SeriesLabelPosition::UpperLeft)
     })
 }
 

@@ -382,11 +382,8 @@ pub fn plot(rows: &[SlicingRow]) -> Option<Plot> {
         .filter(|r| r.error.is_none() && r.evaluations > 0)
         .collect();
     let max_ms = ok.iter().map(|r| r.shading_ms).fold(1.0, f64::max) * 1.1;
-    let mut svg = String::new();
-    {
-        let area = SVGBackend::with_string(&mut svg, (880, 520)).into_drawing_area();
-        area.fill(&WHITE).ok()?;
-        let mut chart = ChartBuilder::on(&area)
+    super::svg_plot("slicing.svg", (880, 520), |area| {
+        let mut chart = ChartBuilder::on(area)
             .caption(
                 "Z-slicing: useful fraction of light evaluations against shading time",
                 ("sans-serif", 20),
@@ -416,17 +413,7 @@ pub fn plot(rows: &[SlicingRow]) -> Option<Plot> {
                 .label(*name)
                 .legend(move |(x, y)| Circle::new((x + 8, y), 4, color.filled()));
         }
-        chart
-            .configure_series_labels()
-            .background_style(WHITE.mix(0.8))
-            .border_style(BLACK)
-            .draw()
-            .ok()?;
-        area.present().ok()?;
-    }
-    Some(Plot {
-        file: "slicing.svg".into(),
-        svg,
+        super::legend(&mut chart, SeriesLabelPosition::MiddleRight)
     })
 }
 
