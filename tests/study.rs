@@ -57,6 +57,12 @@ fn codecs_on_the_gpu_match_the_cpu_twin_and_the_published_figures() {
         // No code of that many bits can beat the covering bound.
         assert!(g.max_deg >= codecs::covering_bound_deg(g.bits as f64));
     }
+    // Every printed figure of the GPU is the CPU twin's, or one unit off in its last digit.
+    assert!(
+        codecs::all_agree(&rows),
+        "{}",
+        codecs::table(&rows).terminal()
+    );
     let find = |codec: &str, sampling: &str, bits: u32| {
         rows.iter()
             .find(|r| {

@@ -8,7 +8,6 @@
 use glam::{DMat4, DVec2, DVec3, DVec4};
 
 use super::depth::DepthMapping;
-
 use super::reference::RasterTruth;
 use crate::scene::{Camera, Scene};
 use crate::variant::{ToonMode, Variant};

@@ -260,13 +260,13 @@ impl ClusterBuffers {
         Ok(bytemuck::pod_read_unaligned(&bytes))
     }
 
-    /// The light lists as the GPU holds them.
     /// Lights in each cluster's list.
     pub fn read_counts(&self, gpu: &Gpu) -> Result<Vec<u32>, GpuError> {
         let n = self.clusters as u64 * 4;
         Ok(bytemuck::cast_slice(&read_buffer(gpu, &self.counts, 0, n)?).to_vec())
     }
 
+    /// The light lists as the GPU holds them.
     pub fn read_lists(&self, gpu: &Gpu) -> Result<ClusterLists, GpuError> {
         let n = self.clusters as u64 * 4;
         let counts: Vec<u32> =

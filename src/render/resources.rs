@@ -137,7 +137,6 @@ pub const LDR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
 #[derive(Clone, Copy, Debug)]
 pub struct DepthSetup {
     pub format: wgpu::TextureFormat,
-    pub reversed: bool,
     pub mapping: DepthMapping,
 }
 
@@ -148,18 +147,17 @@ impl DepthSetup {
                 DepthFormat::Unorm24 => wgpu::TextureFormat::Depth24Plus,
                 DepthFormat::Float32 => wgpu::TextureFormat::Depth32Float,
             },
-            reversed: v.depth.reversed_z,
             mapping: v.depth.mapping(),
         }
     }
 
     pub fn clear(&self) -> f32 {
-        if self.reversed { 0.0 } else { 1.0 }
+        if self.mapping.reversed { 0.0 } else { 1.0 }
     }
 
     /// Nearer wins.
     pub fn compare(&self) -> wgpu::CompareFunction {
-        if self.reversed {
+        if self.mapping.reversed {
             wgpu::CompareFunction::Greater
         } else {
             wgpu::CompareFunction::Less

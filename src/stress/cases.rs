@@ -118,7 +118,7 @@ fn with_slicing(slicing: ZSlicing, tag: &str) -> Vec<(String, Variant)> {
 }
 
 /// Every pipeline with each depth mapping other than the standard finite one.
-fn reversed() -> Vec<(String, Variant)> {
+fn depth_mappings() -> Vec<(String, Variant)> {
     let mappings = [
         ("reversed_z", true, None),
         ("reversed_z_finite_far", true, Some(false)),
@@ -268,7 +268,7 @@ pub fn all() -> Vec<Case> {
         "reversed_z_infinite_far",
         "reversed-Z (infinite and finite far plane) and an infinite far plane, 32-bit float depth",
         lit_room("reversed_z_infinite_far", SIZE, base_lights()),
-        reversed(),
+        depth_mappings(),
     ));
     for (name, fov, what) in [
         (
