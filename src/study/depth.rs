@@ -188,6 +188,19 @@ pub struct DepthRow {
     pub missing: u64,
 }
 
+/// The relative errors of one pixel column (one plane).
+#[derive(Clone, Default)]
+struct ColumnErrors {
+    /// Of the GPU rebuild: largest and sum.
+    max_gpu: f64,
+    sum_gpu: f64,
+    /// Of the f64 rebuild of the stored value.
+    max_stored: f64,
+    count: u64,
+    /// Pixels that showed the clear value.
+    missing: u64,
+}
+
 /// Per column: the largest relative error of the GPU rebuild, for the plot.
 pub struct DepthCurve {
     pub setup: String,
@@ -226,25 +239,24 @@ pub fn run(
             NEAR as f32,
             FAR as f32,
         )?;
-        // Per column: (z, max GPU error, sum of GPU errors, max stored error, count, missing).
         let w = columns as usize;
-        let mut per_column = vec![(0.0f64, 0.0f64, 0.0f64, 0u64, 0u64); w];
+        let mut per_column = vec![ColumnErrors::default(); w];
         for (i, (&d, &rebuilt)) in samples.device.iter().zip(&samples.view_depth).enumerate() {
             let c = &mut per_column[i % w];
             let z = truth[i % w];
             if setup.mapping.is_background(d as f64) {
-                c.4 += 1;
+                c.missing += 1;
                 continue;
             }
-            let gpu_err = (rebuilt as f64 - z).abs() / z;
+            let gpu = (rebuilt as f64 - z).abs() / z;
             let stored = setup
                 .mapping
                 .view_depth(d as f64, NEAR, FAR)
                 .unwrap_or(f64::INFINITY);
-            c.0 = c.0.max(gpu_err);
-            c.1 += gpu_err;
-            c.2 = c.2.max((stored - z).abs() / z);
-            c.3 += 1;
+            c.max_gpu = c.max_gpu.max(gpu);
+            c.sum_gpu += gpu;
+            c.max_stored = c.max_stored.max((stored - z).abs() / z);
+            c.count += 1;
         }
         if setup.format == DepthFormat::Unorm24
             && setup.mapping
@@ -261,7 +273,13 @@ pub fn run(
                     truth[i] >= from && (truth[i] < to || (to == FARTHEST && truth[i] <= to))
                 })
                 .collect();
-            let count: u64 = in_bin.iter().map(|&i| per_column[i].3).sum();
+            let max = |f: fn(&ColumnErrors) -> f64| {
+                in_bin
+                    .iter()
+                    .map(|&i| f(&per_column[i]))
+                    .fold(0.0, f64::max)
+            };
+            let count: u64 = in_bin.iter().map(|&i| per_column[i].count).sum();
             out.rows.push(DepthRow {
                 setup: setup.name(),
                 format: format!("{:?}", setup.format),
@@ -269,21 +287,21 @@ pub fn run(
                 infinite_far: setup.mapping.infinite_far,
                 from,
                 to,
-                max_relative_gpu: in_bin.iter().map(|&i| per_column[i].0).fold(0.0, f64::max),
-                mean_relative_gpu: in_bin.iter().map(|&i| per_column[i].1).sum::<f64>()
+                max_relative_gpu: max(|c| c.max_gpu),
+                mean_relative_gpu: in_bin.iter().map(|&i| per_column[i].sum_gpu).sum::<f64>()
                     / count.max(1) as f64,
-                max_relative_stored: in_bin.iter().map(|&i| per_column[i].2).fold(0.0, f64::max),
+                max_relative_stored: max(|c| c.max_stored),
                 max_relative_model: in_bin
                     .iter()
                     .map(|&i| setup.model_relative_error(truth[i]))
                     .fold(0.0, f64::max),
                 samples: count,
-                missing: in_bin.iter().map(|&i| per_column[i].4).sum(),
+                missing: in_bin.iter().map(|&i| per_column[i].missing).sum(),
             });
         }
         out.curves.push(DepthCurve {
             setup: setup.name(),
-            points: (0..w).map(|i| (truth[i], per_column[i].0)).collect(),
+            points: (0..w).map(|i| (truth[i], per_column[i].max_gpu)).collect(),
         });
     }
     Ok(out)

@@ -8,7 +8,7 @@ use super::{Plot, StudyError};
 use crate::compose::Composer;
 use crate::gpu::Gpu;
 use crate::render::Renderer;
-use crate::scene::{SCENES, Scene, SceneParams};
+use crate::scene::{Scene, SceneError, SceneParams, find_scene};
 use crate::variant::{Clusters, DepthRangeSource, Pipeline, Variant, ZSlicing};
 
 /// Grids the study runs: coarse, the default, the default with enough slices for Olsson's
@@ -178,81 +178,84 @@ pub fn run(
     lights: Option<u32>,
     frames: u32,
 ) -> Result<Vec<SlicingRow>, StudyError> {
+    // Every scene first, so that a bad name or size fails before anything runs.
+    let scenes: Vec<Scene> = scenes
+        .iter()
+        .map(|&name| {
+            let defaults = find_scene(name)
+                .ok_or_else(|| SceneError::Unknown(name.to_string()))
+                .map_err(|e| StudyError::Usage(e.to_string()))?
+                .defaults;
+            let params = SceneParams {
+                width: size.0,
+                height: size.1,
+                lights: lights.unwrap_or(defaults.lights),
+                ..defaults
+            };
+            crate::scene::generate(name, params).map_err(|e| StudyError::Usage(e.to_string()))
+        })
+        .collect::<Result<_, _>>()?;
     let mut rows = Vec::new();
-    for &name in scenes {
-        let info = SCENES
-            .iter()
-            .find(|s| s.name == name)
-            .ok_or_else(|| StudyError::Usage(format!("unknown scene `{name}`")))?;
-        let params = SceneParams {
-            width: size.0,
-            height: size.1,
-            lights: lights.unwrap_or(info.defaults.lights),
-            ..info.defaults
-        };
-        let scene =
-            crate::scene::generate(name, params).map_err(|e| StudyError::Usage(e.to_string()))?;
-        let cam = scene.camera;
+    for scene in &scenes {
+        let (name, params, cam) = (&scene.name, scene.params, scene.camera);
         for (label, grid, slicing, explicit_bounds) in configs(size, cam.near, cam.far) {
-            {
-                let v = variant(grid, slicing, explicit_bounds);
-                let slices = if slicing == ZSlicing::OlssonCubic {
-                    olsson_slices(cam.near, cam.far, cam.fov_y, grid.1).min(grid.2)
-                } else {
-                    grid.2
-                };
-                let mut row = SlicingRow {
-                    scene: name.to_string(),
-                    width: size.0,
-                    height: size.1,
-                    lights: params.lights,
-                    scheme: label,
-                    grid: format!("{}x{}x{}", grid.0, grid.1, grid.2),
-                    explicit_bounds,
-                    clusters: (grid.0 * grid.1 * grid.2) as u64,
-                    slices,
-                    occupied_clusters: 0,
-                    mean_lights_per_occupied: 0.0,
-                    max_lights_per_occupied: 0,
-                    evaluations: 0,
-                    useful_evaluations: 0,
-                    efficiency: 0.0,
-                    gpu_ms: 0.0,
-                    shading_ms: 0.0,
-                    timing_source: String::new(),
-                    error: None,
-                };
-                // One failing run is reported in its row; the others go on.
-                match measure(gpu, composer, &v, &scene, frames) {
-                    Ok(Measured {
-                        stats: s,
-                        frame_ms,
-                        shading_ms,
-                        timestamps,
-                    }) => {
-                        row.occupied_clusters = s.active_clusters;
-                        row.mean_lights_per_occupied = s.mean_lights_per_visible_cluster;
-                        row.max_lights_per_occupied = s.max_lights_per_visible_cluster;
-                        row.evaluations = s.light_evals;
-                        row.useful_evaluations = s.useful_light_evals;
-                        row.efficiency = if s.light_evals > 0 {
-                            s.useful_light_evals as f64 / s.light_evals as f64
-                        } else {
-                            1.0
-                        };
-                        row.gpu_ms = frame_ms;
-                        row.shading_ms = shading_ms;
-                        row.timing_source = if timestamps {
-                            "timestamps"
-                        } else {
-                            "wall clock"
-                        }
-                        .into();
+            let v = variant(grid, slicing, explicit_bounds);
+            let slices = if slicing == ZSlicing::OlssonCubic {
+                olsson_slices(cam.near, cam.far, cam.fov_y, grid.1).min(grid.2)
+            } else {
+                grid.2
+            };
+            let mut row = SlicingRow {
+                scene: name.to_string(),
+                width: size.0,
+                height: size.1,
+                lights: params.lights,
+                scheme: label,
+                grid: format!("{}x{}x{}", grid.0, grid.1, grid.2),
+                explicit_bounds,
+                clusters: (grid.0 * grid.1 * grid.2) as u64,
+                slices,
+                occupied_clusters: 0,
+                mean_lights_per_occupied: 0.0,
+                max_lights_per_occupied: 0,
+                evaluations: 0,
+                useful_evaluations: 0,
+                efficiency: 0.0,
+                gpu_ms: 0.0,
+                shading_ms: 0.0,
+                timing_source: String::new(),
+                error: None,
+            };
+            // One failing run is reported in its row; the others go on.
+            match measure(gpu, composer, &v, scene, frames) {
+                Ok(Measured {
+                    stats: s,
+                    frame_ms,
+                    shading_ms,
+                    timestamps,
+                }) => {
+                    row.occupied_clusters = s.active_clusters;
+                    row.mean_lights_per_occupied = s.mean_lights_per_visible_cluster;
+                    row.max_lights_per_occupied = s.max_lights_per_visible_cluster;
+                    row.evaluations = s.light_evals;
+                    row.useful_evaluations = s.useful_light_evals;
+                    row.efficiency = if s.light_evals > 0 {
+                        s.useful_light_evals as f64 / s.light_evals as f64
+                    } else {
+                        1.0
+                    };
+                    row.gpu_ms = frame_ms;
+                    row.shading_ms = shading_ms;
+                    row.timing_source = if timestamps {
+                        "timestamps"
+                    } else {
+                        "wall clock"
                     }
-                    Err(e) => row.error = Some(e.to_string()),
+                    .into();
                 }
-                rows.push(row);
+                Err(e) => row.error = Some(e.to_string()),
             }
+            rows.push(row);
         }
     }
     Ok(rows)
