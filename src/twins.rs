@@ -162,6 +162,29 @@ pub struct SliceParams {
     pub _pad: u32,
 }
 
+impl SliceParams {
+    /// The camera and grid of a slicing; `gpu_zslices` fills in the count.
+    pub fn new(
+        near: f32,
+        far: f32,
+        near_end: f32,
+        tan_half_fov_y: f32,
+        slices: u32,
+        tiles_y: u32,
+    ) -> Self {
+        Self {
+            near,
+            far,
+            near_end,
+            tan_half_fov_y,
+            slices,
+            tiles_y,
+            count: 0,
+            _pad: 0,
+        }
+    }
+}
+
 /// What the z-slicing kernel computed, per scheme: linear, exponential,
 /// near-then-exponential, Olsson.
 pub struct ZSliceResults {

@@ -309,16 +309,7 @@ fn gpu_kernels_keep_the_properties() {
                     } => (near * 2.0, tan_half_fov_y as f32, tiles_y),
                     _ => (near * 2.0, 0.5, 8),
                 };
-                let params = SliceParams {
-                    near,
-                    far,
-                    near_end,
-                    tan_half_fov_y: tan,
-                    slices,
-                    tiles_y,
-                    count: 0,
-                    _pad: 0,
-                };
+                let params = SliceParams::new(near, far, near_end, tan, slices, tiles_y);
                 let out = gpu_zslices(&gpu, &composer, params, &depths).expect("z-slice kernel");
                 for scheme_index in 0..4 {
                     // A near slice needs another after it (variants check z >= 2).

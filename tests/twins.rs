@@ -44,16 +44,7 @@ fn z_slices_match_on_random_depths_and_at_slice_boundaries() {
             }
         }
     }
-    let params = SliceParams {
-        near,
-        far,
-        near_end,
-        tan_half_fov_y: tan,
-        slices,
-        tiles_y,
-        count: 0,
-        _pad: 0,
-    };
+    let params = SliceParams::new(near, far, near_end, tan, slices, tiles_y);
     let results = gpu_zslices(&gpu, &composer, params, &depths).expect("kernel runs");
     let (got, starts) = (results.slices, results.starts);
     for (i, &z) in depths.iter().enumerate() {

@@ -11,10 +11,8 @@ use super::{Plot, StudyError};
 use crate::compose::Composer;
 use crate::cpu::normals::*;
 use crate::gpu::Gpu;
-use crate::variant::NormalCodec;
+use crate::variant::{NORMAL_BITS, NormalCodec};
 
-/// Bits per component the schema allows (16, 20, 24, 32 bits in all).
-pub const COMPONENT_BITS: [u32; 4] = [8, 10, 12, 16];
 /// Significant digits the table prints, and at most 4 decimals (1e-4 degrees, 17 times the
 /// direction resolution of an f32 unit vector: finer digits would print the GPU's f32
 /// rounding). GPU and CPU must agree to them.
@@ -298,14 +296,10 @@ fn run_set(
         }
     };
     for codec in codecs {
-        for bits in COMPONENT_BITS {
-            let (gpu_codes, gpu_decoded) = crate::twins::gpu_codec_round_trip(
-                gpu,
-                composer,
-                (codec.schema)(2 * bits),
-                &gpu_in,
-            )?;
-            let (cpu_codes, cpu_decoded) = cpu_round_trip(codec, bits, &cpu_in);
+        for total in NORMAL_BITS {
+            let (gpu_codes, gpu_decoded) =
+                crate::twins::gpu_codec_round_trip(gpu, composer, (codec.schema)(total), &gpu_in)?;
+            let (cpu_codes, cpu_decoded) = cpu_round_trip(codec, total / 2, &cpu_in);
             let differing = gpu_codes
                 .iter()
                 .zip(&cpu_codes)
@@ -318,8 +312,8 @@ fn run_set(
                     .map(|d| DVec3::new(d[0] as f64, d[1] as f64, d[2] as f64)),
             );
             let mut cpu_errors = angles(&truth, cpu_decoded.into_par_iter());
-            rows.push(row(codec.name, 2 * bits, "gpu", &mut gpu_errors, differing));
-            rows.push(row(codec.name, 2 * bits, "cpu", &mut cpu_errors, 0));
+            rows.push(row(codec.name, total, "gpu", &mut gpu_errors, differing));
+            rows.push(row(codec.name, total, "cpu", &mut cpu_errors, 0));
         }
     }
     if sampling == "uniform" {

@@ -17,7 +17,8 @@ fn problem(field: &str, message: impl Into<String>) -> Problem {
     }
 }
 
-const NORMAL_BITS: [u32; 4] = [16, 20, 24, 32];
+/// Total bits a packed normal may take (two components of half as many each).
+pub const NORMAL_BITS: [u32; 4] = [16, 20, 24, 32];
 /// Bounds that keep every buffer well inside wgpu's default limits.
 pub const MAX_GRID_XY: u32 = 128;
 pub const MAX_GRID_Z: u32 = 256;
