@@ -40,6 +40,16 @@ enum Command {
     Explain,
     /// List the built-in scenes and their default parameters.
     Scenes,
+    /// List every GPU adapter wgpu sees, what each offers clusterlab, and which one render,
+    /// matrix, stress and study would use and why: the first thing to paste into a bug report.
+    Adapters {
+        /// Print one JSON object instead.
+        #[arg(long)]
+        json: bool,
+        /// Show the choice for this backend (vulkan, gl, ...), as `--backend` would make it.
+        #[arg(long)]
+        backend: Option<String>,
+    },
     /// Render one variant on one scene, measure it against the CPU f64 reference, and write
     /// the image and its error heat map.
     Render(RenderArgs),
@@ -56,9 +66,8 @@ enum Command {
         /// Print the runs as JSON.
         #[arg(long)]
         json: bool,
-        /// GPU backend: vulkan, gl, metal, dx12 (default: WGPU_BACKEND, else Vulkan first).
-        #[arg(long)]
-        backend: Option<String>,
+        #[command(flatten)]
+        gpu: GpuArgs,
     },
     /// Run an accuracy study against published numbers: codecs (normal codec angular
     /// error, GPU and CPU), depth (view depth rebuilt from the depth buffer), slicing
@@ -87,9 +96,8 @@ enum Command {
         /// Slicing: timed frames per run (the median is reported).
         #[arg(long, default_value_t = 3)]
         frames: u32,
-        /// GPU backend: vulkan, gl, metal, dx12 (default: WGPU_BACKEND, else Vulkan first).
-        #[arg(long)]
-        backend: Option<String>,
+        #[command(flatten)]
+        gpu: GpuArgs,
     },
     /// Combine matrix result folders (shards of one study) into one report.
     Merge {
@@ -102,7 +110,45 @@ enum Command {
         /// Print results.json to stdout (the table goes to stderr).
         #[arg(long)]
         json: bool,
+        /// Merge folders from different adapters, or whose variant files differ.
+        #[arg(long)]
+        allow_mixed: bool,
     },
+}
+
+/// Which GPU, and how long one cell's GPU work may take.
+#[derive(clap::Args)]
+struct GpuArgs {
+    /// GPU backend: vulkan, gl, metal, dx12 (default: WGPU_BACKEND, else Vulkan first).
+    #[arg(long)]
+    backend: Option<String>,
+    /// Seconds the GPU work of one cell (a render, a matrix cell, a stress run; in a study,
+    /// one wait) may take before it fails; long frames are waited for until then.
+    #[arg(
+        long,
+        value_name = "SECONDS",
+        default_value_t = clusterlab::gpu::DEFAULT_CELL_TIMEOUT.as_secs_f64(),
+        value_parser = parse_seconds
+    )]
+    cell_timeout: f64,
+}
+
+impl GpuArgs {
+    fn open(&self) -> Result<clusterlab::gpu::Gpu, String> {
+        let gpu = clusterlab::gpu::Gpu::new(self.backend.as_deref()).map_err(|e| e.to_string())?;
+        gpu.set_cell_timeout(std::time::Duration::from_secs_f64(self.cell_timeout));
+        Ok(gpu)
+    }
+}
+
+fn parse_seconds(s: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(v) if v.is_finite() && v > 0.0 && v <= 1e9 => Ok(v),
+        Ok(_) => Err(format!(
+            "`{s}` is not a usable number of seconds: give a positive number up to 1e9"
+        )),
+        Err(_) => Err(format!("`{s}` is not a number of seconds, e.g. 600")),
+    }
 }
 
 #[derive(clap::Args)]
@@ -138,9 +184,8 @@ struct MatrixArgs {
     /// An earlier results.json (or its folder): show each cell's change against it.
     #[arg(long)]
     baseline: Option<PathBuf>,
-    /// GPU backend: vulkan, gl, metal, dx12 (default: WGPU_BACKEND, else Vulkan first).
-    #[arg(long)]
-    backend: Option<String>,
+    #[command(flatten)]
+    gpu: GpuArgs,
 }
 
 #[derive(clap::Args)]
@@ -182,9 +227,8 @@ struct RenderArgs {
     /// Folder for the PNG and its heat map.
     #[arg(long, default_value = "out")]
     out: PathBuf,
-    /// GPU backend: vulkan, gl, metal, dx12 (default: WGPU_BACKEND, else Vulkan first).
-    #[arg(long)]
-    backend: Option<String>,
+    #[command(flatten)]
+    gpu: GpuArgs,
     /// Print one JSON object instead of a summary.
     #[arg(long)]
     json: bool,
@@ -259,14 +303,16 @@ fn main() -> ExitCode {
             scenes();
             Ok(true)
         }
+        Command::Adapters { json, backend } => adapters(json, backend.as_deref()),
         Command::Render(args) => render(&args),
         Command::Matrix(args) => matrix(&args),
-        Command::Merge { dirs, out, json } => merge(&dirs, &out, json),
-        Command::Stress {
-            filter,
+        Command::Merge {
+            dirs,
+            out,
             json,
-            backend,
-        } => stress(filter.as_deref(), json, backend.as_deref()),
+            allow_mixed,
+        } => merge(&dirs, &out, json, allow_mixed),
+        Command::Stress { filter, json, gpu } => stress(filter.as_deref(), json, &gpu),
         Command::Study {
             name,
             json,
@@ -276,7 +322,7 @@ fn main() -> ExitCode {
             scenes,
             lights,
             frames,
-            backend,
+            gpu,
         } => {
             let mut options = clusterlab::study::StudyOptions {
                 samples,
@@ -288,7 +334,7 @@ fn main() -> ExitCode {
             if !scenes.is_empty() {
                 options.scenes = scenes;
             }
-            study(name, &options, json, &out, backend.as_deref())
+            study(name, &options, json, &out, &gpu)
         }
     };
     match result {
@@ -393,6 +439,19 @@ fn scenes() {
     }
 }
 
+fn adapters(json: bool, backend: Option<&str>) -> Result<bool, String> {
+    let survey = clusterlab::gpu::adapters::survey(backend);
+    if json {
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&survey).map_err(|e| e.to_string())?
+        );
+    } else {
+        print!("{}", survey.text());
+    }
+    Ok(survey.chosen.is_some())
+}
+
 fn render(args: &RenderArgs) -> Result<bool, String> {
     let mut loaded = variant::load(&variant::resolve(&args.variant)).map_err(|e| e.to_string())?;
     if let Some(view) = args.debug_view {
@@ -419,7 +478,8 @@ fn render(args: &RenderArgs) -> Result<bool, String> {
             params.width, params.height
         ));
     }
-    let gpu = clusterlab::gpu::Gpu::new(args.backend.as_deref()).map_err(|e| e.to_string())?;
+    let gpu = args.gpu.open()?;
+    gpu.begin_cell();
     let cell = clusterlab::run::run_cell(
         &gpu,
         &Composer::default(),
@@ -568,10 +628,11 @@ fn matrix(args: &MatrixArgs) -> Result<bool, String> {
         .map(matrix::Results::load)
         .transpose()?;
     let mut cells = matrix::expand(&studies)?;
+    let variant_files = matrix::variant_files(&cells);
     if let Some(shard) = args.shard {
         cells = matrix::shard(cells, shard);
     }
-    let gpu = clusterlab::gpu::Gpu::new(args.backend.as_deref()).map_err(|e| e.to_string())?;
+    let mut gpu = args.gpu.open()?;
     std::fs::create_dir_all(&args.out)
         .map_err(|e| format!("{}: cannot create folder: {e}", args.out.display()))?;
     eprintln!(
@@ -589,9 +650,11 @@ fn matrix(args: &MatrixArgs) -> Result<bool, String> {
         progress: true,
         shard: args.shard,
         command: std::env::args().collect(),
+        variant_files,
+        before_cell: None,
     };
     let start = Instant::now();
-    let mut results = matrix::run(&gpu, &Composer::default(), &cells, &options);
+    let mut results = matrix::run(&mut gpu, &Composer::default(), &cells, &options);
     if let Some(old) = &baseline {
         matrix::derive(&mut results.cells, Some(old));
     }
@@ -601,8 +664,8 @@ fn matrix(args: &MatrixArgs) -> Result<bool, String> {
     Ok(results.failed() == 0)
 }
 
-fn merge(dirs: &[PathBuf], out: &Path, json: bool) -> Result<bool, String> {
-    let results = clusterlab::matrix::merge(dirs, out)?;
+fn merge(dirs: &[PathBuf], out: &Path, json: bool, allow_mixed: bool) -> Result<bool, String> {
+    let results = clusterlab::matrix::merge(dirs, out, allow_mixed)?;
     clusterlab::matrix::write_report(out, &results)?;
     report(&results, json, out)?;
     Ok(results.failed() == 0)
@@ -624,14 +687,14 @@ fn report(results: &clusterlab::matrix::Results, json: bool, out: &Path) -> Resu
     Ok(())
 }
 
-fn stress(filter: Option<&str>, json: bool, backend: Option<&str>) -> Result<bool, String> {
-    let gpu = clusterlab::gpu::Gpu::new(backend).map_err(|e| e.to_string())?;
+fn stress(filter: Option<&str>, json: bool, gpu: &GpuArgs) -> Result<bool, String> {
+    let mut gpu = gpu.open()?;
     eprintln!(
         "stress suite on {} ({}, {})",
         gpu.adapter.name, gpu.adapter.backend, gpu.adapter.driver
     );
     let bar = indicatif::ProgressBar::new_spinner();
-    let runs = clusterlab::stress::run(&gpu, &Composer::default(), filter, &|what| {
+    let runs = clusterlab::stress::run(&mut gpu, &Composer::default(), filter, &|what| {
         bar.set_message(what.to_string());
         bar.tick();
     });
@@ -658,9 +721,9 @@ fn study(
     options: &clusterlab::study::StudyOptions,
     json: bool,
     out: &Path,
-    backend: Option<&str>,
+    gpu: &GpuArgs,
 ) -> Result<bool, String> {
-    let gpu = clusterlab::gpu::Gpu::new(backend).map_err(|e| e.to_string())?;
+    let gpu = gpu.open()?;
     eprintln!(
         "study {} on {} ({}, {})",
         name.as_str(),

@@ -173,7 +173,7 @@ fn bad_requests_get_a_clear_message_and_exit_code_1() {
         ),
         (
             &["--scene", "atrium", "--backend", "vulcan"],
-            "unknown backend `vulcan`",
+            "`vulcan` (from --backend) is not a backend",
             1,
         ),
         (

@@ -11,6 +11,7 @@ use clusterlab::cpu::post::{self, CameraPair, Geometry, Image, PostParams};
 use clusterlab::gpu::Gpu;
 use clusterlab::render::Renderer;
 use clusterlab::scene::{self, Scene};
+use clusterlab::twins;
 use clusterlab::variant::*;
 use common::{cell, gpu, load, small};
 use glam::DVec3;
@@ -39,14 +40,26 @@ struct ChainRun {
 
 fn run_chain(gpu: &Gpu, v: &Variant, scene: &Scene) -> ChainRun {
     let mut v = v.clone();
-    // 32-bit float depth can be read back; the chain reads it as any depth format.
+    // 32-bit float depth: the twins take the stored values as they are, unrounded.
     v.depth.format = DepthFormat::Float32;
-    let mut r = Renderer::new(gpu, &Composer::default(), &v, scene).expect("renderer");
+    let composer = Composer::default();
+    let mut r = Renderer::new(gpu, &composer, &v, scene).expect("renderer");
     let frame = r.render().expect("frame");
     let (w, h) = (frame.width, frame.height);
+    // Read by a compute pass: OpenGL cannot copy a depth texture to a buffer.
+    let cam = &scene.camera;
+    let depth = twins::gpu_depth_samples(
+        gpu,
+        &composer,
+        &v,
+        r.depth_texture(),
+        cam.near as f32,
+        cam.far as f32,
+    )
+    .expect("depth");
     ChainRun {
         input: Image::from_rgba(w, h, &r.read_shaded().expect("shaded")),
-        depth: r.read_depth().expect("depth"),
+        depth: depth.device,
         output: Image::from_rgba(w, h, &frame.hdr),
     }
 }

@@ -8,8 +8,8 @@ use clusterlab::stress;
 
 #[test]
 fn the_stress_suite_passes() {
-    let gpu = common::gpu();
-    let runs = stress::run(&gpu, &Composer::default(), None, &|_| {});
+    let mut gpu = common::gpu();
+    let runs = stress::run(&mut gpu, &Composer::default(), None, &|_| {});
     let cases: std::collections::BTreeSet<&str> = runs.iter().map(|r| r.case.as_str()).collect();
     assert!(cases.len() >= 30, "{} cases", cases.len());
     for pipeline in [

@@ -1,14 +1,17 @@
 //! The GPU: adapter choice, device with checked features and limits, captured errors,
 //! per-pass timing and read-back.
 
+pub mod adapters;
+pub mod expect;
 mod readback;
 mod timing;
 
 pub use readback::{read_buffer, read_texture};
 pub use timing::{PassTimer, TimestampSlot, Timings};
 
-use std::fmt;
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
 
 /// What the adapter is, as reports print it.
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -19,45 +22,47 @@ pub struct AdapterSummary {
 }
 
 /// Why the GPU could not be used.
-#[derive(Debug)]
+#[derive(Debug, thiserror::Error)]
 pub enum GpuError {
-    NoAdapter {
-        backends: String,
-    },
-    UnknownBackend(String),
+    #[error(
+        "no GPU adapter found (backends tried: {backends}). Without a GPU, install Mesa's \
+         software Vulkan driver (lavapipe): `apt-get install mesa-vulkan-drivers`; or try \
+         OpenGL (llvmpipe) with `--backend gl` or `WGPU_BACKEND=gl`"
+    )]
+    NoAdapter { backends: String },
+    #[error(
+        "`{value}` (from {from}) is not a backend; use vulkan, gl, metal or dx12, or a comma \
+         list of them"
+    )]
+    UnknownBackend { value: String, from: &'static str },
+    #[error("could not open the GPU device: {0}")]
     Device(String),
-    /// A wgpu validation or out-of-memory error captured while running a pass.
+    /// A wgpu validation, out-of-memory or internal error captured while running a pass.
+    #[error("GPU error: {0}")]
     Captured(String),
+    #[error("{0}")]
     TooLarge(String),
+    /// The cell's GPU work did not finish within its time limit.
+    #[error(
+        "the GPU work did not finish within the cell time limit of {} s; raise it with \
+         --cell-timeout SECONDS",
+        limit.as_secs_f64()
+    )]
+    TimedOut { limit: Duration },
+    /// The device was lost (driver reset, destroyed) and cannot run anything more.
+    #[error("the GPU device was lost: {0}")]
+    Lost(String),
 }
 
-impl fmt::Display for GpuError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            GpuError::NoAdapter { backends } => write!(
-                f,
-                "no GPU adapter found (backends tried: {backends}). Without a GPU, install Mesa's \
-                 software Vulkan driver (lavapipe): `apt-get install mesa-vulkan-drivers`; or try \
-                 OpenGL (llvmpipe) with `--backend gl` or `WGPU_BACKEND=gl`"
-            ),
-            GpuError::UnknownBackend(b) => write!(
-                f,
-                "unknown backend `{b}`; use vulkan, gl, metal or dx12 (or a comma list)"
-            ),
-            GpuError::Device(e) => write!(f, "could not open the GPU device: {e}"),
-            GpuError::Captured(e) => write!(f, "GPU error: {e}"),
-            GpuError::TooLarge(e) => write!(f, "{e}"),
-        }
-    }
-}
-
-impl std::error::Error for GpuError {}
+/// How long one cell's GPU work may take by default (`--cell-timeout`).
+pub const DEFAULT_CELL_TIMEOUT: Duration = Duration::from_secs(600);
 
 /// An open device and what it can do.
 pub struct Gpu {
     pub device: wgpu::Device,
     pub queue: wgpu::Queue,
     pub adapter: AdapterSummary,
+    pub backend: wgpu::Backend,
     /// Pass times come from timestamp queries (hardware adapters that have them); otherwise
     /// each pass is submitted alone and timed by the wall clock.
     pub timestamps: bool,
@@ -66,56 +71,43 @@ pub struct Gpu {
     pub hdr_format: wgpu::TextureFormat,
     pub limits: wgpu::Limits,
     uncaptured: Arc<Mutex<Vec<String>>>,
+    /// Why the device was lost, once it was (set by wgpu's device-lost callback).
+    lost: Arc<Mutex<Option<String>>>,
+    /// A wait ran past the cell limit: the queue may still hold that work.
+    overran: AtomicBool,
+    /// The backends asked for, so `reopen` asks for the same.
+    requested: Option<String>,
+    /// Nanoseconds one cell's GPU work may take (`--cell-timeout`).
+    cell_timeout_ns: AtomicU64,
+    /// When the current cell began (`begin_cell`); its waits share the limit.
+    cell_started: Mutex<Option<Instant>>,
 }
 
 impl Gpu {
     /// Open the best adapter of `backend` (e.g. "vulkan", "gl"); `None` honours
     /// `WGPU_BACKEND`, else prefers Vulkan and falls back to any backend.
     pub fn new(backend: Option<&str>) -> Result<Gpu, GpuError> {
-        let requested = match backend {
-            Some(b) => Some(parse_backends(b)?),
-            None => wgpu::Backends::from_env(),
-        };
-        let tries: Vec<wgpu::Backends> = match requested {
-            Some(b) => vec![b],
-            None => vec![wgpu::Backends::VULKAN, wgpu::Backends::all()],
-        };
-        for backends in &tries {
-            let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
-            desc.backends = *backends;
-            desc.flags = wgpu::InstanceFlags::empty().with_env();
-            let instance = wgpu::Instance::new(desc);
-            let mut adapters = pollster::block_on(instance.enumerate_adapters(*backends));
-            // Real GPUs before software ones; Vulkan before other backends.
-            adapters.sort_by_key(|a| {
-                let info = a.get_info();
-                let kind = match info.device_type {
-                    wgpu::DeviceType::DiscreteGpu => 0,
-                    wgpu::DeviceType::IntegratedGpu => 1,
-                    wgpu::DeviceType::VirtualGpu => 2,
-                    wgpu::DeviceType::Cpu => 3,
-                    wgpu::DeviceType::Other => 4,
-                };
-                (kind, info.backend != wgpu::Backend::Vulkan)
-            });
-            if let Some(adapter) = adapters.into_iter().next() {
-                return Self::open(adapter);
-            }
-        }
-        let backends = tries.last().map(|b| format!("{b:?}")).unwrap_or_default();
-        Err(GpuError::NoAdapter { backends })
+        let mut gpu = Self::find(backend)?;
+        gpu.requested = backend.map(str::to_string);
+        Ok(gpu)
+    }
+
+    /// A new device on the same backends, with the same cell limit: what a run uses in place
+    /// of a device that became unusable.
+    pub fn reopen(&self) -> Result<Gpu, GpuError> {
+        let gpu = Self::new(self.requested.as_deref())?;
+        gpu.set_cell_timeout(self.cell_timeout());
+        Ok(gpu)
+    }
+
+    fn find(backend: Option<&str>) -> Result<Gpu, GpuError> {
+        let request = adapters::Request::new(backend)?;
+        Self::open(adapters::pick(&request)?)
     }
 
     fn open(adapter: wgpu::Adapter) -> Result<Gpu, GpuError> {
         let info = adapter.get_info();
-        let available = adapter.features();
-        // Adapter-specific format features: OpenGL reports rgba32float as renderable only here.
-        // Forced early depth tests let instrumented passes count what early-Z shades.
-        let wanted = wgpu::Features::TIMESTAMP_QUERY
-            | wgpu::Features::SHADER_EARLY_DEPTH_TEST
-            | wgpu::Features::FLOAT32_BLENDABLE
-            | wgpu::Features::TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES;
-        let features = available & wanted;
+        let features = adapter.features() & adapters::wanted_features();
         let limits = adapter.limits();
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("clusterlab"),
@@ -134,21 +126,15 @@ impl Gpu {
                 v.push(e.to_string());
             }
         }));
-        let f32_usages = adapter
-            .get_texture_format_features(wgpu::TextureFormat::Rgba32Float)
-            .allowed_usages;
-        let hdr_format = if f32_usages.contains(wgpu::TextureUsages::RENDER_ATTACHMENT)
-            && features.contains(wgpu::Features::FLOAT32_BLENDABLE)
-        {
-            wgpu::TextureFormat::Rgba32Float
-        } else {
-            wgpu::TextureFormat::Rgba16Float
-        };
-        let driver = [info.driver.trim(), info.driver_info.trim()]
-            .into_iter()
-            .filter(|s| !s.is_empty())
-            .collect::<Vec<_>>()
-            .join(" ");
+        let lost = Arc::new(Mutex::new(None));
+        let lost_sink = lost.clone();
+        device.set_device_lost_callback(move |reason, message| {
+            if let Ok(mut l) = lost_sink.lock() {
+                *l = Some(format!("{reason:?}: {message}"));
+            }
+        });
+        let hdr_format = adapters::hdr_format(&adapter);
+        let driver = driver_string(&info);
         Ok(Gpu {
             device,
             queue,
@@ -157,23 +143,32 @@ impl Gpu {
                 backend: info.backend.to_string(),
                 driver,
             },
+            backend: info.backend,
             timestamps: features.contains(wgpu::Features::TIMESTAMP_QUERY)
-                && timestamps_are_per_pass(info.device_type),
+                && adapters::timestamps_are_per_pass(info.device_type),
             hdr_format,
             limits,
             uncaptured,
+            lost,
+            overran: AtomicBool::new(false),
+            requested: None,
+            cell_timeout_ns: AtomicU64::new(DEFAULT_CELL_TIMEOUT.as_nanos() as u64),
+            cell_started: Mutex::new(None),
         })
     }
 
-    /// Run `work` with validation and out-of-memory errors captured; any error becomes
-    /// `GpuError::Captured` naming `what`.
+    /// Run `work` with validation, out-of-memory and internal errors captured; any error
+    /// becomes `GpuError::Captured` naming `what`.
     pub fn scoped<T>(&self, what: &str, work: impl FnOnce() -> T) -> Result<T, GpuError> {
+        let internal = self.device.push_error_scope(wgpu::ErrorFilter::Internal);
         let oom = self.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
         let validation = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
         let out = work();
         let v = pollster::block_on(validation.pop());
         let o = pollster::block_on(oom.pop());
-        if let Some(e) = v.or(o) {
+        // Internal errors carry why a backend rejected a shader (OpenGL: no GLSL for it).
+        let i = pollster::block_on(internal.pop());
+        if let Some(e) = i.or(v).or(o) {
             return Err(GpuError::Captured(format!("{what}: {e}")));
         }
         self.take_uncaptured(what)?;
@@ -206,33 +201,113 @@ impl Gpu {
         Ok(())
     }
 
-    /// Block until all submitted work is done.
+    /// The limit on one cell's GPU work (`--cell-timeout`).
+    pub fn cell_timeout(&self) -> Duration {
+        Duration::from_nanos(self.cell_timeout_ns.load(Ordering::Relaxed))
+    }
+
+    pub fn set_cell_timeout(&self, limit: Duration) {
+        let ns = u64::try_from(limit.as_nanos()).unwrap_or(u64::MAX);
+        self.cell_timeout_ns.store(ns, Ordering::Relaxed);
+    }
+
+    /// Start the clock of a cell: its waits together may take up to the cell limit. Without
+    /// it, each wait has the whole limit to itself.
+    pub fn begin_cell(&self) {
+        if let Ok(mut started) = self.cell_started.lock() {
+            *started = Some(Instant::now());
+        }
+    }
+
+    /// Block until all submitted work is done, or fail once the cell's limit is spent.
+    ///
+    /// A poll that times out means "not yet": wgpu's OpenGL backend clamps every fence wait
+    /// to `i32::MAX` ns (about 2.1 s), even an indefinite one, so a long frame on a software
+    /// GPU comes back as a timeout many times before it is done.
     pub fn wait(&self) -> Result<(), GpuError> {
-        self.device
-            .poll(wgpu::PollType::wait_indefinitely())
-            .map(|_| ())
-            .map_err(|e| GpuError::Captured(e.to_string()))
+        let started = self
+            .cell_started
+            .lock()
+            .ok()
+            .and_then(|s| *s)
+            .unwrap_or_else(Instant::now);
+        loop {
+            self.check_lost()?;
+            let limit = self.cell_timeout();
+            let remaining = limit.saturating_sub(started.elapsed());
+            if remaining.is_zero() {
+                self.overran.store(true, Ordering::Relaxed);
+                return Err(GpuError::TimedOut { limit });
+            }
+            match self.device.poll(wgpu::PollType::Wait {
+                submission_index: None,
+                timeout: Some(remaining),
+            }) {
+                Ok(_) => return Ok(()),
+                Err(wgpu::PollError::Timeout) => continue,
+                Err(e) => return Err(GpuError::Captured(e.to_string())),
+            }
+        }
+    }
+
+    fn check_lost(&self) -> Result<(), GpuError> {
+        match self.lost.lock().ok().and_then(|l| l.clone()) {
+            Some(why) => Err(GpuError::Lost(why)),
+            None => Ok(()),
+        }
+    }
+
+    /// After a failure: keep the device when `check_health` passes, else put a new one in
+    /// its place. Returns what was wrong with the old one (None when it was kept), or why no
+    /// new one could be opened.
+    pub fn renew_if_unusable(&mut self) -> Result<Option<GpuError>, GpuError> {
+        let Err(broken) = self.check_health() else {
+            return Ok(None);
+        };
+        *self = self.reopen()?;
+        Ok(Some(broken))
+    }
+
+    /// Whether the device can still run work: not lost, no work left over from a wait that
+    /// ran past its limit, and a small write and read-back comes back intact. A run calls it
+    /// after a failure to decide whether to `reopen`.
+    pub fn check_health(&self) -> Result<(), GpuError> {
+        self.check_lost()?;
+        if self.overran.load(Ordering::Relaxed) {
+            return Err(GpuError::TimedOut {
+                limit: self.cell_timeout(),
+            });
+        }
+        const PROBE: [u8; 16] = *b"clusterlab probe";
+        let buffer = self.scoped("device check", || {
+            let buffer = self.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("device check"),
+                size: PROBE.len() as u64,
+                usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC,
+                mapped_at_creation: false,
+            });
+            self.queue.write_buffer(&buffer, 0, &PROBE);
+            buffer
+        })?;
+        self.begin_cell();
+        let back = self.scoped("device check", || {
+            read_buffer(self, &buffer, 0, PROBE.len() as u64)
+        })??;
+        self.check_lost()?;
+        if back != PROBE {
+            return Err(GpuError::Captured(
+                "device check: a buffer written and read back came back changed".into(),
+            ));
+        }
+        Ok(())
     }
 }
 
-fn parse_backends(name: &str) -> Result<wgpu::Backends, GpuError> {
-    let b = wgpu::Backends::from_comma_list(name);
-    if b.is_empty() {
-        Err(GpuError::UnknownBackend(name.to_string()))
-    } else {
-        Ok(b)
-    }
-}
-
-/// Whether pass timestamps measure each pass's own work. Software adapters (lavapipe,
-/// llvmpipe) record a compute pass's timestamps without waiting for its dispatches, whose
-/// work then lands in whichever pass comes next; there each pass is submitted alone and
-/// timed by the wall clock instead, which on a CPU device is exactly its cost.
-/// `CLUSTERLAB_TIMING=timestamps` or `=wall` overrides the choice.
-fn timestamps_are_per_pass(device: wgpu::DeviceType) -> bool {
-    match std::env::var("CLUSTERLAB_TIMING").as_deref() {
-        Ok("timestamps") => true,
-        Ok("wall") => false,
-        _ => device != wgpu::DeviceType::Cpu,
-    }
+/// The driver's name and version, as one line.
+fn driver_string(info: &wgpu::AdapterInfo) -> String {
+    [info.driver.trim(), info.driver_info.trim()]
+        .into_iter()
+        .filter(|s| !s.is_empty())
+        .collect::<Vec<_>>()
+        .join(" ")
 }

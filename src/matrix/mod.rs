@@ -181,12 +181,20 @@ pub struct MatrixOptions {
     pub progress: bool,
     pub shard: Option<(u32, u32)>,
     pub command: Vec<String>,
+    /// The variant files of the whole matrix (all shards), for provenance: `merge` checks
+    /// that every shard read the same files.
+    pub variant_files: BTreeMap<String, VariantFile>,
+    /// Called before each cell runs (tests use it to break the device on purpose).
+    #[doc(hidden)]
+    pub before_cell: Option<fn(&Gpu, &CellSpec)>,
 }
 
 /// Run every cell, one at a time, and return the results with speed-ups and the Pareto
-/// front filled in. A cell that fails (or panics) is recorded and the others still run.
+/// front filled in. A cell that fails (or panics) is recorded and the others still run: after
+/// a failure the device is checked and, when it is unusable (lost, still busy past the cell
+/// limit, failing a read-back), replaced by a new one before the next cell.
 pub fn run(
-    gpu: &Gpu,
+    gpu: &mut Gpu,
     composer: &Composer,
     cells: &[PlannedCell],
     options: &MatrixOptions,
@@ -206,19 +214,28 @@ pub fn run(
         .progress_chars("=> "),
     );
     let mut records = Vec::with_capacity(cells.len());
+    // Why there is no usable device (the last one broke and no new one could be opened).
+    let mut no_device: Option<String> = None;
     for cell in cells {
         bar.set_message(cell.spec.id.clone());
-        let record = catch_unwind(AssertUnwindSafe(|| {
-            run_one(gpu, composer, cell, options, &images, &references)
-        }))
-        .unwrap_or_else(|panic| {
-            let why = panic
-                .downcast_ref::<String>()
-                .cloned()
-                .or_else(|| panic.downcast_ref::<&str>().map(|s| s.to_string()))
-                .unwrap_or_else(|| "unknown panic".into());
-            CellRecord::failed(cell.spec.clone(), format!("panicked: {why}"))
-        });
+        if no_device.is_some() {
+            no_device = gpu
+                .reopen()
+                .map(|fresh| *gpu = fresh)
+                .err()
+                .map(no_usable_device);
+        }
+        let mut record = match &no_device {
+            Some(why) => CellRecord::failed(cell.spec.clone(), why.clone()),
+            None => run_guarded(gpu, composer, cell, options, &images, &references),
+        };
+        if let Some(why) = &mut record.failure
+            && no_device.is_none()
+            && let Some(note) = renew_if_unusable(gpu, &mut no_device)
+        {
+            bar.println(format!("{}: {note}", cell.spec.id));
+            why.push_str(&format!(" [{note}]"));
+        }
         if let Some(why) = &record.failure {
             bar.println(format!(
                 "FAILED {}: {}",
@@ -231,11 +248,57 @@ pub fn run(
     }
     bar.finish_and_clear();
     let mut results = Results {
-        provenance: vec![provenance(gpu, cells, options)],
+        provenance: vec![provenance(gpu, options)],
         cells: records,
     };
     derive(&mut results.cells, None);
     results
+}
+
+/// Run one cell with its time limit started, turning a panic into a failed cell.
+fn run_guarded(
+    gpu: &Gpu,
+    composer: &Composer,
+    cell: &PlannedCell,
+    options: &MatrixOptions,
+    images: &Path,
+    references: &ReferenceCache,
+) -> CellRecord {
+    gpu.begin_cell();
+    if let Some(hook) = options.before_cell {
+        hook(gpu, &cell.spec);
+    }
+    catch_unwind(AssertUnwindSafe(|| {
+        run_one(gpu, composer, cell, options, images, references)
+    }))
+    .unwrap_or_else(|panic| {
+        let why = panic
+            .downcast_ref::<String>()
+            .cloned()
+            .or_else(|| panic.downcast_ref::<&str>().map(|s| s.to_string()))
+            .unwrap_or_else(|| "unknown panic".into());
+        CellRecord::failed(cell.spec.clone(), format!("panicked: {why}"))
+    })
+}
+
+/// After a failed cell: keep the device if it still works, else open a new one (or record in
+/// `no_device` why none opens). Returns what happened when the device was not kept.
+fn renew_if_unusable(gpu: &mut Gpu, no_device: &mut Option<String>) -> Option<String> {
+    match gpu.renew_if_unusable() {
+        Ok(None) => None,
+        Ok(Some(broken)) => Some(format!(
+            "the device was unusable afterwards ({broken}); a new one runs the next cells"
+        )),
+        Err(e) => {
+            let why = no_usable_device(e);
+            *no_device = Some(why.clone());
+            Some(format!("the device was unusable afterwards; {why}"))
+        }
+    }
+}
+
+fn no_usable_device(e: crate::gpu::GpuError) -> String {
+    format!("no usable GPU device: opening a new one failed: {e}")
 }
 
 fn run_one(
@@ -373,8 +436,17 @@ pub fn derive(cells: &mut [CellRecord], baseline: Option<&Results>) {
 }
 
 /// Combine result folders into one: cells by id (a later folder's cell replaces an earlier
-/// one's), images copied into `out`, provenance of every run kept.
-pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<Results, String> {
+/// one's), images copied into `out`, provenance of every run kept. Folders from different
+/// adapters, or whose runs read different variant files under one name, are refused unless
+/// `allow_mixed`: their times (and perhaps images) are not comparable.
+pub fn merge(dirs: &[PathBuf], out: &Path, allow_mixed: bool) -> Result<Results, String> {
+    let loaded: Vec<(&PathBuf, Results)> = dirs
+        .iter()
+        .map(|d| Results::load(d).map(|r| (d, r)))
+        .collect::<Result<_, _>>()?;
+    if !allow_mixed {
+        check_comparable(&loaded)?;
+    }
     let mut merged = Results {
         provenance: Vec::new(),
         cells: Vec::new(),
@@ -382,8 +454,7 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<Results, String> {
     let images = out.join("images");
     std::fs::create_dir_all(&images)
         .map_err(|e| format!("{}: cannot create folder: {e}", images.display()))?;
-    for dir in dirs {
-        let r = Results::load(dir)?;
+    for (dir, r) in loaded {
         merged.provenance.extend(r.provenance);
         for cell in r.cells {
             for file in [&cell.images.image, &cell.images.heat, &cell.images.debug]
@@ -405,11 +476,67 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<Results, String> {
     Ok(merged)
 }
 
-fn provenance(gpu: &Gpu, cells: &[PlannedCell], options: &MatrixOptions) -> Provenance {
-    let mut variant_files = BTreeMap::new();
+/// Refuse folders whose runs used different adapters, or different files for one variant.
+fn check_comparable(loaded: &[(&PathBuf, Results)]) -> Result<(), String> {
+    let runs: Vec<(&PathBuf, &Provenance)> = loaded
+        .iter()
+        .flat_map(|(dir, r)| r.provenance.iter().map(move |p| (*dir, p)))
+        .collect();
+    let Some(&(first_dir, first)) = runs.first() else {
+        return Ok(());
+    };
+    let adapter = |p: &Provenance| {
+        format!(
+            "{} ({}, {})",
+            p.adapter.name, p.adapter.backend, p.adapter.driver
+        )
+    };
+    for &(dir, p) in &runs[1..] {
+        if p.adapter != first.adapter {
+            return Err(format!(
+                "{} ran on {}, but {} ran on {}: times from different adapters are not \
+                 comparable. Merge folders from one adapter, or pass --allow-mixed to merge \
+                 them anyway",
+                dir.display(),
+                adapter(p),
+                first_dir.display(),
+                adapter(first)
+            ));
+        }
+    }
+    let mut seen: BTreeMap<&str, (&PathBuf, &VariantFile)> = BTreeMap::new();
+    for &(dir, p) in &runs {
+        for (name, file) in &p.variant_files {
+            match seen.get(name.as_str()) {
+                Some((other_dir, other)) if other.sha256 != file.sha256 => {
+                    return Err(format!(
+                        "variant `{name}` differs: {} ran {} (SHA-256 {}), {} ran {} (SHA-256 \
+                         {}). Rerun the stale shard with the same variant files, or pass \
+                         --allow-mixed to merge them anyway",
+                        other_dir.display(),
+                        other.path.display(),
+                        &other.sha256[..12.min(other.sha256.len())],
+                        dir.display(),
+                        file.path.display(),
+                        &file.sha256[..12.min(file.sha256.len())],
+                    ));
+                }
+                Some(_) => {}
+                None => {
+                    seen.insert(name, (dir, file));
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The SHA-256 of each variant file the cells read, by variant name.
+pub fn variant_files(cells: &[PlannedCell]) -> BTreeMap<String, VariantFile> {
+    let mut files = BTreeMap::new();
     for c in cells {
         if let Ok(text) = std::fs::read(&c.spec.variant_path) {
-            variant_files
+            files
                 .entry(c.spec.variant.clone())
                 .or_insert_with(|| VariantFile {
                     path: c.spec.variant_path.clone(),
@@ -417,6 +544,10 @@ fn provenance(gpu: &Gpu, cells: &[PlannedCell], options: &MatrixOptions) -> Prov
                 });
         }
     }
+    files
+}
+
+fn provenance(gpu: &Gpu, options: &MatrixOptions) -> Provenance {
     let git = |args: &[&str]| {
         std::process::Command::new("git")
             .args(args)
@@ -441,7 +572,7 @@ fn provenance(gpu: &Gpu, cells: &[PlannedCell], options: &MatrixOptions) -> Prov
         .into(),
         command: options.command.clone(),
         shard: options.shard.map(|(k, n)| format!("{k}/{n}")),
-        variant_files,
+        variant_files: options.variant_files.clone(),
         scenes: SCENES
             .iter()
             .map(|s| (s.name.to_string(), s.defaults.into()))

@@ -1091,19 +1091,6 @@ impl<'g> Renderer<'g> {
         Ok(read_hdr(self.gpu, &self.targets.hdr)?)
     }
 
-    /// The depth buffer of the last frame, for variants with `depth.format: Float32` (24-bit
-    /// depth cannot be copied out).
-    pub fn read_depth(&self) -> Result<Vec<f32>, RenderError> {
-        let t = &self.targets.depth;
-        if t.format() != wgpu::TextureFormat::Depth32Float {
-            return Err(RenderError::NotRunnable(format!(
-                "reading back depth needs depth.format: Float32 (this variant's depth is {:?})",
-                t.format()
-            )));
-        }
-        Ok(bytemuck::cast_slice(&read_texture(self.gpu, t, 4)?).to_vec())
-    }
-
     /// The light lists as the GPU holds them after the last frame (clustered variants).
     pub fn cluster_lists(&self) -> Result<Option<ClusterLists>, RenderError> {
         match &self.clusters {

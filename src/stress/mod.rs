@@ -10,7 +10,7 @@ use serde::Serialize;
 
 use crate::compose::Composer;
 use crate::cpu::clusters::{self as cpu, Grid};
-use crate::gpu::Gpu;
+use crate::gpu::{Gpu, expect};
 use crate::render::Renderer;
 use crate::run::{CellOptions, run_scene};
 use crate::scene::Scene;
@@ -37,16 +37,17 @@ pub struct CaseRun {
 
 /// Largest 8-bit error a variant may have against the reference: 1 LSB when the G-buffer
 /// keeps full precision, more for the packed normal codecs (bounded by their angular error
-/// at 16 bits per component). Scissor deferred adds each light by blending; into a 16-bit
-/// float target (OpenGL) every blend rounds the sum to 11 bits, so its bound grows with the
-/// lights that overlap: 1 LSB per 32 lights (1000 lights at one point measure 17 LSB).
-pub fn error_bound(v: &Variant, hdr_format: wgpu::TextureFormat, lights: usize) -> u32 {
-    let accumulation = if v.pipeline == crate::variant::Pipeline::DeferredScissor
-        && hdr_format == wgpu::TextureFormat::Rgba16Float
-    {
-        (lights / 32) as u32
-    } else {
-        0
+/// at 16 bits per component). Scissor deferred adds each light by blending, so where the
+/// adapter's HDR target rounds each blend (see `gpu::expect`), its bound grows with the
+/// lights that overlap.
+pub fn error_bound(v: &Variant, gpu: &Gpu, lights: usize) -> u32 {
+    let blended = v.pipeline == crate::variant::Pipeline::DeferredScissor;
+    let accumulation = match expect::allowance(gpu, expect::Check::BlendedLightSum) {
+        Some(d) if blended => match d.allowance {
+            expect::Allowance::LsbPerLights(per) => lights as u32 / per,
+            _ => 0,
+        },
+        _ => 0,
     };
     let codec = if !v.pipeline.is_deferred() {
         1
@@ -132,7 +133,7 @@ pub fn run_case(gpu: &Gpu, composer: &Composer, case: &Case, name: &str, v: &Var
                     Err(e) => check("no dropped light", false, e),
                 });
             }
-            let bound = error_bound(v, gpu.hdr_format, case.scene.lights.len());
+            let bound = error_bound(v, gpu, case.scene.lights.len());
             let e = &cell.report.error;
             let worst = (0..f.ldr.len())
                 .max_by_key(|&i| {
@@ -213,29 +214,49 @@ pub fn missing_light(
 }
 
 /// Run every case whose name contains `filter` (all without one) on each of its variants.
+/// After a failed run the device is checked, and replaced when it is unusable, so one run's
+/// broken device does not fail the runs after it.
 pub fn run(
-    gpu: &Gpu,
+    gpu: &mut Gpu,
     composer: &Composer,
     filter: Option<&str>,
     progress: &dyn Fn(&str),
 ) -> Vec<CaseRun> {
     let mut out = Vec::new();
+    // Why there is no usable device: the runs after that fail with it.
+    let mut no_device: Option<String> = None;
     for case in cases() {
         if filter.is_some_and(|f| !case.name.contains(f)) {
             continue;
         }
         for (name, v) in &case.variants {
             progress(&format!("{} / {name}", case.name));
-            let run = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-                run_case(gpu, composer, &case, name, v)
-            }))
-            .unwrap_or_else(|_| CaseRun {
+            let failed = |why: String| CaseRun {
                 case: case.name.to_string(),
                 variant: name.clone(),
                 what: case.what.to_string(),
                 ok: false,
-                checks: vec![check("renders", false, "panicked".into())],
-            });
+                checks: vec![check("renders", false, why)],
+            };
+            if let Some(why) = &no_device {
+                out.push(failed(why.clone()));
+                continue;
+            }
+            gpu.begin_cell();
+            let run = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+                run_case(gpu, composer, &case, name, v)
+            }))
+            .unwrap_or_else(|_| failed("panicked".into()));
+            if !run.ok {
+                match gpu.renew_if_unusable() {
+                    Ok(None) => {}
+                    Ok(Some(broken)) => progress(&format!(
+                        "device unusable after {} / {name} ({broken}); opened a new one",
+                        case.name
+                    )),
+                    Err(e) => no_device = Some(format!("no usable GPU device: {e}")),
+                }
+            }
             out.push(run);
         }
     }

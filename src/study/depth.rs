@@ -213,6 +213,8 @@ pub struct DepthStudy {
     pub curves: Vec<DepthCurve>,
     /// How the adapter stores Depth24Plus, judged from the stored values.
     pub unorm24_storage: String,
+    /// Why this adapter's reversed-Z float32 depth differs, where it is declared to.
+    pub adapter_deviation: Option<&'static str>,
 }
 
 pub fn run(
@@ -226,6 +228,11 @@ pub fn run(
         rows: Vec::new(),
         curves: Vec::new(),
         unorm24_storage: String::new(),
+        adapter_deviation: crate::gpu::expect::allowance(
+            gpu,
+            crate::gpu::expect::Check::ReversedFloatDepth,
+        )
+        .map(|d| d.why),
     };
     for setup in Setup::all() {
         let variant = setup.variant();
@@ -369,6 +376,11 @@ pub fn table(study: &DepthStudy) -> Table {
          this adapter as: {}. Pixels that missed their plane: {missing}.",
         study.unorm24_storage
     ));
+    if let Some(why) = study.adapter_deviation {
+        t.notes.push(format!(
+            "On this adapter reversed-Z float32 is only as precise as 24-bit depth: {why}."
+        ));
+    }
     t
 }
 

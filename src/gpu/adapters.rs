@@ -1,0 +1,421 @@
+//! Which adapters wgpu sees, what each offers clusterlab, and which one a run picks and why:
+//! the choice `Gpu::new` makes, and the survey `clusterlab adapters` prints.
+
+use serde::Serialize;
+
+use super::GpuError;
+use super::expect::DEVIATIONS;
+
+/// Where the backends to try came from.
+#[derive(Clone, Debug)]
+pub enum Request {
+    /// `--backend` (or a library caller).
+    Flag(String, wgpu::Backends),
+    /// The `WGPU_BACKEND` environment variable.
+    Env(String, wgpu::Backends),
+    /// Neither: Vulkan first, then any backend.
+    Default,
+}
+
+impl Request {
+    /// `backend` if given, else `WGPU_BACKEND` if set, else the default order.
+    pub fn new(backend: Option<&str>) -> Result<Request, GpuError> {
+        if let Some(b) = backend {
+            return Ok(Request::Flag(
+                b.to_string(),
+                parse_backends(b, "--backend")?,
+            ));
+        }
+        match std::env::var("WGPU_BACKEND") {
+            Ok(b) if !b.trim().is_empty() => {
+                let backends = parse_backends(&b, "WGPU_BACKEND")?;
+                Ok(Request::Env(b, backends))
+            }
+            _ => Ok(Request::Default),
+        }
+    }
+
+    /// The backend sets to try, in order; the first that has an adapter is used.
+    pub fn tries(&self) -> Vec<wgpu::Backends> {
+        match self {
+            Request::Flag(_, b) | Request::Env(_, b) => vec![*b],
+            Request::Default => vec![wgpu::Backends::VULKAN, wgpu::Backends::all()],
+        }
+    }
+
+    fn describe(&self) -> String {
+        match self {
+            Request::Flag(b, _) => format!("--backend {b}: only those backends"),
+            Request::Env(b, _) => format!("WGPU_BACKEND={b}: only those backends"),
+            Request::Default => {
+                "no --backend and no WGPU_BACKEND: Vulkan adapters first, any backend when \
+                 there is none"
+                    .into()
+            }
+        }
+    }
+}
+
+/// Parse a comma list of backend names, refusing any name wgpu does not know (wgpu itself
+/// skips them silently).
+fn parse_backends(list: &str, from: &'static str) -> Result<wgpu::Backends, GpuError> {
+    let mut all = wgpu::Backends::empty();
+    for name in list.split(',') {
+        let b = wgpu::Backends::from_comma_list(name);
+        if b.is_empty() {
+            return Err(GpuError::UnknownBackend {
+                value: name.trim().to_string(),
+                from,
+            });
+        }
+        all |= b;
+    }
+    Ok(all)
+}
+
+/// Every adapter of `backends`, best first: real GPUs before software ones, Vulkan before
+/// other backends of the same kind.
+pub fn enumerate(backends: wgpu::Backends) -> Vec<wgpu::Adapter> {
+    let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
+    desc.backends = backends;
+    desc.flags = wgpu::InstanceFlags::empty().with_env();
+    let instance = wgpu::Instance::new(desc);
+    let mut adapters = pollster::block_on(instance.enumerate_adapters(backends));
+    adapters.sort_by_key(|a| rank(&a.get_info()));
+    adapters
+}
+
+const RANKING: &str = "real GPUs before software ones (discrete, integrated, virtual, CPU, \
+                       other), Vulkan before other backends of the same kind";
+
+fn rank(info: &wgpu::AdapterInfo) -> (u8, bool) {
+    let kind = match info.device_type {
+        wgpu::DeviceType::DiscreteGpu => 0,
+        wgpu::DeviceType::IntegratedGpu => 1,
+        wgpu::DeviceType::VirtualGpu => 2,
+        wgpu::DeviceType::Cpu => 3,
+        wgpu::DeviceType::Other => 4,
+    };
+    (kind, info.backend != wgpu::Backend::Vulkan)
+}
+
+/// The adapter a run uses for `request`, or why there is none.
+pub fn pick(request: &Request) -> Result<wgpu::Adapter, GpuError> {
+    let tries = request.tries();
+    for backends in &tries {
+        if let Some(adapter) = enumerate(*backends).into_iter().next() {
+            return Ok(adapter);
+        }
+    }
+    let backends = tries.last().map(|b| format!("{b:?}")).unwrap_or_default();
+    Err(GpuError::NoAdapter { backends })
+}
+
+/// The optional features clusterlab asks for when the adapter has them.
+pub fn wanted_features() -> wgpu::Features {
+    // Adapter-specific format features: OpenGL reports rgba32float as renderable only here.
+    // Forced early depth tests let instrumented passes count what early-Z shades.
+    wgpu::Features::TIMESTAMP_QUERY
+        | wgpu::Features::SHADER_EARLY_DEPTH_TEST
+        | wgpu::Features::FLOAT32_BLENDABLE
+        | wgpu::Features::TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES
+}
+
+/// Whether rgba32float can be rendered to and blended.
+fn float32_target(adapter: &wgpu::Adapter, features: wgpu::Features) -> bool {
+    let usages = adapter
+        .get_texture_format_features(wgpu::TextureFormat::Rgba32Float)
+        .allowed_usages;
+    usages.contains(wgpu::TextureUsages::RENDER_ATTACHMENT)
+        && features.contains(wgpu::Features::FLOAT32_BLENDABLE)
+}
+
+/// The HDR colour target's format: rgba32float where the adapter can render and blend it,
+/// else rgba16float (OpenGL through wgpu).
+pub fn hdr_format(adapter: &wgpu::Adapter) -> wgpu::TextureFormat {
+    if float32_target(adapter, adapter.features() & wanted_features()) {
+        wgpu::TextureFormat::Rgba32Float
+    } else {
+        wgpu::TextureFormat::Rgba16Float
+    }
+}
+
+/// Whether pass timestamps measure each pass's own work. Software adapters (lavapipe,
+/// llvmpipe) record a compute pass's timestamps without waiting for its dispatches, whose
+/// work then lands in whichever pass comes next; there each pass is submitted alone and
+/// timed by the wall clock instead, which on a CPU device is exactly its cost.
+/// `CLUSTERLAB_TIMING=timestamps` or `=wall` overrides the choice.
+pub fn timestamps_are_per_pass(device: wgpu::DeviceType) -> bool {
+    match std::env::var("CLUSTERLAB_TIMING").as_deref() {
+        Ok("timestamps") => true,
+        Ok("wall") => false,
+        _ => device != wgpu::DeviceType::Cpu,
+    }
+}
+
+/// One capability clusterlab uses, and whether an adapter has it.
+#[derive(Clone, Debug, Serialize)]
+pub struct Capability {
+    pub name: &'static str,
+    pub present: bool,
+    /// What clusterlab does with it, and without it.
+    #[serde(rename = "use")]
+    pub use_: &'static str,
+}
+
+/// An adapter as `clusterlab adapters` reports it.
+#[derive(Clone, Debug, Serialize)]
+pub struct AdapterReport {
+    pub name: String,
+    pub backend: String,
+    pub device_type: String,
+    pub driver: String,
+    pub vendor_id: u32,
+    pub device_id: u32,
+    pub capabilities: Vec<Capability>,
+    pub hdr_format: String,
+    pub timing: String,
+    pub max_texture_side: u32,
+    pub max_storage_buffer_bytes: u64,
+    pub max_buffer_bytes: u64,
+    /// Where this adapter's results legitimately differ from the reviewed ones (see
+    /// `gpu::expect`).
+    pub declared_differences: Vec<&'static str>,
+    /// Whether `render`, `matrix`, `stress` and `study` would use this adapter.
+    pub chosen: bool,
+}
+
+/// What `clusterlab adapters` prints.
+#[derive(Clone, Debug, Serialize)]
+pub struct Survey {
+    pub tool: String,
+    pub adapters: Vec<AdapterReport>,
+    /// How the adapter is chosen.
+    pub rule: String,
+    /// The chosen adapter's index in `adapters`.
+    pub chosen: Option<usize>,
+    /// Why no adapter can be used, when none can.
+    pub problem: Option<String>,
+    /// Hints and the environment variables that change the choice.
+    pub notes: Vec<String>,
+}
+
+fn capabilities(adapter: &wgpu::Adapter) -> Vec<Capability> {
+    let f = adapter.features();
+    let down = adapter.get_downlevel_capabilities().flags;
+    let has = |x: wgpu::Features| f.contains(x);
+    let d = |x: wgpu::DownlevelFlags| down.contains(x);
+    vec![
+        Capability {
+            name: "compute shaders",
+            present: d(wgpu::DownlevelFlags::COMPUTE_SHADERS),
+            use_: "required: cluster bounds, light assignment, post effects",
+        },
+        Capability {
+            name: "storage writes in fragment shaders",
+            present: d(wgpu::DownlevelFlags::FRAGMENT_WRITABLE_STORAGE),
+            use_: "required: the counters of instrumented frames",
+        },
+        Capability {
+            name: "indirect dispatch",
+            present: d(wgpu::DownlevelFlags::INDIRECT_EXECUTION),
+            use_: "required: bloom's blur sized by its bright pass",
+        },
+        Capability {
+            name: "early depth test (SHADER_EARLY_DEPTH_TEST)",
+            present: has(wgpu::Features::SHADER_EARLY_DEPTH_TEST),
+            use_: "required by the forward pass: instrumented frames count only what early-Z shades",
+        },
+        Capability {
+            name: "timestamp queries (TIMESTAMP_QUERY)",
+            present: has(wgpu::Features::TIMESTAMP_QUERY),
+            use_: "per-pass GPU times on hardware adapters; without them each pass is timed by the wall clock",
+        },
+        Capability {
+            name: "float32 blending (FLOAT32_BLENDABLE)",
+            present: has(wgpu::Features::FLOAT32_BLENDABLE),
+            use_: "with a renderable rgba32float: a 32-bit HDR target; else rgba16float",
+        },
+        Capability {
+            name: "rgba32float render target",
+            present: adapter
+                .get_texture_format_features(wgpu::TextureFormat::Rgba32Float)
+                .allowed_usages
+                .contains(wgpu::TextureUsages::RENDER_ATTACHMENT),
+            use_: "with float32 blending: a 32-bit HDR target; else rgba16float",
+        },
+        Capability {
+            name: "adapter-specific format features",
+            present: has(wgpu::Features::TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES),
+            use_: "OpenGL reports rgba32float as renderable only through it",
+        },
+    ]
+}
+
+fn report(adapter: &wgpu::Adapter, chosen: bool) -> AdapterReport {
+    let info = adapter.get_info();
+    let limits = adapter.limits();
+    let hdr = hdr_format(adapter);
+    let timestamps = adapter.features().contains(wgpu::Features::TIMESTAMP_QUERY)
+        && timestamps_are_per_pass(info.device_type);
+    AdapterReport {
+        name: info.name.clone(),
+        backend: info.backend.to_string(),
+        device_type: format!("{:?}", info.device_type),
+        driver: super::driver_string(&info),
+        vendor_id: info.vendor,
+        device_id: info.device,
+        capabilities: capabilities(adapter),
+        hdr_format: format!("{hdr:?}").to_lowercase(),
+        timing: if timestamps {
+            "gpu timestamps".into()
+        } else if info.device_type == wgpu::DeviceType::Cpu {
+            "wall clock per pass (software adapter: timestamps do not wait for compute work)".into()
+        } else {
+            "wall clock per pass (no timestamp queries, or CLUSTERLAB_TIMING=wall)".into()
+        },
+        max_texture_side: limits.max_texture_dimension_2d,
+        max_storage_buffer_bytes: limits.max_storage_buffer_binding_size,
+        max_buffer_bytes: limits.max_buffer_size,
+        declared_differences: DEVIATIONS
+            .iter()
+            .filter(|d| d.on.holds_for(info.backend, hdr))
+            .map(|d| d.why)
+            .collect(),
+        chosen,
+    }
+}
+
+/// Every adapter wgpu sees on any backend, and the one `backend` (or `WGPU_BACKEND`, or the
+/// default order) picks.
+pub fn survey(backend: Option<&str>) -> Survey {
+    let request = Request::new(backend);
+    let picked = request
+        .as_ref()
+        .map_err(|e| e.to_string())
+        .and_then(|r| pick(r).map(|a| a.get_info()).map_err(|e| e.to_string()));
+    let adapters: Vec<AdapterReport> = enumerate(wgpu::Backends::all())
+        .iter()
+        .map(|a| {
+            let info = a.get_info();
+            let chosen = picked.as_ref().is_ok_and(|p| same_adapter(p, &info));
+            report(a, chosen)
+        })
+        .collect();
+    let chosen = adapters.iter().position(|a| a.chosen);
+    let problem = match (&picked, chosen) {
+        (Err(e), _) => Some(e.clone()),
+        (Ok(p), None) => Some(format!(
+            "the chosen adapter {} is not among those listed",
+            p.name
+        )),
+        (Ok(_), Some(_)) => None,
+    };
+    let mut notes = Vec::new();
+    if !adapters
+        .iter()
+        .any(|a| a.backend == wgpu::Backend::Vulkan.to_string())
+    {
+        notes.push(
+            "no Vulkan adapter: on a machine without a GPU, `apt-get install \
+             mesa-vulkan-drivers` adds lavapipe, which is faster than OpenGL's llvmpipe here \
+             and is the adapter the image snapshots were reviewed on"
+                .to_string(),
+        );
+    }
+    for var in ["WGPU_BACKEND", "CLUSTERLAB_TIMING", "WGPU_ADAPTER_NAME"] {
+        if let Ok(v) = std::env::var(var) {
+            notes.push(format!("{var}={v}"));
+        }
+    }
+    Survey {
+        tool: format!("clusterlab {}", env!("CARGO_PKG_VERSION")),
+        adapters,
+        rule: match &request {
+            Ok(r) => format!("{}; among them {RANKING}", r.describe()),
+            Err(_) => "none: the backend request is invalid".into(),
+        },
+        chosen,
+        problem,
+        notes,
+    }
+}
+
+fn same_adapter(a: &wgpu::AdapterInfo, b: &wgpu::AdapterInfo) -> bool {
+    a.name == b.name
+        && a.backend == b.backend
+        && a.device_type == b.device_type
+        && a.vendor == b.vendor
+        && a.device == b.device
+        && a.driver == b.driver
+}
+
+impl Survey {
+    /// The survey as text, to paste into a bug report.
+    pub fn text(&self) -> String {
+        use std::fmt::Write as _;
+        let mut s = String::new();
+        let _ = writeln!(
+            s,
+            "{}: {} adapters wgpu sees",
+            self.tool,
+            self.adapters.len()
+        );
+        for (i, a) in self.adapters.iter().enumerate() {
+            let _ = writeln!(
+                s,
+                "\n{}. {} ({}, {}){}",
+                i + 1,
+                a.name,
+                a.backend,
+                a.device_type,
+                if a.chosen {
+                    "  <- render, matrix, stress and study use this one"
+                } else {
+                    ""
+                }
+            );
+            let _ = writeln!(s, "   driver: {}", a.driver);
+            let _ = writeln!(
+                s,
+                "   ids: vendor 0x{:04x}, device 0x{:04x}",
+                a.vendor_id, a.device_id
+            );
+            let _ = writeln!(s, "   HDR target: {}", a.hdr_format);
+            let _ = writeln!(s, "   pass times: {}", a.timing);
+            let _ = writeln!(
+                s,
+                "   limits: textures up to {} px a side, storage bindings up to {} MiB, buffers up to {} MiB",
+                a.max_texture_side,
+                a.max_storage_buffer_bytes >> 20,
+                a.max_buffer_bytes >> 20
+            );
+            for c in &a.capabilities {
+                let _ = writeln!(
+                    s,
+                    "   [{}] {}: {}",
+                    if c.present { "x" } else { " " },
+                    c.name,
+                    c.use_
+                );
+            }
+            for why in &a.declared_differences {
+                let _ = writeln!(s, "   differs (declared): {why}");
+            }
+        }
+        let _ = writeln!(s, "\nchoice: {}", self.rule);
+        match (self.chosen, &self.problem) {
+            (Some(i), _) => {
+                let a = &self.adapters[i];
+                let _ = writeln!(s, "uses: {}. {} ({})", i + 1, a.name, a.backend);
+            }
+            (None, why) => {
+                let _ = writeln!(s, "uses: none: {}", why.as_deref().unwrap_or("no adapter"));
+            }
+        }
+        for note in &self.notes {
+            let _ = writeln!(s, "note: {note}");
+        }
+        s
+    }
+}

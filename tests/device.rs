@@ -1,0 +1,225 @@
+//! A failed cell stays in its cell: a device broken on purpose in one matrix cell is
+//! replaced before the next, and GPU work past the cell limit fails that cell alone, naming
+//! the limit.
+
+mod common;
+
+use std::sync::OnceLock;
+use std::time::{Duration, Instant};
+
+use clusterlab::compose::Composer;
+use clusterlab::gpu::{Gpu, GpuError};
+use clusterlab::matrix::{self, CellSpec, MatrixOptions, Study, Sweep};
+use clusterlab::render::{RenderError, Renderer};
+use clusterlab::scene;
+
+/// The cell whose device the hook destroys.
+static BREAK: OnceLock<String> = OnceLock::new();
+
+fn destroy_device_in_chosen_cell(gpu: &Gpu, spec: &CellSpec) {
+    if BREAK.get() == Some(&spec.id) {
+        gpu.device.destroy();
+    }
+}
+
+#[test]
+fn a_cell_that_breaks_the_device_fails_alone_and_later_cells_get_a_new_one() {
+    let mut gpu = common::gpu();
+    let studies = [Study {
+        name: "device".into(),
+        variants: matrix::find_variants(&["forward_plus".into(), "naive_forward".into()])
+            .expect("variants"),
+        scenes: vec!["one_light".into()],
+        sweeps: vec![Sweep::Lights(vec![1, 3])],
+        size: Some((48, 27)),
+    }];
+    let cells = matrix::expand(&studies).expect("cells");
+    assert_eq!(cells.len(), 4);
+    // The first cell: every other cell runs after the break.
+    let broken = cells[0].spec.id.clone();
+    BREAK.set(broken.clone()).expect("set once");
+    let out = std::env::temp_dir().join(format!("clusterlab-device-{}", std::process::id()));
+    let options = MatrixOptions {
+        warmup: 0,
+        frames: 1,
+        out: out.clone(),
+        progress: false,
+        shard: None,
+        command: vec![],
+        variant_files: matrix::variant_files(&cells),
+        before_cell: Some(destroy_device_in_chosen_cell),
+    };
+    let results = matrix::run(&mut gpu, &Composer::default(), &cells, &options);
+    let _ = std::fs::remove_dir_all(&out);
+    for c in &results.cells {
+        if c.spec.id == broken {
+            let why = c.failure.as_deref().expect("the broken cell fails");
+            assert!(
+                why.contains("a new one runs the next cells"),
+                "the failure says the device was replaced: {why}"
+            );
+        } else {
+            assert!(
+                c.ok(),
+                "{} after the broken cell: {:?}",
+                c.spec.id,
+                c.failure
+            );
+            assert!(c.error.as_ref().is_some_and(|e| e.max_abs_8bit <= 1));
+        }
+    }
+    // The device the matrix hands back is the new one, and it works.
+    gpu.check_health().expect("the replacement device works");
+}
+
+/// A renderer of naive forward with `lights` lights, after its warm-up frame, and the wall
+/// time of a frame.
+fn timed_frame(gpu: &Gpu, lights: u32) -> (Duration, Renderer<'_>) {
+    let scene =
+        scene::generate("atrium", common::small("atrium", 160, 90, Some(lights))).expect("atrium");
+    let v = common::load("naive_forward").variant;
+    let mut r = Renderer::new(gpu, &Composer::default(), &v, &scene).expect("renderer");
+    r.render().expect("warm-up frame");
+    let start = Instant::now();
+    r.render().expect("timed frame");
+    (start.elapsed(), r)
+}
+
+#[test]
+fn work_past_the_cell_limit_fails_naming_the_limit_and_the_device_is_renewed() {
+    let mut gpu = common::gpu();
+    // A frame long enough to time reliably on this adapter (software or real GPU).
+    let mut lights = 64;
+    let (mut took, mut renderer) = timed_frame(&gpu, lights);
+    while took < Duration::from_millis(40) && lights * 4 <= scene::MAX_LIGHTS {
+        lights *= 4;
+        (took, renderer) = timed_frame(&gpu, lights);
+    }
+    assert!(
+        took >= Duration::from_millis(10),
+        "{lights} lights: {took:?}"
+    );
+    let limit = took / 8;
+    gpu.set_cell_timeout(limit);
+    gpu.begin_cell();
+    match renderer.render() {
+        Err(RenderError::Gpu(e @ GpuError::TimedOut { .. })) => {
+            let message = e.to_string();
+            assert!(message.contains("--cell-timeout"), "{message}");
+        }
+        other => panic!(
+            "expected a timeout after {limit:?} ({lights} lights, frame {took:?}), got {:?}",
+            other.map(|_| ())
+        ),
+    }
+    drop(renderer);
+    let broken = gpu.renew_if_unusable().expect("a new device opens");
+    assert!(
+        matches!(broken, Some(GpuError::TimedOut { .. })),
+        "{broken:?}"
+    );
+    assert_eq!(gpu.cell_timeout(), limit, "the new device keeps the limit");
+    gpu.set_cell_timeout(clusterlab::gpu::DEFAULT_CELL_TIMEOUT);
+    gpu.check_health().expect("the new device works");
+}
+
+fn clusterlab(args: &[&str], env: &[(&str, &str)]) -> (i32, String) {
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_clusterlab"))
+        .args(args)
+        .envs(env.iter().copied())
+        .output()
+        .expect("clusterlab runs");
+    let text =
+        String::from_utf8_lossy(&out.stdout).into_owned() + &String::from_utf8_lossy(&out.stderr);
+    (out.status.code().unwrap_or(-1), text)
+}
+
+/// No adapter is a failure with the install hint, never a silent pass. Metal has no adapter
+/// on Linux.
+#[cfg(target_os = "linux")]
+#[test]
+fn no_adapter_fails_with_the_install_hint() {
+    let render = [
+        "render",
+        "--variant",
+        "forward_plus",
+        "--scene",
+        "one_light",
+        "--size",
+        "8x8",
+    ];
+    for (args, env) in [
+        (&render[..], vec![("WGPU_BACKEND", "metal")]),
+        (&["adapters", "--backend", "metal"][..], vec![]),
+    ] {
+        let (code, text) = clusterlab(args, &env);
+        assert_eq!(code, 1, "{args:?}: {text}");
+        assert!(
+            text.contains("no GPU adapter found")
+                && text.contains("apt-get install mesa-vulkan-drivers")
+                && text.contains("WGPU_BACKEND=gl"),
+            "{args:?}: {text}"
+        );
+    }
+    assert!(matches!(
+        Gpu::new(Some("metal")),
+        Err(GpuError::NoAdapter { .. })
+    ));
+}
+
+#[test]
+fn a_bad_backend_name_is_named_with_where_it_came_from() {
+    let (code, text) = clusterlab(&["adapters"], &[("WGPU_BACKEND", "vulcan")]);
+    assert_eq!(code, 1, "{text}");
+    assert!(
+        text.contains("`vulcan` (from WGPU_BACKEND) is not a backend"),
+        "{text}"
+    );
+    let (code, text) = clusterlab(
+        &[
+            "render",
+            "--variant",
+            "forward_plus",
+            "--scene",
+            "one_light",
+            "--backend",
+            "vulkan,glx",
+        ],
+        &[],
+    );
+    assert_eq!(code, 1, "{text}");
+    assert!(
+        text.contains("`glx` (from --backend) is not a backend"),
+        "{text}"
+    );
+}
+
+#[test]
+fn adapters_names_the_one_a_run_uses() {
+    let (code, text) = clusterlab(&["adapters", "--json"], &[]);
+    assert_eq!(code, 0, "{text}");
+    let survey: serde_json::Value = serde_json::from_str(&text).expect("JSON");
+    let chosen = survey["chosen"].as_u64().expect("an adapter is chosen") as usize;
+    let adapter = &survey["adapters"][chosen];
+    let gpu = common::gpu();
+    assert_eq!(adapter["name"], gpu.adapter.name.as_str());
+    assert_eq!(adapter["backend"], gpu.adapter.backend.as_str());
+    assert_eq!(
+        adapter["hdr_format"],
+        format!("{:?}", gpu.hdr_format).to_lowercase().as_str()
+    );
+    let required = adapter["capabilities"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|c| c["use"].as_str().unwrap().starts_with("required"));
+    for c in required {
+        assert_eq!(c["present"], true, "the chosen adapter lacks {}", c["name"]);
+    }
+    let (code, text) = clusterlab(&["adapters"], &[]);
+    assert_eq!(code, 0);
+    assert!(
+        text.contains(&format!("uses: {}. {}", chosen + 1, gpu.adapter.name)),
+        "{text}"
+    );
+}
