@@ -72,11 +72,11 @@ fn a_cell_that_breaks_the_device_fails_alone_and_later_cells_get_a_new_one() {
     gpu.check_health().expect("the replacement device works");
 }
 
-/// A renderer of naive forward with `lights` lights, after its warm-up frame, and the wall
-/// time of a frame.
-fn timed_frame(gpu: &Gpu, lights: u32) -> (Duration, Renderer<'_>) {
-    let scene =
-        scene::generate("atrium", common::small("atrium", 160, 90, Some(lights))).expect("atrium");
+/// A renderer of naive forward on atrium at `(width, height, lights)`, after its warm-up
+/// frame, and the wall time of a frame.
+fn timed_frame(gpu: &Gpu, (width, height, lights): (u32, u32, u32)) -> (Duration, Renderer<'_>) {
+    let params = common::small("atrium", width, height, Some(lights));
+    let scene = scene::generate("atrium", params).expect("atrium");
     let v = common::load("naive_forward").variant;
     let mut r = Renderer::new(gpu, &Composer::default(), &v, &scene).expect("renderer");
     r.render().expect("warm-up frame");
@@ -88,17 +88,22 @@ fn timed_frame(gpu: &Gpu, lights: u32) -> (Duration, Renderer<'_>) {
 #[test]
 fn work_past_the_cell_limit_fails_naming_the_limit_and_the_device_is_renewed() {
     let mut gpu = common::gpu();
-    // A frame long enough to time reliably on this adapter (software or real GPU).
-    let mut lights = 64;
-    let (mut took, mut renderer) = timed_frame(&gpu, lights);
-    while took < Duration::from_millis(40) && lights * 4 <= scene::MAX_LIGHTS {
-        lights *= 4;
-        (took, renderer) = timed_frame(&gpu, lights);
+    // The first frame long enough to time reliably on this adapter: a software GPU stops at
+    // the first step, a real one climbs to more lights and pixels.
+    let steps = [64, 256, 1024, 4096, 16384, 65536]
+        .map(|lights| (160, 90, lights))
+        .into_iter()
+        .chain([(640, 360, 65536), (1920, 1080, 65536)]);
+    let mut frame = None;
+    for step in steps {
+        let (took, renderer) = timed_frame(&gpu, step);
+        frame = Some((took, renderer, step));
+        if took >= Duration::from_millis(40) {
+            break;
+        }
     }
-    assert!(
-        took >= Duration::from_millis(10),
-        "{lights} lights: {took:?}"
-    );
+    let (took, mut renderer, step) = frame.expect("a frame");
+    assert!(took >= Duration::from_millis(10), "{step:?}: {took:?}");
     let limit = took / 8;
     gpu.set_cell_timeout(limit);
     gpu.begin_cell();
@@ -108,7 +113,7 @@ fn work_past_the_cell_limit_fails_naming_the_limit_and_the_device_is_renewed() {
             assert!(message.contains("--cell-timeout"), "{message}");
         }
         other => panic!(
-            "expected a timeout after {limit:?} ({lights} lights, frame {took:?}), got {:?}",
+            "expected a timeout after {limit:?} ({step:?}, frame {took:?}), got {:?}",
             other.map(|_| ())
         ),
     }

@@ -32,17 +32,20 @@ fn decode_png(path: &Path) -> Option<image::RgbImage> {
     image::open(path).ok().map(|i| i.to_rgb8())
 }
 
+/// The largest per-channel difference of two RGB pixels.
+fn pixel_diff(a: &[u8], b: &[u8]) -> u8 {
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| x.abs_diff(*y))
+        .max()
+        .unwrap_or(0)
+}
+
 /// How many pixels differ from `old` by more than the tolerance, and the largest difference.
 fn pixels_off(old: &[u8], new: &[u8]) -> (usize, u8) {
     old.chunks(3)
         .zip(new.chunks(3))
-        .map(|(a, b)| {
-            a.iter()
-                .zip(b)
-                .map(|(x, y)| x.abs_diff(*y))
-                .max()
-                .unwrap_or(0)
-        })
+        .map(|(a, b)| pixel_diff(a, b))
         .filter(|&d| d > TOLERANCE)
         .fold((0, 0), |(n, worst), d| (n + 1, worst.max(d)))
 }
@@ -81,12 +84,7 @@ fn check_image(
                 .chunks(3)
                 .zip(rgb.chunks(3))
                 .flat_map(|(a, b)| {
-                    let d = a
-                        .iter()
-                        .zip(b)
-                        .map(|(x, y)| x.abs_diff(*y))
-                        .max()
-                        .unwrap_or(0);
+                    let d = pixel_diff(a, b);
                     if d > TOLERANCE {
                         [255, 0, d.saturating_mul(16)]
                     } else {

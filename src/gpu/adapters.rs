@@ -318,8 +318,9 @@ pub fn survey(backend: Option<&str>) -> Survey {
     {
         notes.push(
             "no Vulkan adapter: on a machine without a GPU, `apt-get install \
-             mesa-vulkan-drivers` adds lavapipe, which is faster than OpenGL's llvmpipe here \
-             and is the adapter the image snapshots were reviewed on"
+             mesa-vulkan-drivers` adds lavapipe, which renders into a 32-bit float HDR target \
+             (OpenGL through wgpu gets a 16-bit one) and is the adapter the image snapshots \
+             were reviewed on"
                 .to_string(),
         );
     }

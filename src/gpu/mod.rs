@@ -1,5 +1,6 @@
-//! The GPU: adapter choice, device with checked features and limits, captured errors,
-//! per-pass timing and read-back.
+//! The GPU: adapter choice (`adapters`), device with checked features and limits, captured
+//! errors, waits bounded by a per-cell time limit, device health and replacement, per-pass
+//! timing, read-back, and where adapters are declared to differ (`expect`).
 
 pub mod adapters;
 pub mod expect;
