@@ -5,12 +5,14 @@
 //! the frame is compared ([`metrics`]) with an independent [`cpu`] reference. The
 //! [`matrix`] runs many such cells and reports them side by side.
 
+pub mod common;
 pub mod compose;
 pub mod cpu;
 pub mod explain;
 pub mod gpu;
 pub mod matrix;
 pub mod metrics;
+pub mod reference;
 pub mod render;
 pub mod run;
 pub mod scene;

@@ -2,7 +2,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::cpu::reference::ReferenceFrame;
+use crate::cpu::frame::ReferenceFrame;
 use crate::render::FrameOutput;
 
 /// How far a frame is from the reference. HDR figures are in linear radiance; 8-bit figures

@@ -5,9 +5,10 @@ use bytemuck::{Pod, Zeroable};
 use wgpu::util::DeviceExt;
 
 use crate::compose::Composer;
+use crate::cpu::zslice::Slices;
 use crate::gpu::{Gpu, read_buffer};
 use crate::render::RenderError;
-use crate::variant::{NormalCodec, Pipeline, Variant};
+use crate::variant::{Clusters, NormalCodec, Pipeline, Variant};
 
 /// Run entry point `entry` of test kernel `root` once per input (64 a workgroup). Group 0
 /// binds `inputs` (read-only storage) at 0.., then read-write outputs of the given byte
@@ -151,66 +152,64 @@ enum InputResource {
 /// Parameters of the z-slicing kernel. Mirrors `SliceParams` in twin_zslice.wesl.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
-pub struct SliceParams {
-    pub near: f32,
-    pub far: f32,
-    pub near_end: f32,
-    pub tan_half_fov_y: f32,
-    pub slices: u32,
-    pub tiles_y: u32,
-    pub count: u32,
-    pub _pad: u32,
+struct SliceParams {
+    near: f32,
+    far: f32,
+    tan_half_fov_y: f32,
+    tiles_y: u32,
+    count: u32,
+    starts: u32,
+    _pad: [u32; 2],
 }
 
-impl SliceParams {
-    /// The camera and grid of a slicing; `gpu_zslices` fills in the count.
-    pub fn new(
-        near: f32,
-        far: f32,
-        near_end: f32,
-        tan_half_fov_y: f32,
-        slices: u32,
-        tiles_y: u32,
-    ) -> Self {
-        Self {
-            near,
-            far,
-            near_end,
-            tan_half_fov_y,
-            slices,
-            tiles_y,
-            count: 0,
-            _pad: 0,
-        }
-    }
-}
-
-/// What the z-slicing kernel computed, per scheme: linear, exponential,
-/// near-then-exponential, Olsson.
+/// What the z-slicing kernel computed for one scheme.
 pub struct ZSliceResults {
     /// The slice of each depth.
-    pub slices: Vec<[u32; 4]>,
-    /// Where slice k begins, for k in 0..=slices.
-    pub starts: Vec<[f32; 4]>,
+    pub slices: Vec<u32>,
+    /// Where slice k begins, for k in 0..=count (slice `count` begins at far).
+    pub starts: Vec<f32>,
 }
 
-/// Run the z-slicing functions of the WGSL on `depths`.
+/// Run the variant's own z-slicing (`z_slice`, `slice_near_depth` of zslice.wesl, composed
+/// with `slices.scheme` and a grid of `slices.count` slices) on `depths`. Any scheme: the
+/// kernel is the same for all.
 pub fn gpu_zslices(
     gpu: &Gpu,
     composer: &Composer,
-    mut params: SliceParams,
+    slices: &Slices,
     depths: &[f32],
 ) -> Result<ZSliceResults, RenderError> {
-    params.count = depths.len() as u32;
-    let n = depths.len().max(params.slices as usize + 1) as u32;
-    let out = run_kernel(
+    let variant = Variant {
+        pipeline: Pipeline::ClusteredForward,
+        clusters: Some(Clusters {
+            grid: (1, slices.tiles_y, slices.count),
+            slicing: slices.scheme,
+            ..Clusters::default()
+        }),
+        ..Variant::default()
+    };
+    let params = SliceParams {
+        near: slices.near as f32,
+        far: slices.far as f32,
+        tan_half_fov_y: slices.tan_half_fov_y as f32,
+        tiles_y: slices.tiles_y,
+        count: depths.len() as u32,
+        starts: slices.count + 1,
+        _pad: [0; 2],
+    };
+    let n = depths.len().max(slices.count as usize + 1) as u32;
+    let out = run_kernel_for(
         gpu,
         composer,
+        &variant,
         "twin_zslice",
         "zslice_main",
         n,
-        &[bytemuck::bytes_of(&params), bytemuck::cast_slice(depths)],
-        &[depths.len() as u64 * 16, (params.slices as u64 + 1) * 16],
+        &[
+            KernelInput::Bytes(bytemuck::bytes_of(&params)),
+            KernelInput::Bytes(bytemuck::cast_slice(depths)),
+        ],
+        &[depths.len() as u64 * 4, (slices.count as u64 + 1) * 4],
     )?;
     Ok(ZSliceResults {
         slices: bytemuck::cast_slice(&out[0]).to_vec(),

@@ -6,8 +6,9 @@ mod common;
 use clusterlab::compose::Composer;
 use clusterlab::cpu::clusters::{self as cpu, Grid};
 use clusterlab::cpu::normals as codec;
-use clusterlab::cpu::zslice::{self, Scheme};
-use clusterlab::twins::{SliceParams, gpu_codecs, gpu_zslices};
+use clusterlab::cpu::zslice::Slices;
+use clusterlab::twins::{gpu_codecs, gpu_zslices};
+use clusterlab::variant::ZSlicing;
 use glam::DVec3;
 use proptest::prelude::*;
 use proptest::test_runner::{Config, TestRunner};
@@ -95,52 +96,45 @@ proptest! {
     }
 }
 
-/// A scheme with its parameters, a near plane and a far plane.
-fn slicing() -> impl Strategy<Value = (Scheme, f64, f64, u32)> {
+/// Any scheme of the list (`ZSlicing::every`) over a random range and slice count, with a
+/// random camera half-angle and tile rows for Olsson's cubic slices.
+fn slicing() -> impl Strategy<Value = Slices> {
     (
         1e-4..10.0f64,
         (1.5f64..1e6),
         1u32..=64,
-        0u32..4,
-        (0.01f64..0.99),
+        any::<proptest::sample::Index>(),
         (5.0f64..170.0),
         1u32..=64,
     )
-        .prop_map(|(near, ratio, slices, kind, split, fov, tiles_y)| {
+        .prop_map(|(near, ratio, slices, pick, fov, tiles_y)| {
             let far = near * ratio;
-            let scheme = match kind {
-                0 => Scheme::Linear,
-                1 => Scheme::Exponential,
-                2 if slices >= 2 => Scheme::NearThenExponential {
-                    near_end: near + (far - near) * split,
-                },
-                2 => Scheme::Exponential,
-                _ => Scheme::Olsson {
-                    tan_half_fov_y: (fov.to_radians() / 2.0).tan(),
-                    tiles_y,
-                },
-            };
-            (scheme, near, far, slices)
+            let schemes = ZSlicing::every(near, far);
+            let mut scheme = schemes[pick.index(schemes.len())];
+            // A near slice needs another after it (variants check z >= 2).
+            if matches!(scheme, ZSlicing::NearSliceThenExponential { .. }) && slices < 2 {
+                scheme = ZSlicing::Exponential;
+            }
+            Slices {
+                scheme,
+                near,
+                far,
+                count: slices,
+                tan_half_fov_y: (fov.to_radians() / 2.0).tan(),
+                tiles_y,
+            }
         })
 }
 
-fn grid_of(
-    scheme: Scheme,
-    near: f64,
-    far: f64,
-    slices: u32,
-    tan: f64,
-    aspect: f64,
-    tiles: (u32, u32),
-) -> Grid {
+fn grid_of(s: Slices, tan: f64, aspect: f64, tiles: (u32, u32)) -> Grid {
     Grid {
         x: tiles.0,
         y: tiles.1,
-        z: slices,
-        scheme,
-        range: (near, far),
-        near,
-        far,
+        z: s.count,
+        slicing: s.scheme,
+        range: (s.near, s.far),
+        near: s.near,
+        far: s.far,
         tan_half_fov_y: tan,
         aspect,
     }
@@ -150,25 +144,27 @@ proptest! {
     #![proptest_config(Config::with_cases(1000))]
 
     #[test]
-    fn z_slicing_is_monotone_and_covers_near_to_far((scheme, near, far, slices) in slicing(), a in 0.0..=1.0f64, b in 0.0..=1.0f64) {
+    fn z_slicing_is_monotone_and_covers_near_to_far(s in slicing(), a in 0.0..=1.0f64, b in 0.0..=1.0f64) {
+        let (near, far, slices) = (s.near, s.far, s.count);
+        let scheme = s.scheme;
         let z = |t: f64| near + (far - near) * t;
         let (lo, hi) = (z(a.min(b)), z(a.max(b)));
-        let (k_lo, k_hi) = (zslice::slice(scheme, lo, near, far, slices), zslice::slice(scheme, hi, near, far, slices));
+        let (k_lo, k_hi) = (s.slice(lo), s.slice(hi));
         prop_assert!(k_lo <= k_hi, "{scheme:?}: slice({lo}) = {k_lo} > slice({hi}) = {k_hi}");
         prop_assert!(k_hi < slices);
-        prop_assert_eq!(zslice::slice(scheme, near, near, far, slices), 0);
+        prop_assert_eq!(s.slice(near), 0);
         // The grid's slices tile [near, far] without gaps, and each holds its depths.
-        let grid = grid_of(scheme, near, far, slices, 0.5, 1.5, (4, 4));
+        let grid = grid_of(Slices { tan_half_fov_y: 0.5, tiles_y: 4, ..s }, 0.5, 1.5, (4, 4));
         prop_assert_eq!(grid.slice_depths(0).0, near);
         prop_assert_eq!(grid.slice_depths(slices - 1).1, far);
         for k in 1..slices {
             prop_assert_eq!(grid.slice_depths(k - 1).1, grid.slice_depths(k).0);
         }
         for depth in [lo, hi] {
-            let k = zslice::slice(scheme, depth, near, far, slices);
-            let (s, e) = grid.slice_depths(k);
+            let k = grid.slices().slice(depth);
+            let (s0, e) = grid.slice_depths(k);
             let tol = 1e-9 * depth;
-            prop_assert!(s - tol <= depth && depth <= e + tol, "{scheme:?}: {depth} in slice {k} = [{s}, {e}]");
+            prop_assert!(s0 - tol <= depth && depth <= e + tol, "{scheme:?}: {depth} in slice {k} = [{s0}, {e}]");
         }
     }
 }
@@ -182,21 +178,12 @@ fn frustum_point() -> impl Strategy<Value = (Grid, DVec3)> {
         (1u32..=32, 1u32..=32),
         (-1.0..=1.0f64, -1.0..=1.0f64, 0.0..=1.0f64),
     )
-        .prop_map(
-            |((scheme, near, far, slices), fov, aspect, tiles, (x, y, t))| {
-                let tan = (fov.to_radians() / 2.0).tan();
-                let scheme = match scheme {
-                    Scheme::Olsson { .. } => Scheme::Olsson {
-                        tan_half_fov_y: tan,
-                        tiles_y: tiles.1,
-                    },
-                    s => s,
-                };
-                let grid = grid_of(scheme, near, far, slices, tan, aspect, tiles);
-                let z = near + (far - near) * t;
-                (grid, DVec3::new(x * tan * aspect * z, y * tan * z, -z))
-            },
-        )
+        .prop_map(|(s, fov, aspect, tiles, (x, y, t))| {
+            let tan = (fov.to_radians() / 2.0).tan();
+            let grid = grid_of(s, tan, aspect, tiles);
+            let z = s.near + (s.far - s.near) * t;
+            (grid, DVec3::new(x * tan * aspect * z, y * tan * z, -z))
+        })
 }
 
 /// The cluster a view-space point maps to (as the shaders pick it from the pixel).
@@ -208,7 +195,7 @@ fn cluster_of(g: &Grid, p: DVec3) -> (u32, u32, u32) {
     (
         tile((ndc_x + 1.0) / 2.0, g.x),
         tile((1.0 - ndc_y) / 2.0, g.y),
-        zslice::slice(g.scheme, z, g.range.0, g.range.1, g.z),
+        g.slices().slice(z),
     )
 }
 
@@ -294,38 +281,30 @@ fn gpu_kernels_keep_the_properties() {
     runner
         .run(
             &(slicing(), proptest::collection::vec(0.0..=1.0f64, 256)),
-            |((scheme, near, far, slices), ts)| {
-                let (near, far) = (near as f32, far as f32);
+            |(s, ts)| {
+                let (near, far) = (s.near as f32, s.far as f32);
                 let mut depths: Vec<f32> =
                     ts.iter().map(|t| near + (far - near) * *t as f32).collect();
                 depths.push(near);
                 depths.push(far);
                 depths.sort_by(f32::total_cmp);
-                let (near_end, tan, tiles_y) = match scheme {
-                    Scheme::NearThenExponential { near_end } => (near_end as f32, 0.5, 8),
-                    Scheme::Olsson {
-                        tan_half_fov_y,
-                        tiles_y,
-                    } => (near * 2.0, tan_half_fov_y as f32, tiles_y),
-                    _ => (near * 2.0, 0.5, 8),
-                };
-                let params = SliceParams::new(near, far, near_end, tan, slices, tiles_y);
-                let out = gpu_zslices(&gpu, &composer, params, &depths).expect("z-slice kernel");
-                for scheme_index in 0..4 {
-                    // A near slice needs another after it (variants check z >= 2).
-                    if scheme_index == 2 && slices < 2 {
-                        continue;
+                // Every scheme of the list on the same depths.
+                for scheme in ZSlicing::every(s.near, s.far) {
+                    if matches!(scheme, ZSlicing::NearSliceThenExponential { .. }) && s.count < 2 {
+                        continue; // a near slice needs another after it
                     }
-                    let ks: Vec<u32> = out.slices.iter().map(|s| s[scheme_index]).collect();
+                    let s = Slices { scheme, ..s };
+                    let out = gpu_zslices(&gpu, &composer, &s, &depths).expect("z-slice kernel");
+                    let ks = &out.slices;
                     prop_assert!(
                         ks.windows(2).all(|w| w[0] <= w[1]),
-                        "scheme {scheme_index}: not monotone: {ks:?}"
+                        "{scheme:?}: not monotone: {ks:?}"
                     );
                     prop_assert!(
-                        ks.iter().all(|&k| k < slices),
-                        "scheme {scheme_index}: outside the grid"
+                        ks.iter().all(|&k| k < s.count),
+                        "{scheme:?}: outside the grid"
                     );
-                    prop_assert_eq!(ks[0], 0, "scheme {}: near is not in slice 0", scheme_index);
+                    prop_assert_eq!(ks[0], 0, "{:?}: near is not in slice 0", scheme);
                 }
                 Ok(())
             },

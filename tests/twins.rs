@@ -2,9 +2,10 @@
 
 use clusterlab::compose::Composer;
 use clusterlab::cpu::normals as cpu;
-use clusterlab::cpu::zslice::{self, Scheme};
+use clusterlab::cpu::zslice::Slices;
 use clusterlab::gpu::Gpu;
-use clusterlab::twins::{SliceParams, gpu_codecs, gpu_zslices};
+use clusterlab::twins::{gpu_codecs, gpu_zslices};
+use clusterlab::variant::ZSlicing;
 use glam::DVec3;
 use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg64Mcg;
@@ -17,61 +18,54 @@ fn gpu() -> Gpu {
 fn z_slices_match_on_random_depths_and_at_slice_boundaries() {
     let gpu = gpu();
     let composer = Composer::default();
-    let (near, far, slices, near_end, tan, tiles_y) =
-        (0.1f32, 60.0f32, 24u32, 4.0f32, 0.577_35f32, 9u32);
-    let schemes = [
-        Scheme::Linear,
-        Scheme::Exponential,
-        Scheme::NearThenExponential {
-            near_end: near_end as f64,
-        },
-        Scheme::Olsson {
+    let (near, far, slices, tan, tiles_y) = (0.1f32, 60.0f32, 24u32, 0.577_35f32, 9u32);
+    // Every scheme of the list, through the same kernel composed for each.
+    for scheme in ZSlicing::every(near as f64, far as f64) {
+        let s = Slices {
+            scheme,
+            near: near as f64,
+            far: far as f64,
+            count: slices,
             tan_half_fov_y: tan as f64,
             tiles_y,
-        },
-    ];
-    let mut rng = Pcg64Mcg::seed_from_u64(7);
-    let mut depths: Vec<f32> = (0..4000)
-        .map(|_| near * (far / near).powf(rng.random_range(0.0f32..1.0)))
-        .collect();
-    // Edges: near, far, and every boundary of every scheme, with its neighbours.
-    depths.extend([near, far, near_end]);
-    for &s in &schemes {
+        };
+        let mut rng = Pcg64Mcg::seed_from_u64(7);
+        let mut depths: Vec<f32> = (0..4000)
+            .map(|_| near * (far / near).powf(rng.random_range(0.0f32..1.0)))
+            .collect();
+        // Edges: near, far, and every boundary of the scheme, with its neighbours.
+        depths.extend([near, far]);
         for k in 0..=slices {
-            let z = zslice::slice_start(s, k, near as f64, far as f64, slices) as f32;
+            let z = s.start(k) as f32;
             if (near..=far).contains(&z) {
                 depths.extend([z, z.next_down(), z.next_up()]);
             }
         }
-    }
-    let params = SliceParams::new(near, far, near_end, tan, slices, tiles_y);
-    let results = gpu_zslices(&gpu, &composer, params, &depths).expect("kernel runs");
-    let (got, starts) = (results.slices, results.starts);
-    for (i, &z) in depths.iter().enumerate() {
-        for (j, &s) in schemes.iter().enumerate() {
-            let want = zslice::slice(s, z as f64, near as f64, far as f64, slices);
-            let have = got[i][j];
+        let results = gpu_zslices(&gpu, &composer, &s, &depths).expect("kernel runs");
+        for (i, &z) in depths.iter().enumerate() {
+            let want = s.slice(z as f64);
+            let have = results.slices[i];
             if have == want {
                 continue;
             }
             // f32 and f64 may round a depth on a boundary to either side of it: allowed only
             // there, and only by one slice.
-            let boundary = zslice::slice_start(s, have.max(want), near as f64, far as f64, slices);
+            let boundary = s.start(have.max(want));
             assert!(
                 have.abs_diff(want) == 1 && ((z as f64 - boundary) / boundary).abs() < 1e-5,
-                "{s:?}: depth {z}: GPU slice {have}, CPU slice {want}"
+                "{scheme:?}: depth {z}: GPU slice {have}, CPU slice {want}"
             );
         }
-    }
-    for k in 0..=slices {
-        for (j, &s) in schemes.iter().enumerate() {
-            let want = zslice::slice_start(s, k, near as f64, far as f64, slices);
-            let have = starts[k as usize][j] as f64;
+        for k in 0..slices {
+            let want = s.start(k);
+            let have = results.starts[k as usize] as f64;
             assert!(
                 ((have - want) / want).abs() < 1e-5,
-                "{s:?}: start of slice {k}: GPU {have}, CPU {want}"
+                "{scheme:?}: start of slice {k}: GPU {have}, CPU {want}"
             );
         }
+        // Slice `slices` begins at far (the shaders' end of the grid).
+        assert_eq!(results.starts[slices as usize], far, "{scheme:?}");
     }
 }
 

@@ -3,6 +3,8 @@
 
 use std::fmt::Write;
 
+use strum::IntoEnumIterator;
+
 use crate::variant::*;
 
 /// Every feature flag the shaders may test, with its value for `v`. All flags are always
@@ -15,7 +17,7 @@ pub fn feature_flags(v: &Variant) -> Vec<(&'static str, bool)> {
     let deferred = p.is_deferred();
     let toon = v.post.toon.as_ref();
     let slicing = clusters.slicing;
-    vec![
+    let mut flags = vec![
         (
             "blinn_phong",
             matches!(v.shading.model, ShadingModel::BlinnPhong { .. }),
@@ -25,17 +27,6 @@ pub fn feature_flags(v: &Variant) -> Vec<(&'static str, bool)> {
         ("depth_prepass", v.depth_prepass),
         ("reversed_z", v.depth.reversed_z),
         ("infinite_far", v.depth.mapping().infinite_far),
-        ("slice_linear", slicing == ZSlicing::Linear),
-        ("slice_exponential", slicing == ZSlicing::Exponential),
-        (
-            "slice_near_then_exponential",
-            matches!(slicing, ZSlicing::NearSliceThenExponential { .. }),
-        ),
-        ("slice_olsson", slicing == ZSlicing::OlssonCubic),
-        (
-            "slice_dynamic",
-            matches!(slicing, ZSlicing::DynamicRange { .. }),
-        ),
         (
             "capped_lists",
             matches!(clusters.lists, LightLists::Capped { .. }),
@@ -92,7 +83,10 @@ pub fn feature_flags(v: &Variant) -> Vec<(&'static str, bool)> {
             "debug_gbuffer",
             matches!(v.debug_view, DebugView::GBuffer { .. }),
         ),
-    ]
+    ];
+    // One flag per z-slicing scheme, from the scheme list itself.
+    flags.extend(ZSlicing::iter().map(|s| (s.feature(), s.same_scheme(slicing))));
+    flags
 }
 
 /// The numbers of a variant as WGSL constants, in a fixed order. Every constant is always

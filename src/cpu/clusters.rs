@@ -1,12 +1,12 @@
 //! Twin of `shaders/clustering/bounds.wesl` and `assign.wesl`: cluster boxes in view space
-//! and light lists, in f64, from the definitions in DESIGN.md. Also the CPU light assignment
+//! and light lists, in f64, from the definitions in docs/ARCHITECTURE.md. Also the CPU light assignment
 //! of variants with `assignment: Cpu`.
 
 use glam::{DMat4, DVec2, DVec3};
 
-use super::zslice::{self, Scheme};
-use crate::scene::{Light, Scene};
-use crate::variant::{Variant, ZSlicing};
+use super::zslice::Slices;
+use crate::common::Light;
+use crate::common::ZSlicing;
 
 /// Relative padding of every box (as in the shaders).
 pub const BOUNDS_PADDING: f64 = 1e-4;
@@ -17,7 +17,7 @@ pub struct Grid {
     pub x: u32,
     pub y: u32,
     pub z: u32,
-    pub scheme: Scheme,
+    pub slicing: ZSlicing,
     /// The clustered depth range.
     pub range: (f64, f64),
     /// The camera's near and far planes (slice 0 starts at near, the last ends at far).
@@ -28,35 +28,15 @@ pub struct Grid {
 }
 
 impl Grid {
-    /// The twin of a variant's grid over a scene's camera (static z-range).
-    pub fn of(variant: &Variant, scene: &Scene) -> Grid {
-        let c = variant.clusters();
-        let cam = &scene.camera;
-        let tan_half_fov_y = (cam.fov_y / 2.0).tan();
-        let scheme = match c.slicing {
-            ZSlicing::Linear => Scheme::Linear,
-            ZSlicing::Exponential | ZSlicing::DynamicRange { .. } => Scheme::Exponential,
-            ZSlicing::NearSliceThenExponential { near_slice_end } => Scheme::NearThenExponential {
-                near_end: near_slice_end as f64,
-            },
-            ZSlicing::OlssonCubic => Scheme::Olsson {
-                tan_half_fov_y,
-                tiles_y: c.grid.1,
-            },
-        };
-        // The GPU sees the camera's planes as f32; so does the twin.
-        let near = cam.near as f32 as f64;
-        let far = cam.far as f32 as f64;
-        Grid {
-            x: c.grid.0,
-            y: c.grid.1,
-            z: c.grid.2,
-            scheme,
-            range: (near, far),
-            near,
-            far,
-            tan_half_fov_y,
-            aspect: scene.aspect(),
+    /// The grid's slicing over its clustered range.
+    pub fn slices(&self) -> Slices {
+        Slices {
+            scheme: self.slicing,
+            near: self.range.0,
+            far: self.range.1,
+            count: self.z,
+            tan_half_fov_y: self.tan_half_fov_y,
+            tiles_y: self.y,
         }
     }
 
@@ -71,12 +51,12 @@ impl Grid {
     /// View depths bounding slice `k`: the scheme's, widened to the camera's near and far
     /// planes at the ends.
     pub fn slice_depths(&self, k: u32) -> (f64, f64) {
-        let (n, f) = self.range;
+        let slices = self.slices();
         let start = |k: u32| {
             if k >= self.z {
-                f
+                slices.far
             } else {
-                zslice::slice_start(self.scheme, k, n, f, self.z)
+                slices.start(k)
             }
         };
         let mut z0 = start(k);

@@ -3,14 +3,7 @@
 
 use glam::DMat4;
 
-/// Which way depth runs and where the projection's far plane is.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct DepthMapping {
-    /// Near maps to 1 and far (or infinity) to 0.
-    pub reversed: bool,
-    /// The projection's far plane is at infinity.
-    pub infinite_far: bool,
-}
+pub use crate::common::DepthMapping;
 
 impl DepthMapping {
     /// Right-handed perspective projection to wgpu clip space (depth 0..1).

@@ -4,8 +4,9 @@
 pub mod clusters;
 pub mod color;
 pub mod depth;
+pub mod frame;
 pub mod normals;
 pub mod post;
-pub mod reference;
 pub mod shading;
+pub mod truth;
 pub mod zslice;

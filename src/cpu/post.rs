@@ -8,9 +8,7 @@
 use glam::{DMat4, DVec2, DVec3, DVec4};
 
 use super::depth::DepthMapping;
-use super::reference::RasterTruth;
-use crate::scene::{Camera, Scene};
-use crate::variant::{ToonMode, Variant};
+use super::truth::RasterTruth;
 
 /// A linear HDR image, row-major.
 #[derive(Clone, Debug, PartialEq)]
@@ -72,24 +70,6 @@ pub struct PostParams {
 }
 
 impl PostParams {
-    pub fn of(v: &Variant) -> Self {
-        let toon = v.post.toon.as_ref();
-        Self {
-            toon_bands: toon
-                .filter(|t| t.mode == ToonMode::PostProcess)
-                .map(|t| t.bands),
-            outline_threshold: toon
-                .and_then(|t| t.outlines.as_ref())
-                .map(|o| o.depth_threshold as f64),
-            bloom: v
-                .post
-                .bloom
-                .as_ref()
-                .map(|b| (b.threshold as f64, b.radius)),
-            motion_blur_samples: v.post.motion_blur.as_ref().map(|m| m.samples),
-        }
-    }
-
     /// Whether any effect is on.
     pub fn any(&self) -> bool {
         *self != Self::default()
@@ -119,21 +99,6 @@ pub struct CameraPair {
 }
 
 impl CameraPair {
-    pub fn of(scene: &Scene, mapping: DepthMapping) -> Self {
-        let aspect = scene.aspect();
-        let c: &Camera = &scene.camera;
-        let p = &scene.prev_camera;
-        Self {
-            near: c.near,
-            far: c.far,
-            tan_half_fov_y: (c.fov_y / 2.0).tan(),
-            aspect,
-            world_from_view: c.view().inverse(),
-            prev_clip_from_world: p.projection(aspect, mapping) * p.view(),
-            mapping,
-        }
-    }
-
     /// Positive view depth of a depth-buffer value (twin of `view_depth_from_device`);
     /// None for the clear value.
     pub fn view_depth_from_device(&self, d: f64) -> Option<f64> {

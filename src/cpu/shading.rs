@@ -3,8 +3,7 @@
 
 use glam::DVec3;
 
-use crate::scene::Light;
-use crate::variant::{ShadingModel, ToonMode, Variant};
+use crate::common::Light;
 
 /// Smallest squared distance of the inverse-square law (as in the shaders).
 pub const MIN_DISTANCE_SQUARED: f64 = 1e-4;
@@ -17,27 +16,6 @@ pub struct ShadingParams {
     pub ambient: f64,
     /// Toon bands applied to each light's diffuse term (toon in the shading pass).
     pub toon_bands: Option<u32>,
-}
-
-impl ShadingParams {
-    pub fn of(v: &Variant) -> Self {
-        Self {
-            blinn_phong: match v.shading.model {
-                ShadingModel::Lambert => None,
-                ShadingModel::BlinnPhong {
-                    shininess,
-                    specular,
-                } => Some((shininess as f64, specular as f64)),
-            },
-            ambient: v.shading.ambient as f64,
-            toon_bands: v
-                .post
-                .toon
-                .as_ref()
-                .filter(|t| t.mode == ToonMode::PerLight)
-                .map(|t| t.bands),
-        }
-    }
 }
 
 /// A surface point: world position, unit normal, linear albedo.

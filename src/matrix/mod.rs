@@ -24,8 +24,9 @@ use sha2::{Digest, Sha256};
 use crate::compose::Composer;
 use crate::gpu::{AdapterSummary, Gpu};
 use crate::metrics::ErrorMetrics;
+use crate::reference::ReferenceCache;
 use crate::render::{FrameStats, Renderer};
-use crate::run::{CellOptions, ReferenceCache, run_cell, write_images, write_png};
+use crate::run::{CellOptions, run_cell, write_images, write_png};
 use crate::scene::SCENES;
 use crate::variant::DebugView;
 

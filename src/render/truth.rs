@@ -10,7 +10,7 @@ use super::RenderError;
 use super::passes::{clear_attachment, color_target, pipeline_layout, render_pipeline};
 use super::resources::{DepthSetup, SceneBuffers, frame_bind_group, frame_layout, target};
 use crate::compose::Composer;
-use crate::cpu::reference::RasterTruth;
+use crate::cpu::truth::RasterTruth;
 use crate::gpu::{Gpu, read_texture};
 use crate::scene::Scene;
 use crate::variant::Variant;

@@ -7,29 +7,10 @@ mod mesh;
 pub use builtin::{SCENES, SceneInfo, find_scene};
 pub use mesh::MeshBuilder;
 
-use bytemuck::{Pod, Zeroable};
 use glam::{DMat4, DVec3};
 
-use crate::cpu::depth::DepthMapping;
-
-/// One vertex as the raster passes read it. Mirrors `shaders/common/mesh.wesl`.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
-pub struct Vertex {
-    pub position: [f32; 3],
-    pub normal: [f32; 3],
-    pub albedo: [f32; 3],
-}
-
-/// A point light. Mirrors `shaders/common/lights.wesl`.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
-pub struct Light {
-    pub position: [f32; 3],
-    pub radius: f32,
-    pub color: [f32; 3],
-    pub intensity: f32,
-}
+use crate::common::DepthMapping;
+pub use crate::common::{Light, Vertex};
 
 /// A perspective camera, right-handed, looking from `eye` at `target`.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -3,14 +3,14 @@
 
 use glam::DVec3;
 
-use crate::cpu::zslice::{self, Scheme};
+use crate::cpu::zslice::Slices;
 use crate::scene::{Camera, Light, MeshBuilder, Scene, SceneParams, Vertex};
 use crate::variant::*;
 
 /// One stress case: a scene and the variants to run on it.
 pub struct Case {
-    pub name: &'static str,
-    pub what: &'static str,
+    pub name: String,
+    pub what: String,
     pub scene: Scene,
     pub variants: Vec<(String, Variant)>,
 }
@@ -115,6 +115,15 @@ fn with_slicing(slicing: ZSlicing, tag: &str) -> Vec<(String, Variant)> {
             (format!("{n}_{tag}"), v)
         })
         .collect()
+}
+
+/// The name of the stress case of a z-slicing scheme: its feature flag, and the range source
+/// of a dynamic range.
+pub fn slicing_case_name(slicing: ZSlicing) -> String {
+    match slicing {
+        ZSlicing::DynamicRange { source } => format!("{}_{source:?}", slicing.feature()),
+        s => s.feature().to_string(),
+    }
 }
 
 /// Every pipeline with each depth mapping other than the standard finite one.
@@ -227,14 +236,14 @@ fn scene(
 }
 
 fn case(
-    name: &'static str,
-    what: &'static str,
+    name: impl Into<String>,
+    what: impl Into<String>,
     scene: Scene,
     variants: Vec<(String, Variant)>,
 ) -> Case {
     Case {
-        name,
-        what,
+        name: name.into(),
+        what: what.into(),
         scene,
         variants,
     }
@@ -377,8 +386,16 @@ pub fn all() -> Vec<Case> {
         // Centres exactly on the exponential slice boundaries along the view axis and
         // off it, and exactly on tile boundary planes.
         let mut on_slices = Vec::new();
+        let exponential = Slices {
+            scheme: ZSlicing::Exponential,
+            near: cam.near,
+            far: cam.far,
+            count: grid.2,
+            tan_half_fov_y: (cam.fov_y / 2.0).tan(),
+            tiles_y: grid.1,
+        };
         for k in 1..grid.2 {
-            let z = zslice::slice_start(Scheme::Exponential, k, cam.near, cam.far, grid.2);
+            let z = exponential.start(k);
             for x in [-0.5, 0.0, 0.5] {
                 let p = world_from_view.transform_point3(DVec3::new(x * z, 0.0, -z));
                 on_slices.push(light(p, 0.8, 2.0));
@@ -693,6 +710,19 @@ pub fn all() -> Vec<Case> {
         lit_room("grid_64x64x64", SIZE, lattice(64, 2.0)),
         with_grid((64, 64, 64)),
     ));
+    // Every z-slicing scheme (the schema's list), with lights across many slices.
+    {
+        let cam = default_camera(&room());
+        for slicing in ZSlicing::every(cam.near, cam.far) {
+            let tag = slicing_case_name(slicing);
+            cases.push(case(
+                tag.clone(),
+                format!("{} slicing, 64 lights through the room", slicing.label()),
+                lit_room(&tag, SIZE, lattice(64, 2.0)),
+                with_slicing(slicing, &tag),
+            ));
+        }
+    }
     cases.push(case(
         "dynamic_range_previous_frame",
         "slices fitted to the previous frame's depth range: the deepest pixel sits on the far end",

@@ -9,7 +9,7 @@ use crate::compose::Composer;
 use crate::gpu::Gpu;
 use crate::render::Renderer;
 use crate::scene::{Scene, SceneError, SceneParams, find_scene};
-use crate::variant::{Clusters, DepthRangeSource, Pipeline, Variant, ZSlicing};
+use crate::variant::{Clusters, Pipeline, Variant, ZSlicing};
 
 /// Grids the study runs: coarse, the default, the default with enough slices for Olsson's
 /// cubic clusters on the built-in cameras, fine.
@@ -18,35 +18,12 @@ pub const GRIDS: [(u32, u32, u32); 4] = [(8, 8, 16), (16, 9, 24), (16, 9, 64), (
 /// Olsson 2012 works with 32 x 32 pixel tiles.
 const OLSSON_TILE: u32 = 32;
 
-/// Where Bevy's and Persson's special near slice ends by default (world units), kept
-/// inside the camera's range.
-const NEAR_SLICE_END: f64 = 5.0;
-
-/// Every scheme of the schema, with the near slice fitted to the camera.
+/// Every scheme of the schema (`ZSlicing::every`), with its table label.
 pub fn schemes(near: f64, far: f64) -> Vec<(&'static str, ZSlicing)> {
-    vec![
-        ("linear", ZSlicing::Linear),
-        ("exponential", ZSlicing::Exponential),
-        (
-            "near slice + exponential",
-            ZSlicing::NearSliceThenExponential {
-                near_slice_end: NEAR_SLICE_END.clamp(near * 2.0, far / 2.0) as f32,
-            },
-        ),
-        ("Olsson cubic", ZSlicing::OlssonCubic),
-        (
-            "dynamic (this frame)",
-            ZSlicing::DynamicRange {
-                source: DepthRangeSource::CurrentFrame,
-            },
-        ),
-        (
-            "dynamic (previous frame)",
-            ZSlicing::DynamicRange {
-                source: DepthRangeSource::PreviousFrame,
-            },
-        ),
-    ]
+    ZSlicing::every(near, far)
+        .into_iter()
+        .map(|s| (s.label(), s))
+        .collect()
 }
 
 /// One scheme and grid on one scene.

@@ -4,7 +4,8 @@
 //! the user-facing documentation: `clusterlab explain` prints them from the JSON schema
 //! that `schemars` derives from these types.
 
-use crate::cpu::depth::DepthMapping;
+use crate::common::DepthMapping;
+pub use crate::common::{DepthRangeSource, ZSlicing};
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
@@ -124,41 +125,6 @@ impl Default for Clusters {
             sample_bounds: false,
         }
     }
-}
-
-/// How view depth between the camera's near and far planes is cut into slices.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
-pub enum ZSlicing {
-    /// Equal depth steps from near to far.
-    Linear,
-    /// `slice = floor(log(z/near) * Z / log(far/near))`: equal ratios from near to far.
-    Exponential,
-    /// Slice 0 covers [near, near_slice_end]; the other slices are exponential from there
-    /// to far (Persson 2015, Bevy, Filament).
-    NearSliceThenExponential {
-        /// View depth (world units) where the special near slice ends; must lie between the
-        /// camera's near and far planes.
-        near_slice_end: f32,
-    },
-    /// Olsson 2012: slices as deep as they are wide,
-    /// `k = floor(log(z/near) / log(1 + 2 tan(fov_y/2) / grid_y))`; the slice count follows
-    /// from the camera, capped at grid z (the last slice then reaches to far).
-    OlssonCubic,
-    /// Exponential slicing over the depth range the frame actually covers, found by a
-    /// min/max reduction of the depth buffer.
-    DynamicRange {
-        /// Whose depth gives the range.
-        source: DepthRangeSource,
-    },
-}
-
-/// Where a dynamic depth range comes from.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
-pub enum DepthRangeSource {
-    /// Reduce this frame's depth (needs depth before shading: a pre-pass or a G-buffer).
-    CurrentFrame,
-    /// Reduce the previous frame's depth (one frame late, no extra pass before shading).
-    PreviousFrame,
 }
 
 /// Where light lists are built.

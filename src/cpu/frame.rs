@@ -6,38 +6,9 @@ use rayon::prelude::*;
 
 use super::color::display8;
 use super::post::{Geometry, Image, PostParams};
-use super::shading::{ShadingParams, Surface, shade};
-use crate::scene::Light;
-
-/// The rasteriser's coverage and attributes at full precision, read back from the GPU.
-#[derive(Clone, Debug, Default)]
-pub struct RasterTruth {
-    pub width: u32,
-    pub height: u32,
-    /// World position; w = 1 where covered, 0 where background.
-    pub position: Vec<[f32; 4]>,
-    /// Unit world normal (xyz).
-    pub normal: Vec<[f32; 4]>,
-    /// Linear albedo (rgb).
-    pub albedo: Vec<[f32; 4]>,
-}
-
-impl RasterTruth {
-    pub fn covered(&self, i: usize) -> bool {
-        self.position[i][3] > 0.5
-    }
-
-    pub fn surface(&self, i: usize) -> Surface {
-        let p = self.position[i];
-        let n = self.normal[i];
-        let a = self.albedo[i];
-        Surface {
-            position: DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64),
-            normal: DVec3::new(n[0] as f64, n[1] as f64, n[2] as f64).normalize_or_zero(),
-            albedo: DVec3::new(a[0] as f64, a[1] as f64, a[2] as f64),
-        }
-    }
-}
+use super::shading::{ShadingParams, shade};
+use super::truth::RasterTruth;
+use crate::common::Light;
 
 /// A reference frame: linear HDR and 8-bit display values per pixel, row-major.
 #[derive(Clone, Debug)]

@@ -1,0 +1,135 @@
+//! Plain data every layer shares: the vertex and light layouts the shaders read, the depth
+//! mapping, and the z-slicing schemes. A leaf: it imports nothing of this crate, so the CPU
+//! twins (`cpu`), the variant schema (`variant`) and the scenes (`scene`) can all use it
+//! without pointing at each other.
+
+use bytemuck::{Pod, Zeroable};
+use schemars::JsonSchema;
+use serde::{Deserialize, Serialize};
+use strum::{EnumIter, IntoEnumIterator, IntoStaticStr};
+
+/// One vertex as the raster passes read it. Mirrors `shaders/common/mesh.wesl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct Vertex {
+    pub position: [f32; 3],
+    pub normal: [f32; 3],
+    pub albedo: [f32; 3],
+}
+
+/// A point light. Mirrors `shaders/common/lights.wesl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct Light {
+    pub position: [f32; 3],
+    pub radius: f32,
+    pub color: [f32; 3],
+    pub intensity: f32,
+}
+
+/// Which way depth runs and where the projection's far plane is.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct DepthMapping {
+    /// Near maps to 1 and far (or infinity) to 0.
+    pub reversed: bool,
+    /// The projection's far plane is at infinity.
+    pub infinite_far: bool,
+}
+
+/// How view depth between the camera's near and far planes is cut into slices.
+#[derive(
+    Clone, Copy, Debug, PartialEq, Serialize, Deserialize, JsonSchema, EnumIter, IntoStaticStr,
+)]
+#[strum(serialize_all = "snake_case", prefix = "slice_")]
+pub enum ZSlicing {
+    /// Equal depth steps from near to far.
+    Linear,
+    /// `slice = floor(log(z/near) * Z / log(far/near))`: equal ratios from near to far.
+    Exponential,
+    /// Slice 0 covers [near, near_slice_end]; the other slices are exponential from there
+    /// to far (Persson 2015, Bevy, Filament).
+    NearSliceThenExponential {
+        /// View depth (world units) where the special near slice ends; must lie between the
+        /// camera's near and far planes.
+        near_slice_end: f32,
+    },
+    /// Olsson 2012: slices as deep as they are wide,
+    /// `k = floor(log(z/near) / log(1 + 2 tan(fov_y/2) / grid_y))`; the slice count follows
+    /// from the camera, capped at grid z (the last slice then reaches to far).
+    OlssonCubic,
+    /// Exponential slicing over the depth range the frame actually covers, found by a
+    /// min/max reduction of the depth buffer.
+    DynamicRange {
+        /// Whose depth gives the range.
+        source: DepthRangeSource,
+    },
+}
+
+/// Where a dynamic depth range comes from.
+#[derive(
+    Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, JsonSchema, EnumIter,
+)]
+pub enum DepthRangeSource {
+    /// Reduce this frame's depth (needs depth before shading: a pre-pass or a G-buffer).
+    #[default]
+    CurrentFrame,
+    /// Reduce the previous frame's depth (one frame late, no extra pass before shading).
+    PreviousFrame,
+}
+
+/// Where the special near slice ends in the examples of [`ZSlicing::every`] (world units;
+/// Bevy's and Persson's default), kept inside the camera's range.
+const EXAMPLE_NEAR_SLICE_END: f64 = 5.0;
+
+impl ZSlicing {
+    /// The WESL feature flag under which `shaders/clustering/zslice.wesl` holds this scheme's
+    /// code: `slice_` and the scheme's name in snake case.
+    pub fn feature(self) -> &'static str {
+        self.into()
+    }
+
+    /// Whether `self` and `other` are the same scheme, whatever their parameters.
+    pub fn same_scheme(self, other: ZSlicing) -> bool {
+        std::mem::discriminant(&self) == std::mem::discriminant(&other)
+    }
+
+    /// The scheme's name in tables.
+    pub fn label(self) -> &'static str {
+        match self {
+            ZSlicing::Linear => "linear",
+            ZSlicing::Exponential => "exponential",
+            ZSlicing::NearSliceThenExponential { .. } => "near slice + exponential",
+            ZSlicing::OlssonCubic => "Olsson cubic",
+            ZSlicing::DynamicRange {
+                source: DepthRangeSource::CurrentFrame,
+            } => "dynamic (this frame)",
+            ZSlicing::DynamicRange {
+                source: DepthRangeSource::PreviousFrame,
+            } => "dynamic (previous frame)",
+        }
+    }
+
+    /// Every scheme, each with example parameters fitted to a camera's depth range
+    /// [near, far] (and a dynamic range from each source): the one list that the twin
+    /// checks, property tests, stress cases and the slicing study iterate.
+    pub fn every(near: f64, far: f64) -> Vec<ZSlicing> {
+        let near_end = if near * 2.0 <= far / 2.0 {
+            EXAMPLE_NEAR_SLICE_END.clamp(near * 2.0, far / 2.0)
+        } else {
+            (near * far).sqrt()
+        };
+        ZSlicing::iter()
+            .flat_map(|s| match s {
+                ZSlicing::NearSliceThenExponential { .. } => {
+                    vec![ZSlicing::NearSliceThenExponential {
+                        near_slice_end: near_end as f32,
+                    }]
+                }
+                ZSlicing::DynamicRange { .. } => DepthRangeSource::iter()
+                    .map(|source| ZSlicing::DynamicRange { source })
+                    .collect(),
+                s => vec![s],
+            })
+            .collect()
+    }
+}
