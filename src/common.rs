@@ -77,6 +77,15 @@ pub enum DepthRangeSource {
     PreviousFrame,
 }
 
+/// The post-processing effects, in the order a frame applies them (the passes, the post
+/// chain and the CPU twin all follow this order).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, EnumIter)]
+pub enum PostEffect {
+    Toon,
+    Bloom,
+    MotionBlur,
+}
+
 /// Where the special near slice ends in the examples of [`ZSlicing::every`] (world units;
 /// Bevy's and Persson's default), kept inside the camera's range.
 const EXAMPLE_NEAR_SLICE_END: f64 = 5.0;

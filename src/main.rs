@@ -403,10 +403,10 @@ fn wgsl(arg: &str, only: Option<&str>) -> Result<bool, String> {
     let all = passes(&loaded.variant);
     let selected: Vec<_> = all
         .iter()
-        .filter(|p| only.is_none_or(|o| o == p.name))
+        .filter(|p| only.is_none_or(|o| o == p.name()))
         .collect();
     if selected.is_empty() {
-        let names: Vec<&str> = all.iter().map(|p| p.name).collect();
+        let names: Vec<&str> = all.iter().map(|p| p.name()).collect();
         return Err(format!(
             "variant `{}` has no pass `{}`; its passes are: {}",
             loaded.name,
@@ -421,7 +421,8 @@ fn wgsl(arg: &str, only: Option<&str>) -> Result<bool, String> {
             .map_err(|e| e.to_string())?;
         println!(
             "// ---- variant `{}`, pass `{}` ----",
-            loaded.name, pass.name
+            loaded.name,
+            pass.name()
         );
         println!("{}", composed.wgsl);
     }

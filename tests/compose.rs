@@ -24,7 +24,7 @@ fn composed_wgsl_of_every_pass_of_every_variant() {
                 let composed = composer
                     .compose(&loaded.variant, &pass)
                     .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-                insta::assert_snapshot!(pass.name, composed.wgsl);
+                insta::assert_snapshot!(pass.name(), composed.wgsl);
             }
         });
     });
@@ -73,7 +73,7 @@ fn switched_off_features_leave_no_trace() {
     };
     let forward = passes(&lambert)
         .into_iter()
-        .find(|p| p.name == "forward")
+        .find(|p| p.name() == "forward")
         .expect("a forward pass");
     let lambert_wgsl = composer.compose(&lambert, &forward).unwrap().wgsl;
     let blinn_wgsl = composer.compose(&blinn, &forward).unwrap().wgsl;

@@ -183,7 +183,7 @@ fn a_variant_without_an_effect_has_no_pass_and_no_code_for_it() {
             _ => unreachable!(),
         };
         let passes = compose::passes(&v.variant);
-        let names: Vec<&str> = passes.iter().map(|p| p.name).collect();
+        let names: Vec<&str> = passes.iter().map(|p| p.name()).collect();
         let wgsl: Vec<String> = passes
             .iter()
             .map(|p| composer.compose(&v.variant, p).expect("composes").wgsl)

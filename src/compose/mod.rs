@@ -12,7 +12,9 @@ mod resolver;
 
 pub use diagnostics::SourceLocation;
 pub use features::{constants_module, feature_flags};
-pub use passes::{Pass, PassKind, passes};
+pub use passes::{
+    ClusterPass, FramePlan, Pass, PassId, PassKind, PostPass, RasterPass, ScreenPass, passes, plan,
+};
 pub use resolver::ShaderResolver;
 
 use std::fmt;
@@ -122,7 +124,7 @@ impl Composer {
     /// Compose and validate one pass of a variant.
     pub fn compose(&self, variant: &Variant, pass: &Pass) -> Result<ComposedPass, ShaderError> {
         self.compose_root(
-            pass.name,
+            pass.name(),
             pass.root,
             &feature_flags(variant),
             &constants_module(variant),
@@ -142,7 +144,12 @@ impl Composer {
                 *on = true;
             }
         }
-        self.compose_root(pass.name, pass.root, &features, &constants_module(variant))
+        self.compose_root(
+            pass.name(),
+            pass.root,
+            &features,
+            &constants_module(variant),
+        )
     }
 
     /// Compose and validate every pass of a variant, stopping at the first error.

@@ -1,6 +1,65 @@
-//! Which passes a variant runs, in order, and the root module of each.
+//! The passes of a frame: one typed identifier per pass, grouped by family, and the one place
+//! that decides which passes a variant runs, in order.
+//!
+//! A family is one kind of GPU work, and `render/` has one file for each: `raster` (scene
+//! geometry into the depth buffer and targets), `screen` (full-screen and screen-space draws
+//! over what the raster passes left), `clustering` (compute passes that build the clusters
+//! and their light lists) and `post` (compute passes between shading and tonemapping).
 
+use strum::{EnumIter, IntoEnumIterator, IntoStaticStr};
+
+use crate::common::PostEffect;
 use crate::variant::*;
+
+/// Passes that rasterise the scene's geometry.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, EnumIter, IntoStaticStr)]
+#[strum(serialize_all = "snake_case")]
+pub enum RasterPass {
+    DepthPrepass,
+    #[strum(serialize = "gbuffer")]
+    GBuffer,
+    Forward,
+}
+
+/// Passes that draw over the screen without the scene's geometry.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, EnumIter, IntoStaticStr)]
+#[strum(serialize_all = "snake_case")]
+pub enum ScreenPass {
+    Resolve,
+    ScissorLights,
+    DebugView,
+    Tonemap,
+}
+
+/// Compute passes that build the clusters and their light lists.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, EnumIter, IntoStaticStr)]
+#[strum(serialize_all = "snake_case")]
+pub enum ClusterPass {
+    DepthRange,
+    MarkActive,
+    ClusterBounds,
+    LightAssign,
+}
+
+/// Compute passes of the post-processing chain.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, EnumIter, IntoStaticStr)]
+#[strum(serialize_all = "snake_case")]
+pub enum PostPass {
+    Toon,
+    BloomThreshold,
+    BloomBlur,
+    BloomComposite,
+    MotionBlur,
+}
+
+/// Which pass: its family and the pass within it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum PassId {
+    Raster(RasterPass),
+    Screen(ScreenPass),
+    Clustering(ClusterPass),
+    Post(PostPass),
+}
 
 /// What kind of GPU work a pass is.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -9,29 +68,92 @@ pub enum PassKind {
     Compute,
 }
 
-/// One pass of a frame.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Pass {
+impl PassId {
     /// Name in timings, snapshots and `clusterlab wgsl --pass`.
-    pub name: &'static str,
-    /// Root module under shaders/, as a module path.
-    pub root: &'static str,
-    pub kind: PassKind,
-}
+    pub fn name(self) -> &'static str {
+        match self {
+            PassId::Raster(p) => p.into(),
+            PassId::Screen(p) => p.into(),
+            PassId::Clustering(p) => p.into(),
+            PassId::Post(p) => p.into(),
+        }
+    }
 
-const fn render(name: &'static str, root: &'static str) -> Pass {
-    Pass {
-        name,
-        root,
-        kind: PassKind::Render,
+    /// Every pass there is.
+    pub fn all() -> impl Iterator<Item = PassId> {
+        RasterPass::iter()
+            .map(PassId::Raster)
+            .chain(ScreenPass::iter().map(PassId::Screen))
+            .chain(ClusterPass::iter().map(PassId::Clustering))
+            .chain(PostPass::iter().map(PassId::Post))
+    }
+
+    /// The pass of this name, if there is one.
+    pub fn from_name(name: &str) -> Option<PassId> {
+        PassId::all().find(|p| p.name() == name)
+    }
+
+    pub fn kind(self) -> PassKind {
+        match self {
+            PassId::Raster(_) | PassId::Screen(_) => PassKind::Render,
+            PassId::Clustering(_) | PassId::Post(_) => PassKind::Compute,
+        }
+    }
+
+    /// Shading passes: they loop over lights, and have an instrumented twin that counts the
+    /// light evaluations.
+    pub fn is_shading(self) -> bool {
+        matches!(
+            self,
+            PassId::Raster(RasterPass::Forward)
+                | PassId::Screen(ScreenPass::Resolve | ScreenPass::ScissorLights)
+        )
     }
 }
 
-const fn compute(name: &'static str, root: &'static str) -> Pass {
+/// One pass of a frame and the root module it is composed from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Pass {
+    pub id: PassId,
+    /// Root module under shaders/, as a module path.
+    pub root: &'static str,
+}
+
+impl Pass {
+    pub fn name(&self) -> &'static str {
+        self.id.name()
+    }
+
+    pub fn kind(&self) -> PassKind {
+        self.id.kind()
+    }
+}
+
+fn raster(p: RasterPass, root: &'static str) -> Pass {
     Pass {
-        name,
+        id: PassId::Raster(p),
         root,
-        kind: PassKind::Compute,
+    }
+}
+
+fn screen(p: ScreenPass, root: &'static str) -> Pass {
+    Pass {
+        id: PassId::Screen(p),
+        root,
+    }
+}
+
+fn clustering(p: ClusterPass, root: &'static str) -> Pass {
+    Pass {
+        id: PassId::Clustering(p),
+        root,
+    }
+}
+
+fn post(p: PostPass, root: &'static str) -> Pass {
+    Pass {
+        id: PassId::Post(p),
+        root,
     }
 }
 
@@ -41,69 +163,137 @@ pub fn passes(v: &Variant) -> Vec<Pass> {
     let mut out = Vec::new();
     let clusters = v.clusters();
     let clustered = v.pipeline.is_clustered();
-    let current_frame_range = clustered
-        && clusters.slicing
-            == (ZSlicing::DynamicRange {
-                source: DepthRangeSource::CurrentFrame,
-            });
-    let previous_frame_range = clustered
-        && clusters.slicing
-            == (ZSlicing::DynamicRange {
-                source: DepthRangeSource::PreviousFrame,
-            });
+    let range_from = |source| clustered && clusters.slicing == (ZSlicing::DynamicRange { source });
 
     if v.depth_prepass {
-        out.push(render("depth_prepass", "passes::depth_prepass"));
+        out.push(raster(RasterPass::DepthPrepass, "passes::depth_prepass"));
     }
     if v.pipeline.is_deferred() {
-        out.push(render("gbuffer", "passes::gbuffer"));
+        out.push(raster(RasterPass::GBuffer, "passes::gbuffer"));
     }
     if clustered {
-        if current_frame_range {
-            out.push(compute("depth_range", "passes::depth_range"));
+        if range_from(DepthRangeSource::CurrentFrame) {
+            out.push(clustering(ClusterPass::DepthRange, "passes::depth_range"));
         }
         // Marking reads the slices, not the boxes; with sample bounds the boxes need it.
         if clusters.active_clusters {
-            out.push(compute("mark_active", "passes::mark_active"));
+            out.push(clustering(ClusterPass::MarkActive, "passes::mark_active"));
         }
-        out.push(compute("cluster_bounds", "passes::cluster_bounds"));
+        out.push(clustering(
+            ClusterPass::ClusterBounds,
+            "passes::cluster_bounds",
+        ));
         if clusters.assignment == Assignment::Gpu {
-            out.push(compute("light_assign", "passes::light_assign"));
+            out.push(clustering(ClusterPass::LightAssign, "passes::light_assign"));
         }
     }
-    match v.pipeline {
+    out.push(match v.pipeline {
         Pipeline::NaiveForward | Pipeline::ClusteredForward => {
-            out.push(render("forward", "passes::forward"))
+            raster(RasterPass::Forward, "passes::forward")
         }
-        Pipeline::ClusteredDeferred => out.push(render("resolve", "passes::resolve")),
-        Pipeline::DeferredScissor => out.push(render("scissor_lights", "passes::scissor_lights")),
-    }
-    if previous_frame_range {
+        Pipeline::ClusteredDeferred => screen(ScreenPass::Resolve, "passes::resolve"),
+        Pipeline::DeferredScissor => screen(ScreenPass::ScissorLights, "passes::scissor_lights"),
+    });
+    if range_from(DepthRangeSource::PreviousFrame) {
         // Reduced after shading, for the next frame.
-        out.push(compute("depth_range", "passes::depth_range"));
+        out.push(clustering(ClusterPass::DepthRange, "passes::depth_range"));
     }
-    if let Some(toon) = &v.post.toon
-        && (toon.mode == ToonMode::PostProcess || toon.outlines.is_some())
-    {
-        out.push(compute("toon", "passes::toon"));
+    for effect in v.post.effects() {
+        out.extend(post_passes(v, effect));
     }
-    if let Some(bloom) = &v.post.bloom {
-        out.push(compute("bloom_threshold", "passes::bloom_threshold"));
-        match bloom.kernel {
-            BloomKernel::Naive => out.push(compute("bloom_blur", "passes::bloom_naive")),
-            BloomKernel::Separable => {
-                out.push(compute("bloom_blur", "passes::bloom_separable"));
-            }
-        }
-        out.push(compute("bloom_composite", "passes::bloom_composite"));
-    }
-    if v.post.motion_blur.is_some() {
-        out.push(compute("motion_blur", "passes::motion_blur"));
-    }
-    if v.debug_view == DebugView::Off {
-        out.push(render("tonemap", "passes::tonemap"));
+    out.push(if v.debug_view == DebugView::Off {
+        screen(ScreenPass::Tonemap, "passes::tonemap")
     } else {
-        out.push(render("debug_view", "passes::debug_view"));
-    }
+        screen(ScreenPass::DebugView, "passes::debug_view")
+    });
     out
+}
+
+/// The passes of one post effect the variant has.
+fn post_passes(v: &Variant, effect: PostEffect) -> Vec<Pass> {
+    match effect {
+        PostEffect::Toon => match &v.post.toon {
+            // Per-light bands are made in the shading pass; the compute pass only for the
+            // post-process bands or outlines.
+            Some(t) if t.mode == ToonMode::PostProcess || t.outlines.is_some() => {
+                vec![post(PostPass::Toon, "passes::toon")]
+            }
+            _ => vec![],
+        },
+        PostEffect::Bloom => match &v.post.bloom {
+            Some(b) => vec![
+                post(PostPass::BloomThreshold, "passes::bloom_threshold"),
+                post(
+                    PostPass::BloomBlur,
+                    match b.kernel {
+                        BloomKernel::Naive => "passes::bloom_naive",
+                        BloomKernel::Separable => "passes::bloom_separable",
+                    },
+                ),
+                post(PostPass::BloomComposite, "passes::bloom_composite"),
+            ],
+            None => vec![],
+        },
+        PostEffect::MotionBlur => match &v.post.motion_blur {
+            Some(_) => vec![post(PostPass::MotionBlur, "passes::motion_blur")],
+            None => vec![],
+        },
+    }
+}
+
+/// What a renderer of a variant on a scene builds and runs.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct FramePlan {
+    /// The passes every frame runs (but those a frame may skip; see `render`).
+    pub passes: Vec<Pass>,
+    /// Passes of the variant that no frame of this scene needs: not built, reported as
+    /// skipped.
+    pub never: Vec<PassId>,
+    /// Passes built only for the counters of instrumented frames.
+    pub support: Vec<Pass>,
+}
+
+/// The passes of `v` on a scene whose camera is still (`still_camera`) or moves.
+pub fn plan(v: &Variant, still_camera: bool) -> FramePlan {
+    let mut passes = passes(v);
+    let mut never = Vec::new();
+    // Motion blur has nothing to do when the camera does not move.
+    if v.skip_unneeded && still_camera {
+        let blur = PassId::Post(PostPass::MotionBlur);
+        if passes.iter().any(|p| p.id == blur) {
+            never.push(blur);
+        }
+        passes.retain(|p| p.id != blur);
+    }
+    // The count of clusters holding a visible sample needs the marking pass.
+    let mark = PassId::Clustering(ClusterPass::MarkActive);
+    let support = if v.pipeline.is_clustered() && !passes.iter().any(|p| p.id == mark) {
+        vec![clustering(ClusterPass::MarkActive, "passes::mark_active")]
+    } else {
+        vec![]
+    };
+    FramePlan {
+        passes,
+        never,
+        support,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_pass_has_a_distinct_name_and_is_found_by_it() {
+        let names: Vec<&str> = PassId::all().map(PassId::name).collect();
+        let mut unique = names.clone();
+        unique.sort();
+        unique.dedup();
+        assert_eq!(unique.len(), names.len(), "{names:?}");
+        for id in PassId::all() {
+            assert_eq!(PassId::from_name(id.name()), Some(id));
+        }
+        assert_eq!(PassId::Raster(RasterPass::GBuffer).name(), "gbuffer");
+        assert_eq!(PassId::Post(PostPass::BloomBlur).name(), "bloom_blur");
+    }
 }

@@ -8,7 +8,10 @@
 use glam::{DMat4, DVec2, DVec3, DVec4};
 
 use super::depth::DepthMapping;
+use strum::IntoEnumIterator;
+
 use super::truth::RasterTruth;
+use crate::common::PostEffect;
 
 /// A linear HDR image, row-major.
 #[derive(Clone, Debug, PartialEq)]
@@ -312,14 +315,24 @@ pub fn motion_blur(image: &Image, g: &Geometry, samples: u32) -> Image {
 /// Every post effect of `p`, in the order of the passes.
 pub fn apply(p: &PostParams, image: &Image, g: &Geometry) -> Image {
     let mut out = image.clone();
-    if p.toon_bands.is_some() || p.outline_threshold.is_some() {
-        out = toon_pass(&out, g, p.toon_bands, p.outline_threshold);
-    }
-    if let Some((threshold, radius)) = p.bloom {
-        out = bloom(&out, threshold, radius);
-    }
-    if let Some(samples) = p.motion_blur_samples {
-        out = motion_blur(&out, g, samples);
+    for effect in PostEffect::iter() {
+        match effect {
+            PostEffect::Toon => {
+                if p.toon_bands.is_some() || p.outline_threshold.is_some() {
+                    out = toon_pass(&out, g, p.toon_bands, p.outline_threshold);
+                }
+            }
+            PostEffect::Bloom => {
+                if let Some((threshold, radius)) = p.bloom {
+                    out = bloom(&out, threshold, radius);
+                }
+            }
+            PostEffect::MotionBlur => {
+                if let Some(samples) = p.motion_blur_samples {
+                    out = motion_blur(&out, g, samples);
+                }
+            }
+        }
     }
     out
 }

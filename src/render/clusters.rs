@@ -4,7 +4,6 @@
 use bytemuck::{Pod, Zeroable};
 use wgpu::util::DeviceExt;
 
-use super::resources::storage_entry;
 use crate::cpu::clusters::ClusterLists;
 use crate::gpu::{Gpu, GpuError, read_buffer};
 
@@ -56,7 +55,6 @@ mod binding {
     pub const LIGHT_RANGES: u32 = 9;
     pub const FILL_CURSORS: u32 = 10;
     pub const SAMPLE_DEPTHS: u32 = 11;
-    pub const LAST: u32 = SAMPLE_DEPTHS;
 }
 
 /// Clusters of one scan workgroup (`SCAN_BLOCK` in light_assign.wesl).
@@ -157,44 +155,10 @@ impl ClusterBuffers {
         self.index_capacity = capacity;
     }
 
-    /// Layout of group 1 for the passes that build clusters (all read-write).
-    pub fn build_layout(gpu: &Gpu) -> wgpu::BindGroupLayout {
-        let entries: Vec<_> = (0..=binding::LAST)
-            .map(|b| wgpu::BindGroupLayoutEntry {
-                visibility: wgpu::ShaderStages::COMPUTE,
-                ..storage_entry(b, false)
-            })
-            .collect();
-        gpu.device
-            .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-                label: Some("cluster build"),
-                entries: &entries,
-            })
-    }
-
-    /// Layout of group 1 for the passes that look lists up (read-only).
-    pub fn lookup_layout(gpu: &Gpu) -> wgpu::BindGroupLayout {
-        let entries: Vec<_> = [
-            binding::RANGE,
-            binding::COUNTS,
-            binding::OFFSETS,
-            binding::INDICES,
-        ]
-        .into_iter()
-        .map(|b| wgpu::BindGroupLayoutEntry {
-            visibility: wgpu::ShaderStages::FRAGMENT | wgpu::ShaderStages::COMPUTE,
-            ..storage_entry(b, true)
-        })
-        .collect();
-        gpu.device
-            .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-                label: Some("cluster lookup"),
-                entries: &entries,
-            })
-    }
-
-    fn buffer(&self, b: u32) -> &wgpu::Buffer {
-        match b {
+    /// The buffer at `@group(1) @binding(b)` (build_bindings.wesl; lookup.wesl binds a
+    /// few of the same read-only).
+    pub fn buffer(&self, b: u32) -> Option<&wgpu::Buffer> {
+        Some(match b {
             binding::RANGE => &self.range,
             binding::BOUNDS => &self.bounds,
             binding::ACTIVE => &self.active,
@@ -206,46 +170,9 @@ impl ClusterBuffers {
             binding::LIGHT_VIEW => &self.light_view,
             binding::LIGHT_RANGES => &self.light_ranges,
             binding::FILL_CURSORS => &self.fill_cursors,
-            _ => &self.sample_depths,
-        }
-    }
-
-    fn group(
-        &self,
-        gpu: &Gpu,
-        layout: &wgpu::BindGroupLayout,
-        bindings: &[u32],
-    ) -> wgpu::BindGroup {
-        let entries: Vec<_> = bindings
-            .iter()
-            .map(|&b| wgpu::BindGroupEntry {
-                binding: b,
-                resource: self.buffer(b).as_entire_binding(),
-            })
-            .collect();
-        gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("clusters"),
-            layout,
-            entries: &entries,
+            binding::SAMPLE_DEPTHS => &self.sample_depths,
+            _ => return None,
         })
-    }
-
-    pub fn build_group(&self, gpu: &Gpu, layout: &wgpu::BindGroupLayout) -> wgpu::BindGroup {
-        let all: Vec<u32> = (0..=binding::LAST).collect();
-        self.group(gpu, layout, &all)
-    }
-
-    pub fn lookup_group(&self, gpu: &Gpu, layout: &wgpu::BindGroupLayout) -> wgpu::BindGroup {
-        self.group(
-            gpu,
-            layout,
-            &[
-                binding::RANGE,
-                binding::COUNTS,
-                binding::OFFSETS,
-                binding::INDICES,
-            ],
-        )
     }
 
     pub fn read_stats(&self, gpu: &Gpu) -> Result<ClusterStats, GpuError> {

@@ -1,7 +1,6 @@
-//! G-buffer targets per layout, and the group-2 bindings that read them (with depth).
-//! Mirrors `shaders/packing/gbuffer.wesl`.
+//! G-buffer targets per layout. Mirrors `shaders/packing/gbuffer.wesl`.
 
-use super::resources::{F32_BITS_FORMAT, target, texture_entry};
+use super::resources::{F32_BITS_FORMAT, Target};
 use crate::gpu::Gpu;
 use crate::variant::GBufferLayout;
 
@@ -25,61 +24,10 @@ pub fn bytes_per_pixel(layout: GBufferLayout) -> u32 {
         .sum::<u32>()
 }
 
-pub fn targets(gpu: &Gpu, layout: GBufferLayout, w: u32, h: u32) -> Vec<wgpu::Texture> {
+pub fn targets(gpu: &Gpu, layout: GBufferLayout, w: u32, h: u32) -> Vec<Target> {
     formats(layout)
         .into_iter()
         .enumerate()
-        .map(|(i, f)| target(gpu, &format!("gbuffer {i}"), w, h, f))
+        .map(|(i, f)| Target::new(gpu, &format!("gbuffer {i}"), w, h, f))
         .collect()
-}
-
-fn sample_type(format: wgpu::TextureFormat) -> wgpu::TextureSampleType {
-    match format {
-        wgpu::TextureFormat::Rgba8Unorm => wgpu::TextureSampleType::Float { filterable: false },
-        _ => wgpu::TextureSampleType::Uint,
-    }
-}
-
-/// Group 2: depth at binding 0, then the layout's targets (none for `None`: depth only).
-pub fn read_layout(gpu: &Gpu, layout: Option<GBufferLayout>) -> wgpu::BindGroupLayout {
-    // Depth binds as unfilterable float: naga's GLSL output cannot load from depth textures.
-    let mut entries = vec![texture_entry(
-        0,
-        wgpu::TextureSampleType::Float { filterable: false },
-    )];
-    if let Some(layout) = layout {
-        for (i, f) in formats(layout).into_iter().enumerate() {
-            entries.push(texture_entry(i as u32 + 1, sample_type(f)));
-        }
-    }
-    gpu.device
-        .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("gbuffer read"),
-            entries: &entries,
-        })
-}
-
-pub fn read_group(
-    gpu: &Gpu,
-    layout: &wgpu::BindGroupLayout,
-    depth: &wgpu::Texture,
-    targets: &[wgpu::Texture],
-) -> wgpu::BindGroup {
-    let views: Vec<wgpu::TextureView> = std::iter::once(depth)
-        .chain(targets)
-        .map(|t| t.create_view(&Default::default()))
-        .collect();
-    let entries: Vec<_> = views
-        .iter()
-        .enumerate()
-        .map(|(i, v)| wgpu::BindGroupEntry {
-            binding: i as u32,
-            resource: wgpu::BindingResource::TextureView(v),
-        })
-        .collect();
-    gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: Some("gbuffer read"),
-        layout,
-        entries: &entries,
-    })
 }

@@ -67,16 +67,6 @@ pub fn shader_module(gpu: &Gpu, pass: &ComposedPass) -> wgpu::ShaderModule {
         })
 }
 
-pub fn pipeline_layout(gpu: &Gpu, groups: &[&wgpu::BindGroupLayout]) -> wgpu::PipelineLayout {
-    let groups: Vec<Option<&wgpu::BindGroupLayout>> = groups.iter().map(|g| Some(*g)).collect();
-    gpu.device
-        .create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: None,
-            bind_group_layouts: &groups,
-            immediate_size: 0,
-        })
-}
-
 /// A render pipeline of a composed pass with vertex and (optional) fragment entry points.
 pub fn render_pipeline(
     gpu: &Gpu,
@@ -112,23 +102,45 @@ pub fn render_pipeline(
         })
 }
 
-/// A compute pipeline for entry point `entry` of a composed pass.
-pub fn compute_pipeline(
-    gpu: &Gpu,
-    module: &wgpu::ShaderModule,
-    label: &str,
-    layout: &wgpu::PipelineLayout,
-    entry: &str,
-) -> wgpu::ComputePipeline {
-    gpu.device
-        .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-            label: Some(label),
-            layout: Some(layout),
-            module,
-            entry_point: Some(entry),
-            compilation_options: Default::default(),
-            cache: None,
-        })
+/// The compute pipelines of a pass, one per entry point, sharing its layout.
+pub struct ComputePipelines(Vec<(&'static str, wgpu::ComputePipeline)>);
+
+impl ComputePipelines {
+    pub fn new(
+        gpu: &Gpu,
+        pass: &ComposedPass,
+        layout: &wgpu::PipelineLayout,
+        entries: &[&'static str],
+    ) -> Self {
+        let module = shader_module(gpu, pass);
+        Self(
+            entries
+                .iter()
+                .map(|&entry| {
+                    let pipeline =
+                        gpu.device
+                            .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                                label: Some(entry),
+                                layout: Some(layout),
+                                module: &module,
+                                entry_point: Some(entry),
+                                compilation_options: Default::default(),
+                                cache: None,
+                            });
+                    (entry, pipeline)
+                })
+                .collect(),
+        )
+    }
+
+    /// The pipeline of `entry`, one of those it was made with.
+    pub fn get(&self, entry: &str) -> &wgpu::ComputePipeline {
+        self.0
+            .iter()
+            .find(|(e, _)| *e == entry)
+            .map(|(_, p)| p)
+            .unwrap_or_else(|| panic!("no compute pipeline for entry point `{entry}`"))
+    }
 }
 
 /// A colour target without blending.

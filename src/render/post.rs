@@ -5,11 +5,11 @@
 //! another. The colour ping-pongs between two rgba32float storage images, and bloom keeps
 //! its bright and blurred parts in two more; only the images a variant's steps use exist.
 
-use std::collections::HashMap;
-
-use super::passes::compute_pipeline;
-use super::resources::texture_entry;
-use crate::compose::ComposedPass;
+use super::RenderError;
+use super::passes::ComputePipelines;
+use super::reflect::PassLayout;
+use super::resources::{FrameResources, Target};
+use crate::compose::{ComposedPass, PostPass};
 use crate::gpu::{Gpu, TimestampSlot};
 use crate::variant::{BloomKernel, Variant};
 
@@ -32,7 +32,7 @@ enum Image {
 /// One dispatch: an entry point of a pass, reading `input` (and `extra`), writing `output`.
 #[derive(Clone, Copy, Debug)]
 struct StepPlan {
-    pass: &'static str,
+    pass: PostPass,
     entry: &'static str,
     input: Image,
     output: Image,
@@ -41,7 +41,7 @@ struct StepPlan {
 
 /// Which dispatches a variant's post passes make, in order, and which image holds the
 /// final colour.
-fn plan(v: &Variant, pass_names: &[&str]) -> (Vec<StepPlan>, Image) {
+fn plan(v: &Variant, passes: &[PostPass]) -> (Vec<StepPlan>, Image) {
     let mut steps = Vec::new();
     let mut colour = Image::Shaded;
     let next_colour = |c: Image| match c {
@@ -55,40 +55,30 @@ fn plan(v: &Variant, pass_names: &[&str]) -> (Vec<StepPlan>, Image) {
         output,
         extra,
     };
-    for &name in pass_names {
-        match name {
-            "toon" => {
+    for &pass in passes {
+        match pass {
+            PostPass::Toon => {
                 let out = next_colour(colour);
-                steps.push(step("toon", "toon", colour, out, Some(Image::Depth)));
+                steps.push(step(pass, "toon", colour, out, Some(Image::Depth)));
                 colour = out;
             }
-            "bloom_threshold" => steps.push(step(
-                "bloom_threshold",
-                "threshold",
-                colour,
-                Image::Bloom(0),
-                None,
-            )),
-            "bloom_blur" => {
+            PostPass::BloomThreshold => {
+                steps.push(step(pass, "threshold", colour, Image::Bloom(0), None))
+            }
+            PostPass::BloomBlur => {
                 let kernel = v.post.bloom.as_ref().map(|b| b.kernel);
                 if kernel == Some(BloomKernel::Naive) {
-                    steps.push(step(
-                        "bloom_blur",
-                        "blur",
-                        Image::Bloom(0),
-                        Image::Bloom(1),
-                        None,
-                    ));
+                    steps.push(step(pass, "blur", Image::Bloom(0), Image::Bloom(1), None));
                 } else {
                     steps.push(step(
-                        "bloom_blur",
+                        pass,
                         "blur_horizontal",
                         Image::Bloom(0),
                         Image::Bloom(1),
                         None,
                     ));
                     steps.push(step(
-                        "bloom_blur",
+                        pass,
                         "blur_vertical",
                         Image::Bloom(1),
                         Image::Bloom(0),
@@ -96,62 +86,36 @@ fn plan(v: &Variant, pass_names: &[&str]) -> (Vec<StepPlan>, Image) {
                     ));
                 }
             }
-            "bloom_composite" => {
+            PostPass::BloomComposite => {
                 let blurred = match steps.last() {
                     Some(s) => s.output,
                     None => Image::Bloom(0),
                 };
                 let out = next_colour(colour);
-                steps.push(step(
-                    "bloom_composite",
-                    "composite",
-                    colour,
-                    out,
-                    Some(blurred),
-                ));
+                steps.push(step(pass, "composite", colour, out, Some(blurred)));
                 colour = out;
             }
-            "motion_blur" => {
+            PostPass::MotionBlur => {
                 let out = next_colour(colour);
-                steps.push(step(
-                    "motion_blur",
-                    "motion_blur",
-                    colour,
-                    out,
-                    Some(Image::Depth),
-                ));
+                steps.push(step(pass, "motion_blur", colour, out, Some(Image::Depth)));
                 colour = out;
             }
-            _ => {}
         }
     }
     (steps, colour)
 }
 
-/// Whether a pass is a post-processing pass.
-pub fn is_post(name: &str) -> bool {
-    matches!(
-        name,
-        "toon" | "bloom_threshold" | "bloom_blur" | "bloom_composite" | "motion_blur"
-    )
-}
-
-/// Whether a post pass reads the view uniform (group 0).
-fn uses_view(pass: &str) -> bool {
-    matches!(pass, "toon" | "motion_blur")
-}
-
 struct Step {
-    pass: &'static str,
+    pass: PostPass,
     pipeline: wgpu::ComputePipeline,
-    group: wgpu::BindGroup,
+    groups: Vec<Option<wgpu::BindGroup>>,
 }
 
 /// The post passes of a variant, ready to encode.
 pub struct PostChain {
     steps: Vec<Step>,
-    colour: [Option<wgpu::Texture>; 2],
-    bloom: [Option<wgpu::Texture>; 2],
+    colour: [Option<Target>; 2],
+    bloom: [Option<Target>; 2],
     output: Image,
     width: u32,
     height: u32,
@@ -161,25 +125,19 @@ pub struct PostChain {
     indirect_blur: bool,
 }
 
-/// The chain's inputs from the rest of the frame.
-pub struct PostInputs<'a> {
-    pub shaded: &'a wgpu::Texture,
-    pub depth: &'a wgpu::Texture,
-    pub frame_layout: &'a wgpu::BindGroupLayout,
-}
-
 impl PostChain {
     /// Build the images, pipelines and bind groups of `passes` (composed post passes of
-    /// `v`, by name). Call inside an error scope.
+    /// `v`), reading the shaded image and depth of `frame`. Call inside an error scope.
     pub fn new(
         gpu: &Gpu,
         v: &Variant,
-        passes: &[(&'static str, &ComposedPass)],
-        inputs: PostInputs<'_>,
-    ) -> Self {
-        let names: Vec<&str> = passes.iter().map(|(n, _)| *n).collect();
-        let (plan, output) = plan(v, &names);
-        let (width, height) = (inputs.shaded.width(), inputs.shaded.height());
+        passes: &[(PostPass, &ComposedPass)],
+        frame: &FrameResources,
+    ) -> Result<Self, RenderError> {
+        let ids: Vec<PostPass> = passes.iter().map(|(p, _)| *p).collect();
+        let (plan, output) = plan(v, &ids);
+        let shaded = &frame.targets.hdr;
+        let (width, height) = (shaded.texture.width(), shaded.texture.height());
         let uses = |image: Image| {
             plan.iter()
                 .any(|s| s.input == image || s.output == image || s.extra == Some(image))
@@ -193,7 +151,7 @@ impl PostChain {
             image("bloom 0", Image::Bloom(0)),
             image("bloom 1", Image::Bloom(1)),
         ];
-        let any_bloom = plan.iter().any(|s| s.pass == "bloom_threshold");
+        let any_bloom = plan.iter().any(|s| s.pass == PostPass::BloomThreshold);
         let blur_dispatch = any_bloom.then(|| {
             gpu.device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("bloom blur dispatch"),
@@ -205,65 +163,55 @@ impl PostChain {
                 mapped_at_creation: false,
             })
         });
-        let mut modules = HashMap::new();
+        let target = |i: Image| -> &Target {
+            match i {
+                Image::Shaded => shaded,
+                Image::Depth => &frame.targets.depth,
+                Image::Colour(k) => colour[k].as_ref().expect("planned image exists"),
+                Image::Bloom(k) => bloom[k].as_ref().expect("planned image exists"),
+            }
+        };
+        // Per pass: its layout, and a pipeline for each entry point its steps use.
+        let mut built = Vec::new();
+        for &(pass, composed) in passes {
+            let layout = PassLayout::of(gpu, composed)?;
+            let entries: Vec<&'static str> = plan
+                .iter()
+                .filter(|s| s.pass == pass)
+                .map(|s| s.entry)
+                .collect();
+            let pipelines = ComputePipelines::new(gpu, composed, &layout.pipeline, &entries);
+            built.push((pass, layout, pipelines, composed));
+        }
         let mut steps = Vec::new();
         for s in &plan {
-            let Some((_, composed)) = passes.iter().find(|(n, _)| *n == s.pass) else {
+            let Some((_, layout, pipelines, composed)) = built.iter().find(|b| b.0 == s.pass)
+            else {
                 continue;
             };
-            let module = modules
-                .entry(s.pass)
-                .or_insert_with(|| super::shader_module(gpu, composed));
-            let dispatch = dispatch_access(s.pass);
-            let io = io_layout(gpu, s.extra.is_some(), dispatch);
-            let view_layout = uses_view(s.pass).then_some(inputs.frame_layout);
-            let layout = gpu
-                .device
-                .create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                    label: Some(s.pass),
-                    bind_group_layouts: &[view_layout, Some(&io)],
-                    immediate_size: 0,
-                });
-            let texture = |i: Image| -> &wgpu::Texture {
-                match i {
-                    Image::Shaded => inputs.shaded,
-                    Image::Depth => inputs.depth,
-                    Image::Colour(k) => colour[k].as_ref().expect("planned image exists"),
-                    Image::Bloom(k) => bloom[k].as_ref().expect("planned image exists"),
-                }
-            };
-            let views: Vec<wgpu::TextureView> = [Some(s.input), Some(s.output), s.extra]
+            // Group 1: the input image (0), the output image (1), an extra image (2) when
+            // the step reads one, then the blur's dispatch buffer.
+            let images: Vec<&Target> = [Some(s.input), Some(s.output), s.extra]
                 .into_iter()
                 .flatten()
-                .map(|i| texture(i).create_view(&Default::default()))
+                .map(target)
                 .collect();
-            let mut entries: Vec<wgpu::BindGroupEntry> = views
-                .iter()
-                .enumerate()
-                .map(|(b, view)| wgpu::BindGroupEntry {
-                    binding: b as u32,
-                    resource: wgpu::BindingResource::TextureView(view),
-                })
-                .collect();
-            if dispatch.is_some()
-                && let Some(buffer) = &blur_dispatch
-            {
-                entries.push(wgpu::BindGroupEntry {
-                    binding: entries.len() as u32,
-                    resource: buffer.as_entire_binding(),
-                });
-            }
+            let groups =
+                layout.bind_groups(gpu, composed.name.as_str(), |group, binding| match group {
+                    0 => frame.scene_binding(group, binding),
+                    1 => match images.get(binding as usize) {
+                        Some(t) => Some(wgpu::BindingResource::TextureView(&t.view)),
+                        None => blur_dispatch.as_ref().map(|b| b.as_entire_binding()),
+                    },
+                    _ => None,
+                })?;
             steps.push(Step {
                 pass: s.pass,
-                pipeline: compute_pipeline(gpu, module, s.entry, &layout, s.entry),
-                group: gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
-                    label: Some(s.entry),
-                    layout: &io,
-                    entries: &entries,
-                }),
+                pipeline: pipelines.get(s.entry).clone(),
+                groups,
             });
         }
-        Self {
+        Ok(Self {
             steps,
             colour,
             bloom,
@@ -272,7 +220,7 @@ impl PostChain {
             height,
             blur_dispatch,
             indirect_blur: v.skip_unneeded,
-        }
+        })
     }
 
     /// Whether the last frame's bloom blur ran no workgroup (no pixel passed the
@@ -288,7 +236,7 @@ impl PostChain {
     }
 
     /// The image that holds the final colour: the last post step's output, or `shaded`.
-    pub fn output<'a>(&'a self, shaded: &'a wgpu::Texture) -> &'a wgpu::Texture {
+    pub fn output<'a>(&'a self, shaded: &'a Target) -> &'a Target {
         match self.output {
             Image::Colour(k) => self.colour[k].as_ref().expect("output exists"),
             _ => shaded,
@@ -301,87 +249,41 @@ impl PostChain {
         images * POST_FORMAT.block_copy_size(None).unwrap_or(16)
     }
 
-    /// Encode the dispatches of post pass `name` as one compute pass.
+    /// Encode the dispatches of post pass `pass` as one compute pass.
     pub fn encode(
         &self,
-        name: &str,
+        pass: PostPass,
         encoder: &mut wgpu::CommandEncoder,
         slot: Option<TimestampSlot<'_>>,
-        frame: &wgpu::BindGroup,
     ) {
-        if name == "bloom_threshold"
+        if pass == PostPass::BloomThreshold
             && let Some(b) = &self.blur_dispatch
         {
             encoder.clear_buffer(b, 0, None);
         }
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some(name),
+        let mut cp = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some(<&str>::from(pass)),
             timestamp_writes: TimestampSlot::compute(slot),
         });
-        for s in self.steps.iter().filter(|s| s.pass == name) {
-            if uses_view(s.pass) {
-                pass.set_bind_group(0, frame, &[]);
-            }
-            pass.set_bind_group(1, &s.group, &[]);
-            pass.set_pipeline(&s.pipeline);
-            match &self.blur_dispatch {
-                Some(b) if name == "bloom_blur" && self.indirect_blur => {
-                    pass.dispatch_workgroups_indirect(b, 0)
+        for s in self.steps.iter().filter(|s| s.pass == pass) {
+            for (i, g) in s.groups.iter().enumerate() {
+                if let Some(g) = g {
+                    cp.set_bind_group(i as u32, g, &[]);
                 }
-                _ => pass.dispatch_workgroups(self.width.div_ceil(8), self.height.div_ceil(8), 1),
+            }
+            cp.set_pipeline(&s.pipeline);
+            match &self.blur_dispatch {
+                Some(b) if pass == PostPass::BloomBlur && self.indirect_blur => {
+                    cp.dispatch_workgroups_indirect(b, 0)
+                }
+                _ => cp.dispatch_workgroups(self.width.div_ceil(8), self.height.div_ceil(8), 1),
             }
         }
     }
 }
 
-/// How a post pass uses the blur's dispatch buffer (bound after its images): the bright
-/// pass writes it, the composite reads it.
-fn dispatch_access(pass: &str) -> Option<bool> {
-    match pass {
-        "bloom_threshold" => Some(false),
-        "bloom_composite" => Some(true),
-        _ => None,
-    }
-}
-
-/// The images of a step: input (0), output (1), an extra texture (2) when it reads one,
-/// then the dispatch buffer when `dispatch` says how it uses it (read-only or not).
-fn io_layout(gpu: &Gpu, extra: bool, dispatch: Option<bool>) -> wgpu::BindGroupLayout {
-    let mut entries = vec![
-        texture_entry(0, wgpu::TextureSampleType::Float { filterable: false }),
-        wgpu::BindGroupLayoutEntry {
-            binding: 1,
-            visibility: wgpu::ShaderStages::COMPUTE,
-            ty: wgpu::BindingType::StorageTexture {
-                access: wgpu::StorageTextureAccess::WriteOnly,
-                format: POST_FORMAT,
-                view_dimension: wgpu::TextureViewDimension::D2,
-            },
-            count: None,
-        },
-    ];
-    if extra {
-        // Depth binds as unfilterable float, like the other passes that read it.
-        entries.push(texture_entry(
-            2,
-            wgpu::TextureSampleType::Float { filterable: false },
-        ));
-    }
-    if let Some(read_only) = dispatch {
-        entries.push(wgpu::BindGroupLayoutEntry {
-            visibility: wgpu::ShaderStages::COMPUTE,
-            ..super::resources::storage_entry(entries.len() as u32, read_only)
-        });
-    }
-    gpu.device
-        .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("post images"),
-            entries: &entries,
-        })
-}
-
-fn storage_image(gpu: &Gpu, label: &str, width: u32, height: u32) -> wgpu::Texture {
-    gpu.device.create_texture(&wgpu::TextureDescriptor {
+fn storage_image(gpu: &Gpu, label: &str, width: u32, height: u32) -> Target {
+    let texture = gpu.device.create_texture(&wgpu::TextureDescriptor {
         label: Some(label),
         size: wgpu::Extent3d {
             width,
@@ -396,7 +298,9 @@ fn storage_image(gpu: &Gpu, label: &str, width: u32, height: u32) -> wgpu::Textu
             | wgpu::TextureUsages::TEXTURE_BINDING
             | wgpu::TextureUsages::COPY_SRC,
         view_formats: &[],
-    })
+    });
+    let view = texture.create_view(&Default::default());
+    Target { texture, view }
 }
 
 #[cfg(test)]
@@ -404,8 +308,14 @@ mod tests {
     use super::*;
     use crate::variant::{Bloom, MotionBlur, Outlines, Toon, ToonMode};
 
-    fn names(v: &Variant) -> Vec<&'static str> {
-        crate::compose::passes(v).iter().map(|p| p.name).collect()
+    fn names(v: &Variant) -> Vec<PostPass> {
+        crate::compose::passes(v)
+            .iter()
+            .filter_map(|p| match p.id {
+                crate::compose::PassId::Post(p) => Some(p),
+                _ => None,
+            })
+            .collect()
     }
 
     #[test]

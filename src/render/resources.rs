@@ -201,81 +201,127 @@ pub fn target(
     })
 }
 
-/// Layout of group 0 of the scene passes: the view uniform and the light array.
-pub fn frame_layout(gpu: &Gpu) -> wgpu::BindGroupLayout {
-    gpu.device
-        .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("frame"),
-            entries: &[
-                wgpu::BindGroupLayoutEntry {
-                    binding: 0,
-                    visibility: wgpu::ShaderStages::all(),
-                    ty: wgpu::BindingType::Buffer {
-                        ty: wgpu::BufferBindingType::Uniform,
-                        has_dynamic_offset: false,
-                        min_binding_size: None,
-                    },
-                    count: None,
-                },
-                storage_entry(1, true),
-            ],
-        })
+/// A render target and the view passes read and write it through.
+pub struct Target {
+    pub texture: wgpu::Texture,
+    pub view: wgpu::TextureView,
 }
 
-/// A storage-buffer layout entry visible to every stage that may use it.
-pub fn storage_entry(binding: u32, read_only: bool) -> wgpu::BindGroupLayoutEntry {
-    let visibility = if read_only {
-        wgpu::ShaderStages::all()
-    } else {
-        // Vertex shaders may not write storage buffers.
-        wgpu::ShaderStages::FRAGMENT | wgpu::ShaderStages::COMPUTE
-    };
-    wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility,
-        ty: wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Storage { read_only },
-            has_dynamic_offset: false,
-            min_binding_size: None,
-        },
-        count: None,
+impl Target {
+    pub fn new(gpu: &Gpu, label: &str, w: u32, h: u32, format: wgpu::TextureFormat) -> Self {
+        let texture = target(gpu, label, w, h, format);
+        let view = texture.create_view(&Default::default());
+        Self { texture, view }
     }
 }
 
-/// A non-filterable float texture entry (rgba32float targets cannot be filtered).
-pub fn texture_entry(
-    binding: u32,
-    sample_type: wgpu::TextureSampleType,
-) -> wgpu::BindGroupLayoutEntry {
-    wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: wgpu::ShaderStages::FRAGMENT | wgpu::ShaderStages::COMPUTE,
-        ty: wgpu::BindingType::Texture {
-            sample_type,
-            view_dimension: wgpu::TextureViewDimension::D2,
-            multisampled: false,
-        },
-        count: None,
+/// The images of a frame: depth, HDR colour, the 8-bit output and the G-buffer (deferred).
+pub struct Targets {
+    pub depth: Target,
+    pub hdr: Target,
+    pub ldr: Target,
+    pub gbuffer: Vec<Target>,
+}
+
+/// Per-pixel counters of instrumented frames (group 3 of the shading passes, in
+/// `shaders/shading/light_loop.wesl`): light evaluations, useful ones, and the cluster each
+/// pixel looked up (index + 1; 0 for background).
+pub struct Counters {
+    pub evals: wgpu::Buffer,
+    pub useful: wgpu::Buffer,
+    pub clusters: wgpu::Buffer,
+}
+
+impl Counters {
+    pub fn new(gpu: &Gpu, pixels: u64) -> Self {
+        let buffer = |label| {
+            gpu.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size: pixels * 4,
+                usage: wgpu::BufferUsages::STORAGE
+                    | wgpu::BufferUsages::COPY_SRC
+                    | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            })
+        };
+        Self {
+            evals: buffer("pixel light evaluations"),
+            useful: buffer("pixel useful evaluations"),
+            clusters: buffer("pixel cluster indices"),
+        }
+    }
+
+    /// Zero every counter.
+    pub fn clear(&self, encoder: &mut wgpu::CommandEncoder) {
+        for b in [&self.evals, &self.useful, &self.clusters] {
+            encoder.clear_buffer(b, 0, None);
+        }
     }
 }
 
-pub fn frame_bind_group(
-    gpu: &Gpu,
-    layout: &wgpu::BindGroupLayout,
-    s: &SceneBuffers,
-) -> wgpu::BindGroup {
-    gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: Some("frame"),
-        layout,
-        entries: &[
-            wgpu::BindGroupEntry {
-                binding: 0,
-                resource: s.view.as_entire_binding(),
+/// Everything the scene passes bind.
+pub struct FrameResources {
+    pub scene: SceneBuffers,
+    pub targets: Targets,
+    pub clusters: Option<super::ClusterBuffers>,
+    pub counters: Counters,
+}
+
+impl FrameResources {
+    /// Upload `scene` and make the targets, cluster buffers (clustered variants) and
+    /// counters a frame of `variant` needs. Call inside an error scope.
+    pub fn new(gpu: &Gpu, variant: &Variant, scene: &Scene) -> Self {
+        let (w, h) = (scene.params.width, scene.params.height);
+        let depth = DepthSetup::of(variant);
+        let targets = Targets {
+            depth: Target::new(gpu, "depth", w, h, depth.format),
+            hdr: Target::new(gpu, "hdr", w, h, gpu.hdr_format),
+            ldr: Target::new(gpu, "ldr", w, h, LDR_FORMAT),
+            gbuffer: if variant.pipeline.is_deferred() {
+                super::gbuffer::targets(gpu, variant.gbuffer().layout, w, h)
+            } else {
+                Vec::new()
             },
-            wgpu::BindGroupEntry {
-                binding: 1,
-                resource: s.lights.as_entire_binding(),
-            },
-        ],
-    })
+        };
+        let clusters = variant.pipeline.is_clustered().then(|| {
+            let c = variant.clusters();
+            let count = c.grid.0 * c.grid.1 * c.grid.2;
+            let lights = scene.lights.len() as u32;
+            // A first guess; a frame whose lists overflow grows the buffer and runs again.
+            let capacity = (count * lights.clamp(1, 32)).max(1024);
+            let range = super::ClusterRange::new(scene.camera.near as f32, scene.camera.far as f32);
+            super::ClusterBuffers::new(gpu, count, lights, capacity, range)
+        });
+        Self {
+            scene: SceneBuffers::upload(gpu, scene, depth.mapping),
+            targets,
+            clusters,
+            counters: Counters::new(gpu, w as u64 * h as u64),
+        }
+    }
+
+    /// What sits at `@group(group) @binding(binding)` of a scene pass. The groups are the
+    /// same in every scene pass: 0 the frame (`view`, `lights`), 1 the clusters (the
+    /// binding numbers of `build_bindings.wesl`, read-only in `lookup.wesl`), 2 the surface
+    /// (depth, then the G-buffer targets; `packing/gbuffer.wesl`), 3 the counters.
+    pub fn scene_binding(&self, group: u32, binding: u32) -> Option<wgpu::BindingResource<'_>> {
+        fn texture(t: &Target) -> wgpu::BindingResource<'_> {
+            wgpu::BindingResource::TextureView(&t.view)
+        }
+        match (group, binding) {
+            (0, 0) => Some(self.scene.view.as_entire_binding()),
+            (0, 1) => Some(self.scene.lights.as_entire_binding()),
+            (1, b) => self
+                .clusters
+                .as_ref()?
+                .buffer(b)
+                .map(|b| b.as_entire_binding()),
+            (2, 0) => Some(texture(&self.targets.depth)),
+            (2, b) => self.targets.gbuffer.get(b as usize - 1).map(texture),
+            (3, 0) => Some(self.counters.evals.as_entire_binding()),
+            (3, 1) => Some(self.counters.useful.as_entire_binding()),
+            (3, 2) => Some(self.counters.clusters.as_entire_binding()),
+            _ => None,
+        }
+    }
 }

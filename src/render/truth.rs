@@ -7,8 +7,9 @@
 //! wins, where a plain `Less` test keeps the first.
 
 use super::RenderError;
-use super::passes::{clear_attachment, color_target, pipeline_layout, render_pipeline};
-use super::resources::{DepthSetup, SceneBuffers, frame_bind_group, frame_layout, target};
+use super::passes::{clear_attachment, color_target, render_pipeline};
+use super::reflect::PassLayout;
+use super::resources::{DepthSetup, SceneBuffers, target};
 use crate::compose::Composer;
 use crate::cpu::truth::RasterTruth;
 use crate::gpu::{Gpu, read_texture};
@@ -43,11 +44,15 @@ pub fn raster_truth(
         None
     };
     let depth = DepthSetup::of(variant);
-    let textures = gpu.scoped("raster truth", || {
+    let textures = gpu.scoped("raster truth", || -> Result<_, RenderError> {
         let buffers = SceneBuffers::upload(gpu, scene, depth.mapping);
-        let layout = frame_layout(gpu);
-        let group = frame_bind_group(gpu, &layout, &buffers);
-        let pipeline_layout = pipeline_layout(gpu, &[&layout]);
+        let frame = |group: u32, binding: u32| match (group, binding) {
+            (0, 0) => Some(buffers.view.as_entire_binding()),
+            (0, 1) => Some(buffers.lights.as_entire_binding()),
+            _ => None,
+        };
+        let layout = PassLayout::of(gpu, &pass)?;
+        let groups = layout.bind_groups(gpu, "truth", frame)?;
         let vertex = [Some(SceneBuffers::vertex_layout())];
         let depth_state = if prepass.is_some() {
             depth.state(wgpu::CompareFunction::Equal, false)
@@ -57,7 +62,7 @@ pub fn raster_truth(
         let pipeline = render_pipeline(
             gpu,
             &pass,
-            &pipeline_layout,
+            &layout.pipeline,
             ("vs_main", Some("fs_main")),
             &vertex,
             &[
@@ -67,17 +72,23 @@ pub fn raster_truth(
             ],
             Some(depth_state),
         );
-        let prepass_pipeline = prepass.as_ref().map(|p| {
-            render_pipeline(
-                gpu,
-                p,
-                &pipeline_layout,
-                ("vs_main", None),
-                &vertex,
-                &[],
-                Some(depth.state(depth.compare(), true)),
-            )
-        });
+        let prepass_pipeline = match &prepass {
+            Some(p) => {
+                let layout = PassLayout::of(gpu, p)?;
+                let groups = layout.bind_groups(gpu, "truth depth pre-pass", frame)?;
+                let pipeline = render_pipeline(
+                    gpu,
+                    p,
+                    &layout.pipeline,
+                    ("vs_main", None),
+                    &vertex,
+                    &[],
+                    Some(depth.state(depth.compare(), true)),
+                );
+                Some((pipeline, groups))
+            }
+            None => None,
+        };
         let textures: Vec<wgpu::Texture> = ["truth position", "truth normal", "truth albedo"]
             .iter()
             .map(|label| target(gpu, label, w, h, TRUTH_FORMAT))
@@ -93,9 +104,9 @@ pub fn raster_truth(
             .create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
         let draws = prepass_pipeline
             .iter()
-            .map(|p| (p, false))
-            .chain([(&pipeline, true)]);
-        for (i, (pipeline, colors)) in draws.enumerate() {
+            .map(|(p, g)| (p, g, false))
+            .chain([(&pipeline, &groups, true)]);
+        for (i, (pipeline, groups, colors)) in draws.enumerate() {
             let attachments: Vec<_> = if colors {
                 views.iter().map(clear_attachment).collect()
             } else {
@@ -121,14 +132,18 @@ pub fn raster_truth(
                 multiview_mask: None,
             });
             rp.set_pipeline(pipeline);
-            rp.set_bind_group(0, &group, &[]);
+            for (g, group) in groups.iter().enumerate() {
+                if let Some(group) = group {
+                    rp.set_bind_group(g as u32, group, &[]);
+                }
+            }
             rp.set_vertex_buffer(0, buffers.vertices.slice(..));
             rp.set_index_buffer(buffers.indices.slice(..), wgpu::IndexFormat::Uint32);
             rp.draw_indexed(0..buffers.index_count, 0, 0..1);
         }
         gpu.queue.submit([encoder.finish()]);
-        textures
-    })?;
+        Ok(textures)
+    })??;
     let mut planes = Vec::with_capacity(3);
     for t in &textures {
         let bytes = read_texture(gpu, t, 16)?;

@@ -5,9 +5,10 @@
 //! that `schemars` derives from these types.
 
 use crate::common::DepthMapping;
-pub use crate::common::{DepthRangeSource, ZSlicing};
+pub use crate::common::{DepthRangeSource, PostEffect, ZSlicing};
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
+use strum::IntoEnumIterator;
 
 /// One shading pipeline configuration: the unit that the variant matrix measures.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
@@ -300,6 +301,17 @@ pub struct Post {
     pub bloom: Option<Bloom>,
     /// Blur along each pixel's screen-space motion.
     pub motion_blur: Option<MotionBlur>,
+}
+
+impl Post {
+    /// The effects this variant has, in the order a frame applies them.
+    pub fn effects(&self) -> impl Iterator<Item = PostEffect> + '_ {
+        PostEffect::iter().filter(|e| match e {
+            PostEffect::Toon => self.toon.is_some(),
+            PostEffect::Bloom => self.bloom.is_some(),
+            PostEffect::MotionBlur => self.motion_blur.is_some(),
+        })
+    }
 }
 
 /// Toon shading.

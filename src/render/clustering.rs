@@ -1,0 +1,129 @@
+//! The clustering family: compute passes that fit the depth range, mark active clusters,
+//! build cluster boxes and assign lights (count, prefix sum, fill). Their entry points, the
+//! buffers they clear and their dispatches.
+
+use super::clusters::{ClusterBuffers, SCAN_BLOCK};
+use super::passes::ComputePipelines;
+use crate::compose::ClusterPass;
+use crate::gpu::TimestampSlot;
+
+/// Lights per row of the per-light dispatches (`LIGHTS_PER_ROW` in light_assign.wesl).
+const LIGHTS_PER_ROW: u32 = 32768;
+
+/// Workgroups to cover `n` items, `per_group` a workgroup (at least one).
+pub fn dispatch_size(n: u32, per_group: u32) -> u32 {
+    n.div_ceil(per_group).max(1)
+}
+
+/// Compute entry points of a pass, in dispatch order (`mark_visible` runs only for the
+/// counters; see [`encode_visible_count`]).
+pub fn entries(pass: ClusterPass) -> &'static [&'static str] {
+    match pass {
+        ClusterPass::ClusterBounds => &["build_bounds"],
+        ClusterPass::LightAssign => &[
+            "transform_lights",
+            "count_lights",
+            "scan_local",
+            "scan_blocks",
+            "fill_lists",
+            "finish_lists",
+        ],
+        ClusterPass::MarkActive => &["mark_active", "mark_visible"],
+        ClusterPass::DepthRange => &["reduce", "finalize"],
+    }
+}
+
+/// What a clustering pass dispatches over.
+pub struct Extent {
+    pub width: u32,
+    pub height: u32,
+    pub lights: u32,
+}
+
+fn set_groups(pass: &mut wgpu::ComputePass<'_>, groups: &[Option<wgpu::BindGroup>]) {
+    for (i, g) in groups.iter().enumerate() {
+        if let Some(g) = g {
+            pass.set_bind_group(i as u32, g, &[]);
+        }
+    }
+}
+
+/// Encode one clustering pass: clear what it accumulates into, then its dispatches.
+pub fn encode(
+    pass: ClusterPass,
+    p: &ComputePipelines,
+    groups: &[Option<wgpu::BindGroup>],
+    encoder: &mut wgpu::CommandEncoder,
+    slot: Option<TimestampSlot<'_>>,
+    c: &ClusterBuffers,
+    extent: &Extent,
+) {
+    match pass {
+        ClusterPass::MarkActive => {
+            encoder.clear_buffer(&c.active, 0, None);
+            encoder.clear_buffer(&c.sample_depths, 0, None);
+        }
+        ClusterPass::LightAssign => {
+            encoder.clear_buffer(&c.counts, 0, None);
+            encoder.clear_buffer(&c.fill_cursors, 0, None);
+        }
+        ClusterPass::DepthRange | ClusterPass::ClusterBounds => {}
+    }
+    let mut cp = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+        label: Some(<&str>::from(pass)),
+        timestamp_writes: TimestampSlot::compute(slot),
+    });
+    set_groups(&mut cp, groups);
+    let pixels = (
+        dispatch_size(extent.width, 8),
+        dispatch_size(extent.height, 8),
+        1,
+    );
+    let clusters = dispatch_size(c.clusters, 64);
+    let l = extent.lights;
+    // One workgroup per light, in rows of LIGHTS_PER_ROW (light_assign.wesl).
+    let per_light = (
+        l.clamp(1, LIGHTS_PER_ROW),
+        l.div_ceil(LIGHTS_PER_ROW).max(1),
+        1,
+    );
+    let dispatches: Vec<(&str, (u32, u32, u32))> = match pass {
+        ClusterPass::ClusterBounds => vec![("build_bounds", (clusters, 1, 1))],
+        ClusterPass::MarkActive => vec![("mark_active", pixels)],
+        ClusterPass::DepthRange => vec![("reduce", pixels), ("finalize", (1, 1, 1))],
+        ClusterPass::LightAssign => vec![
+            ("transform_lights", (dispatch_size(l, 64), 1, 1)),
+            ("count_lights", per_light),
+            ("scan_local", (dispatch_size(c.clusters, SCAN_BLOCK), 1, 1)),
+            ("scan_blocks", (1, 1, 1)),
+            ("fill_lists", per_light),
+            ("finish_lists", (clusters, 1, 1)),
+        ],
+    };
+    for (entry, (x, y, z)) in dispatches {
+        cp.set_pipeline(p.get(entry));
+        cp.dispatch_workgroups(x, y, z);
+    }
+}
+
+/// Encode the marking of clusters that hold a visible sample of the last frame's depth
+/// (`mark_visible`), with the `active` flags and their counter cleared first.
+pub fn encode_visible_count(
+    p: &ComputePipelines,
+    groups: &[Option<wgpu::BindGroup>],
+    encoder: &mut wgpu::CommandEncoder,
+    c: &ClusterBuffers,
+    extent: &Extent,
+) {
+    encoder.clear_buffer(&c.active, 0, None);
+    // The `active_clusters` counter: the third u32 of the stats.
+    encoder.clear_buffer(&c.stats, 8, Some(4));
+    let mut cp = encoder.begin_compute_pass(&Default::default());
+    set_groups(&mut cp, groups);
+    cp.set_pipeline(p.get("mark_visible"));
+    cp.dispatch_workgroups(
+        dispatch_size(extent.width, 8),
+        dispatch_size(extent.height, 8),
+        1,
+    );
+}

@@ -1,0 +1,97 @@
+//! The light lists: grown to fit when a frame overflows them, and built on the CPU for
+//! variants with `assignment: Cpu`.
+
+use std::time::Instant;
+
+use super::{FrameRun, RenderError, Renderer};
+use crate::cpu::clusters::{self as cpu_clusters, Grid};
+use crate::gpu::GpuError;
+use crate::scene::Scene;
+use crate::variant::{LightLists, Variant};
+
+/// CPU light assignment state: the grid and its boxes (built once), the view-space lights.
+pub struct CpuAssignment {
+    grid: Grid,
+    bounds: Vec<Option<cpu_clusters::Aabb>>,
+    lights: Vec<(glam::DVec3, f64)>,
+    cap: Option<u32>,
+}
+
+impl CpuAssignment {
+    pub fn new(variant: &Variant, scene: &Scene) -> Self {
+        let grid = Grid::of(variant, scene);
+        CpuAssignment {
+            bounds: cpu_clusters::cluster_bounds(&grid),
+            grid,
+            lights: cpu_clusters::view_lights(&scene.lights, scene.camera.view()),
+            cap: match variant.clusters().lists {
+                LightLists::Exact => None,
+                LightLists::Capped { max_per_cluster } => Some(max_per_cluster),
+            },
+        }
+    }
+}
+
+impl Renderer<'_> {
+    /// After a frame: if the light lists overflowed the index buffer, grow it to fit and
+    /// say so (the caller runs the frame again).
+    fn grow_lists_if_needed(&mut self) -> Result<bool, RenderError> {
+        let gpu = self.gpu;
+        let Some(c) = &mut self.res.clusters else {
+            return Ok(false);
+        };
+        let s = c.read_stats(gpu)?;
+        if s.overflow == 0 {
+            return Ok(false);
+        }
+        let needed = s.total as u64 + s.total as u64 / 4 + 1024;
+        let limit = gpu.limits.max_storage_buffer_binding_size / 4;
+        if needed > limit {
+            return Err(RenderError::Gpu(GpuError::TooLarge(format!(
+                "the light lists need {} entries, more than adapter `{}` can bind ({limit}); use fewer lights, a coarser grid or a per-cluster cap",
+                s.total, gpu.adapter.name
+            ))));
+        }
+        c.grow_indices(gpu, needed as u32);
+        self.reallocations += 1;
+        self.remake_groups()?;
+        Ok(true)
+    }
+
+    /// Run the frame until its light lists fit: the index buffer grows to the exact total a
+    /// frame reports, so one re-run fits; lists that still do not fit are an error, never a
+    /// picture with lights missing.
+    pub(super) fn run_fitted(&mut self, instrumented: bool) -> Result<FrameRun, RenderError> {
+        let mut frame = self.run_frame(instrumented)?;
+        let mut runs = 1;
+        while self.grow_lists_if_needed()? {
+            if runs == 3 {
+                return Err(RenderError::Gpu(GpuError::Captured(
+                    "the light lists still overflowed their buffer after growing it twice".into(),
+                )));
+            }
+            frame = self.run_frame(instrumented)?;
+            runs += 1;
+        }
+        Ok(frame)
+    }
+
+    /// Build and upload the light lists on the CPU (variants with `assignment: Cpu`).
+    pub(super) fn assign_on_cpu(&mut self) -> Result<Option<f64>, RenderError> {
+        let Some(cpu) = &self.cpu_assignment else {
+            return Ok(None);
+        };
+        let start = Instant::now();
+        let lists = cpu_clusters::assign(&cpu.grid, &cpu.bounds, &cpu.lights, cpu.cap, None);
+        let ms = start.elapsed().as_secs_f64() * 1e3;
+        let c = self.res.clusters.as_mut().expect("clustered");
+        if !c.upload_lists(self.gpu, &lists) {
+            c.grow_indices(self.gpu, lists.indices.len() as u32 + 1024);
+            self.reallocations += 1;
+            self.remake_groups()?;
+            let c = self.res.clusters.as_ref().expect("clustered");
+            c.upload_lists(self.gpu, &lists);
+        }
+        Ok(Some(ms))
+    }
+}

@@ -1,0 +1,112 @@
+//! The raster family: passes that draw the scene's geometry (depth pre-pass, G-buffer,
+//! forward shading). Their pipelines, attachments and draws.
+
+use super::gbuffer;
+use super::passes::{clear_attachment, color_target, render_pipeline};
+use super::resources::{DepthSetup, SceneBuffers, Targets};
+use crate::compose::{ComposedPass, RasterPass};
+use crate::gpu::{Gpu, TimestampSlot};
+use crate::variant::Variant;
+
+/// The render pipelines of a raster pass, drawn in order.
+pub fn pipelines(
+    gpu: &Gpu,
+    pass: RasterPass,
+    composed: &ComposedPass,
+    layout: &wgpu::PipelineLayout,
+    variant: &Variant,
+    instrumented: bool,
+) -> Vec<wgpu::RenderPipeline> {
+    let d = DepthSetup::of(variant);
+    let vertex = [Some(SceneBuffers::vertex_layout())];
+    let build = |fs: Option<&str>, targets: &[Option<wgpu::ColorTargetState>], depth| {
+        render_pipeline(
+            gpu,
+            composed,
+            layout,
+            ("vs_main", fs),
+            &vertex,
+            targets,
+            Some(depth),
+        )
+    };
+    match pass {
+        RasterPass::DepthPrepass => vec![build(None, &[], d.state(d.compare(), true))],
+        RasterPass::GBuffer => {
+            let formats = gbuffer::formats(variant.gbuffer().layout);
+            let targets: Vec<_> = formats.into_iter().map(color_target).collect();
+            vec![build(Some("fs_main"), &targets, d.state(d.compare(), true))]
+        }
+        RasterPass::Forward => {
+            // After a pre-pass, shade exactly the nearest fragment, once.
+            let depth = if variant.depth_prepass {
+                d.state(wgpu::CompareFunction::Equal, false)
+            } else {
+                d.state(d.compare(), true)
+            };
+            let fs = if instrumented { "fs_stats" } else { "fs_main" };
+            vec![build(Some(fs), &[color_target(gpu.hdr_format)], depth)]
+        }
+    }
+}
+
+/// Encode a raster pass: its attachments, then the scene's triangles.
+#[allow(clippy::too_many_arguments)]
+pub fn encode(
+    pass: RasterPass,
+    pipelines: &[wgpu::RenderPipeline],
+    groups: &[Option<wgpu::BindGroup>],
+    encoder: &mut wgpu::CommandEncoder,
+    slot: Option<TimestampSlot<'_>>,
+    targets: &Targets,
+    scene: &SceneBuffers,
+    variant: &Variant,
+) {
+    let d = DepthSetup::of(variant);
+    let depth = |clear: bool| {
+        Some(wgpu::RenderPassDepthStencilAttachment {
+            view: &targets.depth.view,
+            depth_ops: Some(wgpu::Operations {
+                load: if clear {
+                    wgpu::LoadOp::Clear(d.clear())
+                } else {
+                    wgpu::LoadOp::Load
+                },
+                store: wgpu::StoreOp::Store,
+            }),
+            stencil_ops: None,
+        })
+    };
+    let (colors, depth): (Vec<_>, _) = match pass {
+        RasterPass::DepthPrepass => (vec![], depth(true)),
+        RasterPass::GBuffer => (
+            targets
+                .gbuffer
+                .iter()
+                .map(|t| clear_attachment(&t.view))
+                .collect(),
+            depth(true),
+        ),
+        RasterPass::Forward => (
+            vec![clear_attachment(&targets.hdr.view)],
+            depth(!variant.depth_prepass),
+        ),
+    };
+    let mut rp = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+        label: Some(<&str>::from(pass)),
+        color_attachments: &colors,
+        depth_stencil_attachment: depth,
+        timestamp_writes: TimestampSlot::render(slot),
+        occlusion_query_set: None,
+        multiview_mask: None,
+    });
+    for (i, g) in groups.iter().enumerate() {
+        if let Some(g) = g {
+            rp.set_bind_group(i as u32, g, &[]);
+        }
+    }
+    rp.set_pipeline(&pipelines[0]);
+    rp.set_vertex_buffer(0, scene.vertices.slice(..));
+    rp.set_index_buffer(scene.indices.slice(..), wgpu::IndexFormat::Uint32);
+    rp.draw_indexed(0..scene.index_count, 0, 0..1);
+}

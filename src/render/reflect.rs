@@ -1,0 +1,215 @@
+//! Bind group layouts read off a composed pass's naga module (reflection, as vello derives
+//! its layouts): every resource binding the entry points reach, its type and the stages
+//! that use it. The WGSL is the one statement of what a pass binds; nothing here repeats it.
+
+use std::collections::BTreeMap;
+
+use naga::{AddressSpace, ImageClass, ImageDimension, ScalarKind, ShaderStage, TypeInner};
+
+use super::RenderError;
+use crate::compose::ComposedPass;
+use crate::gpu::Gpu;
+
+/// The layout entries of each bind group a pass uses, by group index, in binding order.
+pub type GroupEntries = BTreeMap<u32, Vec<wgpu::BindGroupLayoutEntry>>;
+
+/// The bindings of `pass`'s module that its entry points use.
+pub fn layout_entries(pass: &ComposedPass) -> Result<GroupEntries, RenderError> {
+    let module = &pass.module;
+    let mut groups = GroupEntries::new();
+    for (handle, var) in module.global_variables.iter() {
+        let Some(slot) = &var.binding else { continue };
+        let mut visibility = wgpu::ShaderStages::NONE;
+        for (i, entry) in module.entry_points.iter().enumerate() {
+            if !pass.info.get_entry_point(i)[handle].is_empty() {
+                visibility |= match entry.stage {
+                    ShaderStage::Vertex => wgpu::ShaderStages::VERTEX,
+                    ShaderStage::Fragment => wgpu::ShaderStages::FRAGMENT,
+                    _ => wgpu::ShaderStages::COMPUTE,
+                };
+            }
+        }
+        if visibility.is_empty() {
+            continue;
+        }
+        let unsupported = |what: &str| {
+            RenderError::Reflection(format!(
+                "pass `{}`: binding @group({}) @binding({}) is {what}, which clusterlab does not bind",
+                pass.name, slot.group, slot.binding
+            ))
+        };
+        let ty = match (&module.types[var.ty].inner, var.space) {
+            (_, AddressSpace::Uniform) => wgpu::BindingType::Buffer {
+                ty: wgpu::BufferBindingType::Uniform,
+                has_dynamic_offset: false,
+                min_binding_size: None,
+            },
+            (_, AddressSpace::Storage { access }) => wgpu::BindingType::Buffer {
+                ty: wgpu::BufferBindingType::Storage {
+                    read_only: !access.contains(naga::StorageAccess::STORE),
+                },
+                has_dynamic_offset: false,
+                min_binding_size: None,
+            },
+            (
+                TypeInner::Image {
+                    dim,
+                    arrayed: false,
+                    class,
+                },
+                AddressSpace::Handle,
+            ) => {
+                let view_dimension = match dim {
+                    ImageDimension::D2 => wgpu::TextureViewDimension::D2,
+                    _ => return Err(unsupported("a texture other than 2D")),
+                };
+                match *class {
+                    // Every texture is read with `textureLoad`: unfilterable.
+                    ImageClass::Sampled { kind, multi } => wgpu::BindingType::Texture {
+                        sample_type: match kind {
+                            ScalarKind::Float => {
+                                wgpu::TextureSampleType::Float { filterable: false }
+                            }
+                            ScalarKind::Uint => wgpu::TextureSampleType::Uint,
+                            ScalarKind::Sint => wgpu::TextureSampleType::Sint,
+                            _ => return Err(unsupported("a texture of booleans")),
+                        },
+                        view_dimension,
+                        multisampled: multi,
+                    },
+                    ImageClass::Depth { multi } => wgpu::BindingType::Texture {
+                        sample_type: wgpu::TextureSampleType::Depth,
+                        view_dimension,
+                        multisampled: multi,
+                    },
+                    ImageClass::Storage { format, access } => wgpu::BindingType::StorageTexture {
+                        access: storage_access(access),
+                        format: storage_format(format)
+                            .ok_or_else(|| unsupported(&format!("a {format:?} storage image")))?,
+                        view_dimension,
+                    },
+                    ImageClass::External => return Err(unsupported("an external texture")),
+                }
+            }
+            _ => return Err(unsupported("not a buffer or a 2D texture")),
+        };
+        groups
+            .entry(slot.group)
+            .or_default()
+            .push(wgpu::BindGroupLayoutEntry {
+                binding: slot.binding,
+                visibility,
+                ty,
+                count: None,
+            });
+    }
+    for entries in groups.values_mut() {
+        entries.sort_by_key(|e| e.binding);
+    }
+    Ok(groups)
+}
+
+fn storage_access(access: naga::StorageAccess) -> wgpu::StorageTextureAccess {
+    let read = access.contains(naga::StorageAccess::LOAD);
+    let write = access.contains(naga::StorageAccess::STORE);
+    match (read, write) {
+        (true, true) => wgpu::StorageTextureAccess::ReadWrite,
+        (true, false) => wgpu::StorageTextureAccess::ReadOnly,
+        _ => wgpu::StorageTextureAccess::WriteOnly,
+    }
+}
+
+/// The wgpu format of a storage image format the shaders use.
+fn storage_format(f: naga::StorageFormat) -> Option<wgpu::TextureFormat> {
+    use naga::StorageFormat as S;
+    use wgpu::TextureFormat as T;
+    Some(match f {
+        S::Rgba32Float => T::Rgba32Float,
+        S::Rgba16Float => T::Rgba16Float,
+        S::Rgba8Unorm => T::Rgba8Unorm,
+        S::R32Float => T::R32Float,
+        S::R32Uint => T::R32Uint,
+        S::Rgba32Uint => T::Rgba32Uint,
+        _ => return None,
+    })
+}
+
+/// The bind group layouts of a pass and the pipeline layout made of them; a group the pass
+/// does not use is a gap.
+pub struct PassLayout {
+    entries: GroupEntries,
+    groups: Vec<Option<wgpu::BindGroupLayout>>,
+    pub pipeline: wgpu::PipelineLayout,
+}
+
+impl PassLayout {
+    /// The layout of `pass`, from its module.
+    pub fn of(gpu: &Gpu, pass: &ComposedPass) -> Result<Self, RenderError> {
+        let entries = layout_entries(pass)?;
+        let count = entries.keys().next_back().map_or(0, |g| g + 1);
+        let groups: Vec<Option<wgpu::BindGroupLayout>> = (0..count)
+            .map(|g| {
+                entries.get(&g).map(|e| {
+                    gpu.device
+                        .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                            label: Some(&pass.name),
+                            entries: e,
+                        })
+                })
+            })
+            .collect();
+        let refs: Vec<Option<&wgpu::BindGroupLayout>> = groups.iter().map(Option::as_ref).collect();
+        let pipeline = gpu
+            .device
+            .create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some(&pass.name),
+                bind_group_layouts: &refs,
+                immediate_size: 0,
+            });
+        Ok(Self {
+            entries,
+            groups,
+            pipeline,
+        })
+    }
+
+    /// The bind groups of this layout, each binding filled by `resource(group, binding)`.
+    /// A slot `resource` has nothing for is an error naming it.
+    pub fn bind_groups<'r>(
+        &self,
+        gpu: &Gpu,
+        pass: &str,
+        resource: impl Fn(u32, u32) -> Option<wgpu::BindingResource<'r>>,
+    ) -> Result<Vec<Option<wgpu::BindGroup>>, RenderError> {
+        let entries = &self.entries;
+        self.groups
+            .iter()
+            .enumerate()
+            .map(|(g, layout)| {
+                let (Some(layout), Some(slots)) = (layout, entries.get(&(g as u32))) else {
+                    return Ok(None);
+                };
+                let bound = slots
+                    .iter()
+                    .map(|slot| {
+                        let resource = resource(g as u32, slot.binding).ok_or_else(|| {
+                            RenderError::Reflection(format!(
+                                "pass `{pass}` binds @group({g}) @binding({}), which no resource fills",
+                                slot.binding
+                            ))
+                        })?;
+                        Ok(wgpu::BindGroupEntry {
+                            binding: slot.binding,
+                            resource,
+                        })
+                    })
+                    .collect::<Result<Vec<_>, RenderError>>()?;
+                Ok(Some(gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                    label: Some(pass),
+                    layout,
+                    entries: &bound,
+                })))
+            })
+            .collect()
+    }
+}

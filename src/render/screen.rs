@@ -1,0 +1,98 @@
+//! The screen family: passes that draw over the screen without the scene's geometry
+//! (deferred resolve, scissor-rectangle lights, the debug views, tonemapping). Their
+//! pipelines, bindings, attachments and draws.
+
+use super::passes::{clear_attachment, color_target, render_pipeline};
+use super::resources::{FrameResources, LDR_FORMAT};
+use crate::compose::{ComposedPass, ScreenPass};
+use crate::gpu::{Gpu, TimestampSlot};
+
+/// The render pipelines of a screen pass, drawn in order.
+pub fn pipelines(
+    gpu: &Gpu,
+    pass: ScreenPass,
+    composed: &ComposedPass,
+    layout: &wgpu::PipelineLayout,
+) -> Vec<wgpu::RenderPipeline> {
+    let build = |vs: &str, fs: &str, target: Option<wgpu::ColorTargetState>| {
+        render_pipeline(gpu, composed, layout, (vs, Some(fs)), &[], &[target], None)
+    };
+    match pass {
+        ScreenPass::Resolve => vec![build("vs_main", "fs_main", color_target(gpu.hdr_format))],
+        // The ambient term over every pixel, then each light added in its rectangle.
+        ScreenPass::ScissorLights => {
+            let additive = Some(wgpu::ColorTargetState {
+                format: gpu.hdr_format,
+                blend: Some(wgpu::BlendState {
+                    color: wgpu::BlendComponent {
+                        src_factor: wgpu::BlendFactor::One,
+                        dst_factor: wgpu::BlendFactor::One,
+                        operation: wgpu::BlendOperation::Add,
+                    },
+                    alpha: wgpu::BlendComponent::OVER,
+                }),
+                write_mask: wgpu::ColorWrites::ALL,
+            });
+            vec![
+                build("vs_ambient", "fs_ambient", additive.clone()),
+                build("vs_light", "fs_light", additive),
+            ]
+        }
+        ScreenPass::DebugView | ScreenPass::Tonemap => {
+            vec![build("vs_main", "fs_main", color_target(LDR_FORMAT))]
+        }
+    }
+}
+
+/// What sits at `@group(group) @binding(binding)` of a screen pass: the scene passes'
+/// groups, but for tonemapping, which reads the final colour (`shaded`, after any post
+/// effect) at group 0.
+pub fn binding<'a>(
+    pass: ScreenPass,
+    group: u32,
+    binding: u32,
+    resources: &'a FrameResources,
+    shaded: &'a wgpu::TextureView,
+) -> Option<wgpu::BindingResource<'a>> {
+    match (pass, group, binding) {
+        (ScreenPass::Tonemap, 0, 0) => Some(wgpu::BindingResource::TextureView(shaded)),
+        (ScreenPass::Tonemap, _, _) => None,
+        _ => resources.scene_binding(group, binding),
+    }
+}
+
+/// Encode a screen pass: one full-screen triangle, or for scissor lights the ambient
+/// triangle and one rectangle per light.
+pub fn encode(
+    pass: ScreenPass,
+    pipelines: &[wgpu::RenderPipeline],
+    groups: &[Option<wgpu::BindGroup>],
+    encoder: &mut wgpu::CommandEncoder,
+    slot: Option<TimestampSlot<'_>>,
+    resources: &FrameResources,
+) {
+    let t = &resources.targets;
+    let target = match pass {
+        ScreenPass::Resolve | ScreenPass::ScissorLights => &t.hdr.view,
+        ScreenPass::DebugView | ScreenPass::Tonemap => &t.ldr.view,
+    };
+    let mut rp = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+        label: Some(<&str>::from(pass)),
+        color_attachments: &[clear_attachment(target)],
+        depth_stencil_attachment: None,
+        timestamp_writes: TimestampSlot::render(slot),
+        occlusion_query_set: None,
+        multiview_mask: None,
+    });
+    for (i, g) in groups.iter().enumerate() {
+        if let Some(g) = g {
+            rp.set_bind_group(i as u32, g, &[]);
+        }
+    }
+    rp.set_pipeline(&pipelines[0]);
+    rp.draw(0..3, 0..1);
+    if pass == ScreenPass::ScissorLights {
+        rp.set_pipeline(&pipelines[1]);
+        rp.draw(0..6, 0..resources.scene.light_count);
+    }
+}

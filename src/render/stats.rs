@@ -1,0 +1,164 @@
+//! The exact counters of a frame: an instrumented run of it (shading passes that count
+//! their light evaluations per pixel), the light lists, and the bytes a frame keeps.
+
+use serde::Serialize;
+
+use super::resources::Target;
+use super::{Pipelines, RenderError, Renderer, clustering, gbuffer};
+use crate::compose::{ClusterPass, PassId};
+use crate::gpu::{GpuError, read_buffer};
+
+/// Exact counters of a frame, from an instrumented run of it.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, serde::Deserialize)]
+pub struct FrameStats {
+    /// Light evaluations performed by the shading pass.
+    pub light_evals: u64,
+    /// Those with the surface closer to the light than its radius.
+    pub useful_light_evals: u64,
+    /// Light-cluster pairs left out by a per-cluster cap.
+    pub dropped_lights: u64,
+    /// Clusters that hold at least one visible sample.
+    pub active_clusters: u64,
+    /// Clusters that took part in light assignment (all, unless active clusters are on).
+    pub assigned_clusters: u64,
+    pub clusters: u64,
+    pub max_lights_per_cluster: u32,
+    /// Mean lights per cluster over the clusters that hold a visible sample (what shading
+    /// loops over).
+    #[serde(default)]
+    pub mean_lights_per_visible_cluster: f64,
+    /// Most lights in a cluster that holds a visible sample.
+    #[serde(default)]
+    pub max_lights_per_visible_cluster: u32,
+    /// Entries in all light lists together.
+    pub light_list_entries: u64,
+    /// Bytes of cluster data on the GPU (bounds, counts, offsets, indices, ...).
+    pub cluster_bytes: u64,
+    /// G-buffer bytes per pixel, depth included (0 for forward pipelines).
+    pub gbuffer_bytes_per_pixel: u32,
+    /// Bytes per pixel of the post-processing images (0 without post effects).
+    pub post_bytes_per_pixel: u32,
+    /// Bytes per pixel of every full-size image the frame keeps: depth, G-buffer, HDR
+    /// colour, post images and the 8-bit output.
+    pub frame_bytes_per_pixel: u32,
+    /// Times the light index buffer was too small and the frame was run again larger.
+    pub list_reallocations: u32,
+    /// The clustered depth range of the frame [near, far].
+    pub z_range: Option<[f32; 2]>,
+    /// Pixels whose shading looked up a cluster index outside the grid (clustered).
+    pub clusters_out_of_grid: u64,
+    /// The first such pixel: [x, y, cluster index].
+    pub first_out_of_grid: Option<[u32; 3]>,
+}
+
+impl Renderer<'_> {
+    /// Render the frame again with instrumented shading and return its exact counters.
+    pub fn stats(&mut self) -> Result<FrameStats, RenderError> {
+        let gpu = self.gpu;
+        self.run_fitted(true)?;
+        let sum = |b: &wgpu::Buffer| -> Result<u64, GpuError> {
+            let bytes = read_buffer(gpu, b, 0, b.size())?;
+            Ok(bytemuck::cast_slice::<u8, u32>(&bytes)
+                .iter()
+                .map(|&v| v as u64)
+                .sum())
+        };
+        let mut stats = FrameStats {
+            light_evals: sum(&self.res.counters.evals)?,
+            useful_light_evals: sum(&self.res.counters.useful)?,
+            gbuffer_bytes_per_pixel: if self.variant.pipeline.is_deferred() {
+                gbuffer::bytes_per_pixel(self.variant.gbuffer().layout)
+            } else {
+                0
+            },
+            post_bytes_per_pixel: self.post.bytes_per_pixel(),
+            frame_bytes_per_pixel: self.frame_bytes_per_pixel(),
+            list_reallocations: self.reallocations,
+            ..Default::default()
+        };
+        if let Some(c) = &self.res.clusters {
+            let s = c.read_stats(gpu)?;
+            let range = c.read_range(gpu)?;
+            stats.clusters = c.clusters as u64;
+            stats.dropped_lights = s.dropped as u64;
+            stats.max_lights_per_cluster = s.max_per_cluster;
+            stats.light_list_entries = s.total as u64;
+            stats.cluster_bytes = c.bytes();
+            stats.z_range = Some([range.near, range.far]);
+            stats.assigned_clusters = if self.variant.clusters().active_clusters {
+                s.active_clusters as u64
+            } else {
+                c.clusters as u64
+            };
+            stats.active_clusters = self.count_visible_clusters()? as u64;
+            let pixel_clusters = &self.res.counters.clusters;
+            let bytes = read_buffer(gpu, pixel_clusters, 0, pixel_clusters.size())?;
+            let used: &[u32] = bytemuck::cast_slice(&bytes);
+            let outside = |&(_, &v): &(usize, &u32)| v > c.clusters;
+            stats.clusters_out_of_grid = used.iter().enumerate().filter(outside).count() as u64;
+            stats.first_out_of_grid = used.iter().enumerate().find(outside).map(|(i, &v)| {
+                let w = self.width as usize;
+                [(i % w) as u32, (i / w) as u32, v - 1]
+            });
+            // Pixels record their cluster index + 1 (0: background).
+            let mut visible: Vec<u32> = used
+                .iter()
+                .filter(|&&v| v > 0 && v <= c.clusters)
+                .map(|&v| v - 1)
+                .collect();
+            visible.sort_unstable();
+            visible.dedup();
+            let counts = c.read_counts(gpu)?;
+            let lights: Vec<u32> = visible.iter().map(|&k| counts[k as usize]).collect();
+            stats.max_lights_per_visible_cluster = lights.iter().copied().max().unwrap_or(0);
+            stats.mean_lights_per_visible_cluster = if lights.is_empty() {
+                0.0
+            } else {
+                lights.iter().map(|&n| n as f64).sum::<f64>() / lights.len() as f64
+            };
+        }
+        Ok(stats)
+    }
+
+    fn frame_bytes_per_pixel(&self) -> u32 {
+        let t = &self.res.targets;
+        let size = |tex: &Target| {
+            // Depth formats have no copy size for the whole texture; 24-bit depth takes 4.
+            let format = tex.texture.format();
+            format
+                .block_copy_size(None)
+                .or_else(|| format.block_copy_size(Some(wgpu::TextureAspect::DepthOnly)))
+                .unwrap_or(4)
+        };
+        [&t.depth, &t.hdr, &t.ldr]
+            .into_iter()
+            .chain(&t.gbuffer)
+            .map(size)
+            .sum::<u32>()
+            + self.post.bytes_per_pixel()
+    }
+
+    /// Clusters holding a visible sample of the last frame's depth (exact marking).
+    fn count_visible_clusters(&self) -> Result<u32, RenderError> {
+        let gpu = self.gpu;
+        let c = self.res.clusters.as_ref().expect("clustered");
+        let mark = PassId::Clustering(ClusterPass::MarkActive);
+        let Some(built) = self
+            .support
+            .iter()
+            .chain(&self.timed)
+            .find(|b| b.pass.id == mark)
+        else {
+            return Ok(0);
+        };
+        let Pipelines::Compute(p) = &built.pipelines else {
+            return Ok(0);
+        };
+        gpu.scoped("counting visible clusters", || {
+            let mut e = gpu.device.create_command_encoder(&Default::default());
+            clustering::encode_visible_count(p, &built.groups, &mut e, c, &self.extent());
+            gpu.queue.submit([e.finish()]);
+        })?;
+        Ok(c.read_stats(gpu)?.active_clusters)
+    }
+}
