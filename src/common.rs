@@ -77,6 +77,80 @@ pub enum DepthRangeSource {
     PreviousFrame,
 }
 
+/// How a normal is stored in the G-buffer.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, JsonSchema, EnumIter)]
+pub enum NormalCodec {
+    /// Three 32-bit floats (wide layout only).
+    Xyz,
+    /// Octahedral map (Meyer 2010, Cigolle 2014), two components of bits/2 each.
+    Octahedral {
+        /// Total bits: 16, 20, 24 or 32.
+        bits: u32,
+        /// Try the 4 neighbouring codes and keep the one whose decode is closest (default false).
+        #[serde(default)]
+        precise: bool,
+    },
+    /// Two angles: polar angle from +z and azimuth, bits/2 each.
+    Polar {
+        /// Total bits: 16, 20, 24 or 32.
+        bits: u32,
+    },
+    /// Spheremap transform (Lambert azimuthal equal-area), bits/2 each.
+    Spheremap {
+        /// Total bits: 16, 20, 24 or 32.
+        bits: u32,
+    },
+}
+
+impl NormalCodec {
+    /// Bits a packed normal takes (xyz floats: 96).
+    pub fn bits(self) -> u32 {
+        match self {
+            NormalCodec::Xyz => 96,
+            NormalCodec::Octahedral { bits, .. }
+            | NormalCodec::Polar { bits }
+            | NormalCodec::Spheremap { bits } => bits,
+        }
+    }
+
+    /// The same codec at `bits` in all.
+    pub fn with_bits(self, bits: u32) -> NormalCodec {
+        match self {
+            NormalCodec::Xyz => NormalCodec::Xyz,
+            NormalCodec::Octahedral { precise, .. } => NormalCodec::Octahedral { bits, precise },
+            NormalCodec::Polar { .. } => NormalCodec::Polar { bits },
+            NormalCodec::Spheremap { .. } => NormalCodec::Spheremap { bits },
+        }
+    }
+
+    /// The codec's name in tables.
+    pub fn label(self) -> &'static str {
+        match self {
+            NormalCodec::Xyz => "xyz floats",
+            NormalCodec::Octahedral { precise: false, .. } => "octahedral",
+            NormalCodec::Octahedral { precise: true, .. } => "octahedral precise",
+            NormalCodec::Polar { .. } => "polar",
+            NormalCodec::Spheremap { .. } => "spheremap",
+        }
+    }
+
+    /// Every codec that packs a normal into a code, at `bits` in all (and octahedral with
+    /// and without the precise encoder): the one list that the twin checks, property tests,
+    /// stress cases and the codec study iterate. `Xyz` stores floats and has no code.
+    pub fn packed(bits: u32) -> Vec<NormalCodec> {
+        NormalCodec::iter()
+            .flat_map(|c| match c {
+                NormalCodec::Xyz => vec![],
+                NormalCodec::Octahedral { .. } => [false, true]
+                    .map(|precise| NormalCodec::Octahedral { bits, precise })
+                    .to_vec(),
+                NormalCodec::Polar { .. } => vec![NormalCodec::Polar { bits }],
+                NormalCodec::Spheremap { .. } => vec![NormalCodec::Spheremap { bits }],
+            })
+            .collect()
+    }
+}
+
 /// The post-processing effects, in the order a frame applies them (the passes, the post
 /// chain and the CPU twin all follow this order).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, EnumIter)]

@@ -217,38 +217,52 @@ pub fn gpu_zslices(
     })
 }
 
-/// What the codec kernel computed.
+/// What the codec kernel computed for one codec.
 pub struct CodecResults {
-    /// Per normal: codes of octahedral, precise octahedral, polar, spheremap.
-    pub codes: Vec<[[u32; 2]; 4]>,
-    /// Per given code: its decode under octahedral, polar, spheremap.
-    pub decoded: Vec<[[f32; 4]; 3]>,
+    /// Per normal: its code.
+    pub codes: Vec<[u32; 2]>,
+    /// Per given code: its decode.
+    pub decoded: Vec<[f32; 4]>,
 }
 
-/// The GPU's codes of `normals` (octahedral, precise octahedral, polar, spheremap) with
-/// `bits` per component, and its decodes of `codes` (octahedral, polar, spheremap).
+/// A deferred variant whose G-buffer stores normals with `codec`.
+fn with_codec(codec: NormalCodec) -> Variant {
+    Variant {
+        pipeline: Pipeline::ClusteredDeferred,
+        gbuffer: Some(crate::variant::GBuffer {
+            layout: crate::variant::GBufferLayout::Packed,
+        }),
+        normals: Some(codec),
+        ..Variant::default()
+    }
+}
+
+/// The GPU's codes of `normals` under `codec`, and its decodes of `codes`: the G-buffer's
+/// own `encode_normal` and `decode_normal`, composed for that codec. Any packed codec: the
+/// kernel is the same for all.
 pub fn gpu_codecs(
     gpu: &Gpu,
     composer: &Composer,
-    bits: u32,
+    codec: NormalCodec,
     normals: &[[f32; 4]],
     codes: &[[u32; 2]],
 ) -> Result<CodecResults, RenderError> {
     let n = normals.len();
     assert_eq!(n, codes.len(), "one code per normal");
-    let params = [bits, n as u32, 0, 0];
-    let out = run_kernel(
+    let params = [n as u32, 0, 0, 0];
+    let out = run_kernel_for(
         gpu,
         composer,
+        &with_codec(codec),
         "twin_codecs",
         "codec_main",
         n as u32,
         &[
-            bytemuck::cast_slice(&params),
-            bytemuck::cast_slice(normals),
-            bytemuck::cast_slice(codes),
+            KernelInput::Bytes(bytemuck::cast_slice(&params)),
+            KernelInput::Bytes(bytemuck::cast_slice(normals)),
+            KernelInput::Bytes(bytemuck::cast_slice(codes)),
         ],
-        &[n as u64 * 32, n as u64 * 48],
+        &[n as u64 * 8, n as u64 * 16],
     )?;
     Ok(CodecResults {
         codes: bytemuck::cast_slice(&out[0]).to_vec(),
@@ -270,14 +284,7 @@ pub fn gpu_codec_round_trip(
         codec != NormalCodec::Xyz,
         "xyz floats are stored, not packed"
     );
-    let variant = Variant {
-        pipeline: Pipeline::ClusteredDeferred,
-        gbuffer: Some(crate::variant::GBuffer {
-            layout: crate::variant::GBufferLayout::Packed,
-        }),
-        normals: Some(codec),
-        ..Variant::default()
-    };
+    let variant = with_codec(codec);
     let (mut codes, mut decoded) = (Vec::new(), Vec::new());
     // Batches keep the storage buffers well under the binding size limit.
     for batch in normals.chunks(1 << 18) {

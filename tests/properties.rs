@@ -8,7 +8,7 @@ use clusterlab::cpu::clusters::{self as cpu, Grid};
 use clusterlab::cpu::normals as codec;
 use clusterlab::cpu::zslice::Slices;
 use clusterlab::twins::{gpu_codecs, gpu_zslices};
-use clusterlab::variant::ZSlicing;
+use clusterlab::variant::{NormalCodec, ZSlicing};
 use glam::DVec3;
 use proptest::prelude::*;
 use proptest::test_runner::{Config, TestRunner};
@@ -37,35 +37,30 @@ fn step_degrees(bits: u32) -> f64 {
     (4.0 / ((1u64 << bits) - 1) as f64).to_degrees()
 }
 
-/// The worst angle each codec may turn a normal by at `bits` bits per component. The
-/// spheremap is singular at (0, 0, -1) (a normal facing straight away from the camera), so
-/// its bound holds for n.z >= -0.9 only.
-fn roundtrips(n: DVec3, bits: u32) -> Vec<(&'static str, DVec3, f64)> {
-    let mut out = vec![
-        (
-            "octahedral",
-            codec::oct_decode(codec::oct_encode(n, bits), bits),
-            1.5 * step_degrees(bits),
-        ),
-        (
-            "octahedral precise",
-            codec::oct_decode(codec::oct_encode_precise(n, bits), bits),
-            step_degrees(bits),
-        ),
-        (
-            "polar",
-            codec::polar_decode(codec::polar_encode(n, bits), bits),
-            step_degrees(bits),
-        ),
-    ];
-    if n.z >= -0.9 {
-        out.push((
-            "spheremap",
-            codec::spheremap_decode(codec::spheremap_encode(n, bits), bits),
-            4.0 * step_degrees(bits),
-        ));
+/// The worst angle `codec` may turn a normal by at `bits` bits per component, on the CPU
+/// (and on the GPU, whose WGSL lets acos and atan2 be off by 4096 ULP, about 1e-3 rad).
+/// The spheremap is singular at (0, 0, -1) (a normal facing straight away from the camera),
+/// so it has a bound for n.z >= -0.9 only.
+fn bound(codec: NormalCodec, n: DVec3, bits: u32, gpu: bool) -> Option<f64> {
+    let step = step_degrees(bits);
+    match codec {
+        NormalCodec::Xyz => None,
+        NormalCodec::Octahedral { precise: false, .. } => Some(1.5 * step),
+        NormalCodec::Octahedral { precise: true, .. } => Some(step),
+        NormalCodec::Polar { .. } => Some(step + if gpu { 0.06 } else { 0.0 }),
+        NormalCodec::Spheremap { .. } => (n.z >= -0.9).then_some(4.0 * step),
     }
-    out
+}
+
+/// Each packed codec's round trip of `n` at `bits` bits per component, with its bound.
+fn roundtrips(n: DVec3, bits: u32) -> Vec<(&'static str, DVec3, f64)> {
+    NormalCodec::packed(2 * bits)
+        .into_iter()
+        .filter_map(|c| {
+            let back = codec::decode(c, codec::encode(c, n)?)?;
+            Some((c.label(), back, bound(c, n, bits, false)?))
+        })
+        .collect()
 }
 
 proptest! {
@@ -247,23 +242,21 @@ fn gpu_kernels_keep_the_properties() {
                     .map(|n| [n.x as f32, n.y as f32, n.z as f32, 0.0])
                     .collect();
                 let zeros = vec![[0u32; 2]; normals.len()];
-                let codes = gpu_codecs(&gpu, &composer, bits, &input, &zeros)
-                    .expect("codec kernel")
-                    .codes;
-                // Decode the GPU's octahedral and polar codes on the GPU.
-                for (which, slot, bound) in [
-                    ("octahedral", 0usize, 1.5 * step_degrees(bits)),
-                    // WGSL lets acos and atan2 be off by 4096 ULP (about 1e-3 rad).
-                    ("polar", 2, step_degrees(bits) + 0.06),
-                ] {
-                    let mine: Vec<[u32; 2]> = codes.iter().map(|c| c[slot]).collect();
-                    let decoded = gpu_codecs(&gpu, &composer, bits, &input, &mine)
+                // Every packed codec: encode on the GPU, then decode those codes on the GPU.
+                for c in NormalCodec::packed(2 * bits) {
+                    let which = c.label();
+                    let codes = gpu_codecs(&gpu, &composer, c, &input, &zeros)
+                        .expect("codec kernel")
+                        .codes;
+                    let decoded = gpu_codecs(&gpu, &composer, c, &input, &codes)
                         .expect("codec kernel")
                         .decoded;
                     for (n, d) in normals.iter().zip(&decoded) {
-                        let back = d[if which == "octahedral" { 0 } else { 1 }];
-                        let back = DVec3::new(back[0] as f64, back[1] as f64, back[2] as f64);
+                        let back = DVec3::new(d[0] as f64, d[1] as f64, d[2] as f64);
                         prop_assert!((back.length() - 1.0).abs() < 1e-5, "{which}: |{back:?}|");
+                        let Some(bound) = bound(c, *n, bits, true) else {
+                            continue;
+                        };
                         let angle = codec::angle_degrees(*n, back);
                         // f32 arithmetic adds rounding of a few 1e-5 degrees.
                         prop_assert!(

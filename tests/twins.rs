@@ -5,7 +5,7 @@ use clusterlab::cpu::normals as cpu;
 use clusterlab::cpu::zslice::Slices;
 use clusterlab::gpu::Gpu;
 use clusterlab::twins::{gpu_codecs, gpu_zslices};
-use clusterlab::variant::ZSlicing;
+use clusterlab::variant::{NormalCodec, ZSlicing};
 use glam::DVec3;
 use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg64Mcg;
@@ -130,32 +130,30 @@ fn normal_codecs_match_on_random_normals_and_at_the_edges() {
         let codes: Vec<[u32; 2]> = (0..inputs.len())
             .map(|_| [rng.random_range(0..=top), rng.random_range(0..=top)])
             .collect();
-        let results = gpu_codecs(&gpu, &composer, bits, &as_f32, &codes).expect("kernel runs");
-        let (got, decoded) = (results.codes, results.decoded);
-        let encoders: [fn(DVec3, u32) -> [u32; 2]; 4] = [
-            cpu::oct_encode,
-            cpu::oct_encode_precise,
-            cpu::polar_encode,
-            cpu::spheremap_encode,
-        ];
-        let names = ["octahedral", "octahedral precise", "polar", "spheremap"];
-        // Codes computed with arithmetic and sqrt almost always agree; polar goes through
-        // acos and atan2, whose GPU precision WGSL leaves to the implementation, so only the
-        // one-code and equal-quality rules above apply to it.
-        let min_exact_percent = [99, 98, 0, 99];
-        for (c, encode) in encoders.iter().enumerate() {
+        for c in NormalCodec::packed(2 * bits) {
+            let name = c.label();
+            let polar = matches!(c, NormalCodec::Polar { .. });
+            let results = gpu_codecs(&gpu, &composer, c, &as_f32, &codes).expect("kernel runs");
+            // Codes computed with arithmetic and sqrt almost always agree; polar goes through
+            // atan2, whose GPU precision WGSL leaves to the implementation, so only the
+            // one-code and equal-quality rules below apply to it.
+            let min_exact_percent = match c {
+                NormalCodec::Octahedral { precise: true, .. } => 98,
+                NormalCodec::Polar { .. } => 0,
+                _ => 99,
+            };
             let mut exact = 0;
             for (i, &n) in inputs.iter().enumerate() {
-                let want = encode(n, bits);
-                let have = got[i][c];
-                let polar_seam = c == 2 && (n.z.abs() > 1.0 - 1e-6 || (n.y == 0.0 && n.x < 0.0));
+                let want = cpu::encode(c, n).expect("a packed codec");
+                let have = results.codes[i];
+                let polar_seam = polar && (n.z.abs() > 1.0 - 1e-6 || (n.y == 0.0 && n.x < 0.0));
                 if have == want {
                     exact += 1;
                 } else if !polar_seam {
                     // A code may round the other way when f32 lands near a rounding tie, so
-                    // codes may differ by one; polar goes through acos and atan2, which WGSL
-                    // lets be off by up to 4096 ULP (about 1e-3 rad near pi).
-                    let slack = if c == 2 {
+                    // codes may differ by one; polar goes through atan2, which WGSL lets be
+                    // off by up to 4096 ULP (about 1e-3 rad near pi).
+                    let slack = if polar {
                         1 + (1e-3 * ((1u64 << bits) - 1) as f64 / std::f64::consts::PI).ceil()
                             as u32
                     } else {
@@ -163,46 +161,31 @@ fn normal_codecs_match_on_random_normals_and_at_the_edges() {
                     };
                     assert!(
                         have[0].abs_diff(want[0]) <= slack && have[1].abs_diff(want[1]) <= slack,
-                        "{} {bits} bits: {n:?}: GPU {have:?}, CPU {want:?}",
-                        names[c]
+                        "{name} {bits} bits: {n:?}: GPU {have:?}, CPU {want:?}"
                     );
                     // And the other code must decode about as close to n.
-                    let err = |q| cpu::angle_degrees(n, decode_with(c, q, bits));
+                    let err = |q| cpu::angle_degrees(n, cpu::decode(c, q).expect("packed"));
                     assert!(
                         (err(have) - err(want)).abs() < 2.0 * slack as f64 * step_degrees(bits),
-                        "{} {bits} bits: {n:?}",
-                        names[c]
+                        "{name} {bits} bits: {n:?}"
                     );
                 }
             }
             assert!(
-                exact * 100 >= inputs.len() * min_exact_percent[c],
-                "{} {bits} bits: only {exact} of {} codes equal",
-                names[c],
+                exact * 100 >= inputs.len() * min_exact_percent,
+                "{name} {bits} bits: only {exact} of {} codes equal",
                 inputs.len()
             );
-        }
-        let decoders: [fn([u32; 2], u32) -> DVec3; 3] =
-            [cpu::oct_decode, cpu::polar_decode, cpu::spheremap_decode];
-        for (c, decode) in decoders.iter().enumerate() {
             for (i, &q) in codes.iter().enumerate() {
-                let want = decode(q, bits);
-                let h = decoded[i][c];
+                let want = cpu::decode(c, q).expect("a packed codec");
+                let h = results.decoded[i];
                 let have = DVec3::new(h[0] as f64, h[1] as f64, h[2] as f64);
                 assert!(
                     (have - want).length() < 1e-5,
-                    "decode {c} of {q:?} at {bits} bits: GPU {have:?}, CPU {want:?}"
+                    "{name}: decode of {q:?} at {bits} bits: GPU {have:?}, CPU {want:?}"
                 );
             }
         }
-    }
-}
-
-fn decode_with(codec: usize, q: [u32; 2], bits: u32) -> DVec3 {
-    match codec {
-        0 | 1 => cpu::oct_decode(q, bits),
-        2 => cpu::polar_decode(q, bits),
-        _ => cpu::spheremap_decode(q, bits),
     }
 }
 

@@ -3,6 +3,32 @@
 
 use glam::{DVec2, DVec3};
 
+use crate::common::NormalCodec;
+
+/// The code of `n` under `codec` (`codec.bits() / 2` bits a component); None for `Xyz`,
+/// which stores floats.
+pub fn encode(codec: NormalCodec, n: DVec3) -> Option<[u32; 2]> {
+    let bits = codec.bits() / 2;
+    Some(match codec {
+        NormalCodec::Xyz => return None,
+        NormalCodec::Octahedral { precise: false, .. } => oct_encode(n, bits),
+        NormalCodec::Octahedral { precise: true, .. } => oct_encode_precise(n, bits),
+        NormalCodec::Polar { .. } => polar_encode(n, bits),
+        NormalCodec::Spheremap { .. } => spheremap_encode(n, bits),
+    })
+}
+
+/// The unit vector of code `q` under `codec`; None for `Xyz`.
+pub fn decode(codec: NormalCodec, q: [u32; 2]) -> Option<DVec3> {
+    let bits = codec.bits() / 2;
+    Some(match codec {
+        NormalCodec::Xyz => return None,
+        NormalCodec::Octahedral { .. } => oct_decode(q, bits),
+        NormalCodec::Polar { .. } => polar_decode(q, bits),
+        NormalCodec::Spheremap { .. } => spheremap_decode(q, bits),
+    })
+}
+
 fn max_code(bits: u32) -> f64 {
     ((1u64 << bits) - 1) as f64
 }

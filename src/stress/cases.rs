@@ -5,6 +5,8 @@ use glam::DVec3;
 
 use crate::cpu::zslice::Slices;
 use crate::scene::{Camera, Light, MeshBuilder, Scene, SceneParams, Vertex};
+use strum::IntoEnumIterator;
+
 use crate::variant::*;
 
 /// One stress case: a scene and the variants to run on it.
@@ -36,17 +38,11 @@ fn variant(description: &str, pipeline: Pipeline) -> Variant {
     }
 }
 
-/// The four pipelines, exact (full-precision G-buffer, exact lists).
+/// Every pipeline, exact (full-precision G-buffer, exact lists).
 pub fn pipelines() -> Vec<(String, Variant)> {
-    [
-        ("naive_forward", Pipeline::NaiveForward),
-        ("forward_plus", Pipeline::ClusteredForward),
-        ("clustered_deferred", Pipeline::ClusteredDeferred),
-        ("deferred_scissor", Pipeline::DeferredScissor),
-    ]
-    .into_iter()
-    .map(|(n, p)| (n.to_string(), variant(n, p)))
-    .collect()
+    Pipeline::iter()
+        .map(|p| (p.short_name().to_string(), variant(p.short_name(), p)))
+        .collect()
 }
 
 /// The clustered pipelines only.
@@ -57,33 +53,18 @@ fn clustered() -> Vec<(String, Variant)> {
         .collect()
 }
 
-/// The pipelines plus deferred with each packed normal codec (for the normal cases).
+/// The pipelines plus deferred with each packed normal codec (the codec list, at 32 bits)
+/// and the compact layout (for the normal cases).
 fn with_codecs() -> Vec<(String, Variant)> {
     let mut out = pipelines();
-    for (name, codec) in [
-        (
-            "deferred_octahedral",
-            NormalCodec::Octahedral {
-                bits: 32,
-                precise: true,
-            },
-        ),
-        (
-            "deferred_octahedral_fast",
-            NormalCodec::Octahedral {
-                bits: 32,
-                precise: false,
-            },
-        ),
-        ("deferred_polar", NormalCodec::Polar { bits: 32 }),
-        ("deferred_spheremap", NormalCodec::Spheremap { bits: 32 }),
-    ] {
-        let mut v = variant(name, Pipeline::ClusteredDeferred);
+    for codec in NormalCodec::packed(32) {
+        let name = codec_case_name(codec);
+        let mut v = variant(&name, Pipeline::ClusteredDeferred);
         v.gbuffer = Some(GBuffer {
             layout: GBufferLayout::Packed,
         });
         v.normals = Some(codec);
-        out.push((name.to_string(), v));
+        out.push((name, v));
     }
     let mut compact = variant("deferred_compact", Pipeline::ClusteredDeferred);
     compact.gbuffer = Some(GBuffer {
@@ -91,6 +72,15 @@ fn with_codecs() -> Vec<(String, Variant)> {
     });
     out.push(("deferred_compact".to_string(), compact));
     out
+}
+
+/// The stress run name of deferred with a packed codec.
+pub fn codec_case_name(codec: NormalCodec) -> String {
+    match codec {
+        NormalCodec::Octahedral { precise: true, .. } => "deferred_octahedral".into(),
+        NormalCodec::Octahedral { precise: false, .. } => "deferred_octahedral_fast".into(),
+        c => format!("deferred_{}", c.label().replace(' ', "_")),
+    }
 }
 
 fn with_grid(grid: (u32, u32, u32)) -> Vec<(String, Variant)> {

@@ -10,6 +10,7 @@ use super::table::{Table, sig};
 use super::{Plot, StudyError};
 use crate::compose::Composer;
 use crate::cpu::normals::*;
+use crate::cpu::normals::{decode, encode};
 use crate::gpu::Gpu;
 use crate::variant::{NORMAL_BITS, NormalCodec};
 
@@ -59,47 +60,6 @@ pub struct CodecRow {
     pub samples: u64,
     pub adversarial_samples: u64,
 }
-
-/// One codec of the study: how it is named, its schema value, and its CPU twin.
-struct Codec {
-    name: &'static str,
-    schema: fn(u32) -> NormalCodec,
-    encode: fn(DVec3, u32) -> [u32; 2],
-    decode: fn([u32; 2], u32) -> DVec3,
-}
-
-const CODECS: [Codec; 4] = [
-    Codec {
-        name: "octahedral",
-        schema: |bits| NormalCodec::Octahedral {
-            bits,
-            precise: false,
-        },
-        encode: oct_encode,
-        decode: oct_decode,
-    },
-    Codec {
-        name: "octahedral precise",
-        schema: |bits| NormalCodec::Octahedral {
-            bits,
-            precise: true,
-        },
-        encode: oct_encode_precise,
-        decode: oct_decode,
-    },
-    Codec {
-        name: "polar",
-        schema: |bits| NormalCodec::Polar { bits },
-        encode: polar_encode,
-        decode: polar_decode,
-    },
-    Codec {
-        name: "spheremap",
-        schema: |bits| NormalCodec::Spheremap { bits },
-        encode: spheremap_encode,
-        decode: spheremap_decode,
-    },
-];
 
 /// `n` unit vectors uniform on the sphere (z uniform in [-1, 1], azimuth uniform), seeded.
 pub fn uniform_normals(n: usize, seed: u64) -> Vec<DVec3> {
@@ -224,12 +184,16 @@ fn as_f32(normals: &[DVec3]) -> (Vec<[f32; 4]>, Vec<DVec3>) {
 }
 
 /// The CPU twin's codes (packed like `pack_code`) and decodes.
-fn cpu_round_trip(codec: &Codec, bits: u32, inputs: &[DVec3]) -> (Vec<u32>, Vec<DVec3>) {
+fn cpu_round_trip(codec: NormalCodec, inputs: &[DVec3]) -> (Vec<u32>, Vec<DVec3>) {
+    let bits = codec.bits() / 2;
     inputs
         .par_iter()
         .map(|&n| {
-            let q = (codec.encode)(n, bits);
-            (q[0] | (q[1] << bits), (codec.decode)(q, bits))
+            let q = encode(codec, n).expect("a packed codec");
+            (
+                q[0] | (q[1] << bits),
+                decode(codec, q).expect("a packed codec"),
+            )
         })
         .unzip()
 }
@@ -250,15 +214,16 @@ pub fn run(
     samples: usize,
     seed: u64,
 ) -> Result<Vec<CodecRow>, StudyError> {
+    let codecs = NormalCodec::packed(32);
     let mut rows = run_set(
         gpu,
         composer,
         "uniform",
         &uniform_normals(samples, seed),
-        &CODECS,
+        &codecs,
     )?;
     let cube = cube_normalized_normals(samples, seed);
-    rows.extend(run_set(gpu, composer, "cube", &cube, &CODECS[..1])?);
+    rows.extend(run_set(gpu, composer, "cube", &cube, &codecs[..1])?);
     Ok(rows)
 }
 
@@ -269,7 +234,7 @@ fn run_set(
     composer: &Composer,
     sampling: &str,
     sample: &[DVec3],
-    codecs: &[Codec],
+    codecs: &[NormalCodec],
 ) -> Result<Vec<CodecRow>, StudyError> {
     let adversarial = adversarial_normals();
     let (nu, na) = (sample.len(), adversarial.len());
@@ -295,11 +260,12 @@ fn run_set(
             adversarial_samples: na as u64,
         }
     };
-    for codec in codecs {
+    for kind in codecs {
         for total in NORMAL_BITS {
+            let codec = kind.with_bits(total);
             let (gpu_codes, gpu_decoded) =
-                crate::twins::gpu_codec_round_trip(gpu, composer, (codec.schema)(total), &gpu_in)?;
-            let (cpu_codes, cpu_decoded) = cpu_round_trip(codec, total / 2, &cpu_in);
+                crate::twins::gpu_codec_round_trip(gpu, composer, codec, &gpu_in)?;
+            let (cpu_codes, cpu_decoded) = cpu_round_trip(codec, &cpu_in);
             let differing = gpu_codes
                 .iter()
                 .zip(&cpu_codes)
@@ -312,8 +278,8 @@ fn run_set(
                     .map(|d| DVec3::new(d[0] as f64, d[1] as f64, d[2] as f64)),
             );
             let mut cpu_errors = angles(&truth, cpu_decoded.into_par_iter());
-            rows.push(row(codec.name, total, "gpu", &mut gpu_errors, differing));
-            rows.push(row(codec.name, total, "cpu", &mut cpu_errors, 0));
+            rows.push(row(codec.label(), total, "gpu", &mut gpu_errors, differing));
+            rows.push(row(codec.label(), total, "cpu", &mut cpu_errors, 0));
         }
     }
     if sampling == "uniform" {
@@ -502,16 +468,18 @@ pub fn plot(rows: &[CodecRow]) -> Option<Plot> {
             RGBColor(44, 160, 44),
             RGBColor(214, 39, 40),
         ];
-        for (codec, color) in CODECS.iter().zip(colors) {
+        for (codec, color) in NormalCodec::packed(32).iter().zip(colors) {
             let points: Vec<(u32, f64)> = rows
                 .iter()
-                .filter(|r| r.source == "gpu" && r.sampling == "uniform" && r.codec == codec.name)
+                .filter(|r| {
+                    r.source == "gpu" && r.sampling == "uniform" && r.codec == codec.label()
+                })
                 .map(|r| (r.bits, r.max_deg.max(1e-4)))
                 .collect();
             chart
                 .draw_series(LineSeries::new(points.clone(), color.stroke_width(2)))
                 .ok()?
-                .label(codec.name)
+                .label(codec.label())
                 .legend(move |(x, y)| PathElement::new([(x, y), (x + 16, y)], color));
             chart
                 .draw_series(points.iter().map(|&p| Circle::new(p, 4, color.filled())))

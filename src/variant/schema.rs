@@ -5,7 +5,7 @@
 //! that `schemars` derives from these types.
 
 use crate::common::DepthMapping;
-pub use crate::common::{DepthRangeSource, PostEffect, ZSlicing};
+pub use crate::common::{DepthRangeSource, NormalCodec, PostEffect, ZSlicing};
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 use strum::IntoEnumIterator;
@@ -65,7 +65,9 @@ impl Default for Variant {
 }
 
 /// The shading pipelines that clusterlab compares.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize, JsonSchema)]
+#[derive(
+    Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize, JsonSchema, strum::EnumIter,
+)]
 pub enum Pipeline {
     /// Every fragment loops over every light: the baseline, exact and slow.
     NaiveForward,
@@ -80,6 +82,16 @@ pub enum Pipeline {
 }
 
 impl Pipeline {
+    /// The name of the pipeline's plain variant (and of its stress runs).
+    pub fn short_name(self) -> &'static str {
+        match self {
+            Pipeline::NaiveForward => "naive_forward",
+            Pipeline::ClusteredForward => "forward_plus",
+            Pipeline::ClusteredDeferred => "clustered_deferred",
+            Pipeline::DeferredScissor => "deferred_scissor",
+        }
+    }
+
     pub fn is_clustered(self) -> bool {
         matches!(
             self,
@@ -219,43 +231,6 @@ pub enum DepthFormat {
     Unorm24,
     /// 32-bit float depth.
     Float32,
-}
-
-/// How a normal is stored in the G-buffer.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
-pub enum NormalCodec {
-    /// Three 32-bit floats (wide layout only).
-    Xyz,
-    /// Octahedral map (Meyer 2010, Cigolle 2014), two components of bits/2 each.
-    Octahedral {
-        /// Total bits: 16, 20, 24 or 32.
-        bits: u32,
-        /// Try the 4 neighbouring codes and keep the one whose decode is closest (default false).
-        #[serde(default)]
-        precise: bool,
-    },
-    /// Two angles: polar angle from +z and azimuth, bits/2 each.
-    Polar {
-        /// Total bits: 16, 20, 24 or 32.
-        bits: u32,
-    },
-    /// Spheremap transform (Lambert azimuthal equal-area), bits/2 each.
-    Spheremap {
-        /// Total bits: 16, 20, 24 or 32.
-        bits: u32,
-    },
-}
-
-impl NormalCodec {
-    /// Bits a packed normal takes (xyz floats: 96).
-    pub fn bits(self) -> u32 {
-        match self {
-            NormalCodec::Xyz => 96,
-            NormalCodec::Octahedral { bits, .. }
-            | NormalCodec::Polar { bits }
-            | NormalCodec::Spheremap { bits } => bits,
-        }
-    }
 }
 
 /// The surface shading model.

@@ -1,0 +1,195 @@
+//! One list per concept: every z-slicing scheme, normal codec, pipeline and post effect is
+//! enumerable in one place (the schema's enums), and each place that must handle all of them
+//! does. A test here fails naming what is missing.
+
+mod common;
+
+use std::path::Path;
+
+use clusterlab::compose::{Composer, PassId, passes};
+use clusterlab::cpu::normals;
+use clusterlab::cpu::zslice::Slices;
+use clusterlab::stress;
+use clusterlab::study::{codecs, slicing};
+use clusterlab::twins::{gpu_codecs, gpu_zslices};
+use clusterlab::variant::{self, NormalCodec, Pipeline, PostEffect, ZSlicing};
+use strum::IntoEnumIterator;
+
+const NEAR: f64 = 0.1;
+const FAR: f64 = 60.0;
+
+/// The stress case of `name`, if there is one, with the variants it runs.
+fn stress_case(name: &str) -> Option<stress::Case> {
+    stress::cases().into_iter().find(|c| c.name == name)
+}
+
+#[test]
+fn every_z_slicing_scheme_has_an_example_a_twin_kernel_check_a_stress_case_and_a_study_row() {
+    let gpu = common::gpu();
+    let composer = Composer::default();
+    let every = ZSlicing::every(NEAR, FAR);
+    let study = slicing::schemes(NEAR, FAR);
+    let mut missing = Vec::new();
+    for kind in ZSlicing::iter() {
+        let name = kind.feature();
+        let examples: Vec<ZSlicing> = every
+            .iter()
+            .copied()
+            .filter(|s| s.same_scheme(kind))
+            .collect();
+        if examples.is_empty() {
+            missing.push(format!(
+                "{name}: no example in ZSlicing::every (property tests, twin checks)"
+            ));
+            continue;
+        }
+        for s in examples {
+            let case = stress::slicing_case_name(s);
+            match stress_case(&case) {
+                None => missing.push(format!("{name}: no stress case `{case}`")),
+                Some(c) => {
+                    let uses =
+                        |v: &variant::Variant| v.clusters.as_ref().is_some_and(|c| c.slicing == s);
+                    if c.variants.is_empty() || !c.variants.iter().all(|(_, v)| uses(v)) {
+                        missing.push(format!("{name}: stress case `{case}` does not run {s:?}"));
+                    }
+                }
+            }
+            if !study.iter().any(|(_, row)| *row == s) {
+                missing.push(format!("{name}: no row in `study slicing`"));
+            }
+            // The twin kernel runs the variant's own z_slice: it composes only when
+            // zslice.wesl has code for the scheme, and must agree with the CPU twin.
+            let slices = Slices {
+                scheme: s,
+                near: NEAR,
+                far: FAR,
+                count: 16,
+                tan_half_fov_y: 0.5,
+                tiles_y: 9,
+            };
+            let depths = [NEAR as f32, 1.0, 7.5, 30.0, FAR as f32];
+            match gpu_zslices(&gpu, &composer, &slices, &depths) {
+                Err(e) => missing.push(format!("{name}: no twin kernel check: {e}")),
+                Ok(r) => {
+                    let cpu: Vec<u32> = depths.iter().map(|&z| slices.slice(z as f64)).collect();
+                    if r.slices != cpu {
+                        missing.push(format!(
+                            "{name}: the GPU slices {:?} are not the CPU twin's {cpu:?}",
+                            r.slices
+                        ));
+                    }
+                }
+            }
+        }
+    }
+    assert!(missing.is_empty(), "{}", missing.join("\n"));
+}
+
+#[test]
+fn every_normal_codec_has_a_twin_kernel_check_a_stress_run_and_a_study_row() {
+    let gpu = common::gpu();
+    let composer = Composer::default();
+    let packed = NormalCodec::packed(32);
+    let study = codecs::run(&gpu, &composer, 256, 1).expect("codec study");
+    let runs: Vec<String> = stress_case("normals_on_octahedron_seams")
+        .expect("the normal-codec stress case")
+        .variants
+        .into_iter()
+        .map(|(name, _)| name)
+        .collect();
+    let mut missing = Vec::new();
+    for kind in NormalCodec::iter().filter(|c| *c != NormalCodec::Xyz) {
+        let name = format!("{kind:?}");
+        let codecs: Vec<NormalCodec> = packed
+            .iter()
+            .copied()
+            .filter(|c| std::mem::discriminant(c) == std::mem::discriminant(&kind))
+            .collect();
+        if codecs.is_empty() {
+            missing.push(format!(
+                "{name}: not in NormalCodec::packed (property tests, twin checks)"
+            ));
+        }
+        for c in codecs {
+            let run = stress::codec_case_name(c);
+            if !runs.contains(&run) {
+                missing.push(format!("{}: no stress run `{run}`", c.label()));
+            }
+            if !study.iter().any(|r| r.codec == c.label()) {
+                missing.push(format!("{}: no row in `study codecs`", c.label()));
+            }
+            let n = [0.6f32, 0.0, 0.8, 0.0];
+            let want = normals::encode(c, glam::DVec3::new(0.6, 0.0, 0.8).normalize());
+            match gpu_codecs(&gpu, &composer, c, &[n], &[[0, 0]]) {
+                Err(e) => missing.push(format!("{}: no twin kernel check: {e}", c.label())),
+                Ok(r) if Some(r.codes[0]) != want => missing.push(format!(
+                    "{}: GPU code {:?}, CPU twin {want:?}",
+                    c.label(),
+                    r.codes[0]
+                )),
+                Ok(_) => {}
+            }
+        }
+    }
+    assert!(missing.is_empty(), "{}", missing.join("\n"));
+}
+
+/// Every variant in variants/.
+fn shipped() -> Vec<variant::LoadedVariant> {
+    variant::find_files(Path::new("variants"))
+        .expect("variants/")
+        .iter()
+        .map(|f| variant::load(f).unwrap_or_else(|e| panic!("{e}")))
+        .collect()
+}
+
+#[test]
+fn every_pipeline_has_a_stress_run_and_a_shipped_variant() {
+    let runs: Vec<String> = stress_case("one_light")
+        .expect("the one-light stress case")
+        .variants
+        .into_iter()
+        .map(|(name, _)| name)
+        .collect();
+    let shipped = shipped();
+    let mut missing = Vec::new();
+    for p in Pipeline::iter() {
+        if !runs.iter().any(|r| r == p.short_name()) {
+            missing.push(format!("{p:?}: no stress run `{}`", p.short_name()));
+        }
+        if !shipped.iter().any(|v| v.variant.pipeline == p) {
+            missing.push(format!("{p:?}: no variant file in variants/"));
+        }
+    }
+    assert!(missing.is_empty(), "{}", missing.join("\n"));
+}
+
+#[test]
+fn every_post_effect_has_a_shipped_variant_whose_frame_runs_it() {
+    let shipped = shipped();
+    let mut missing = Vec::new();
+    for effect in PostEffect::iter() {
+        let with: Vec<_> = shipped
+            .iter()
+            .filter(|v| v.variant.post.effects().any(|e| e == effect))
+            .collect();
+        if with.is_empty() {
+            missing.push(format!("{effect:?}: no variant file in variants/"));
+        }
+        // Toon per light shades in the shading pass; every other variant with an effect
+        // has a post pass for it.
+        let post_passes = |v: &variant::Variant| {
+            passes(v)
+                .iter()
+                .filter(|p| matches!(p.id, PassId::Post(_)))
+                .count()
+        };
+        if !with.iter().any(|v| post_passes(&v.variant) > 0) {
+            missing.push(format!(
+                "{effect:?}: no shipped variant runs a post pass for it"
+            ));
+        }
+    }
+    assert!(missing.is_empty(), "{}", missing.join("\n"));
+}
