@@ -12,6 +12,7 @@ pub mod explain;
 pub mod gpu;
 pub mod matrix;
 pub mod metrics;
+pub mod plot;
 pub mod reference;
 pub mod render;
 pub mod run;

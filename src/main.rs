@@ -514,33 +514,14 @@ fn render(args: &RenderArgs) -> Result<bool, String> {
             r.adapter.backend,
             r.adapter.driver
         );
-        let passes: Vec<String> = r
-            .gpu_ms
-            .iter()
-            .map(|(k, v)| format!("{k} {v} ms"))
-            .collect();
-        println!("  time ({}): {}", r.timing_source, passes.join(", "));
-        let e = &r.error;
-        println!(
-            "  error: max {} LSB, {} pixels over 1 LSB, PSNR {} dB, mean FLIP {:.5}, HDR RMSE {:.3e}, NaN pixels {}",
-            e.max_abs_8bit,
-            e.pixels_over_1lsb,
-            e.psnr_db.map_or("inf".into(), |p| format!("{p:.1}")),
-            e.flip_mean,
-            e.rmse,
-            e.nan_pixels
-        );
-        if let Some(s) = &r.stats {
-            println!(
-                "  stats: {} light evaluations, {} useful ({:.1}%), {} dropped, {} of {} clusters active, longest list {}",
-                s.light_evals,
-                s.useful_light_evals,
-                100.0 * s.useful_light_evals as f64 / s.light_evals.max(1) as f64,
-                s.dropped_lights,
-                s.active_clusters,
-                s.clusters,
-                s.max_lights_per_cluster
-            );
+        println!("  timing: {}", r.timing_source);
+        // The result columns, as the matrix table and CSV have them.
+        let m = r.measured();
+        for col in clusterlab::matrix::COLUMNS {
+            let text = (col.text)(&m);
+            if !text.is_empty() && text != "-" && (col.shown.terminal || col.shown.csv) {
+                println!("  {:<17} {text}", col.heading);
+            }
         }
         for image in &r.images {
             println!("  wrote {}", image.display());

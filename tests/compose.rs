@@ -13,21 +13,53 @@ fn snapshot_settings(folder: &str) -> insta::Settings {
     settings
 }
 
-/// A new variant file gets its snapshots with no code change: `glob!` visits every file.
+/// One snapshot per distinct composed shader: every pass of every variant in variants/ is
+/// composed, equal WGSL is one snapshot named after its pass and the first variant (by name)
+/// that composes it, and its header lists every variant that shares it. A change to one
+/// module is then one diff per distinct shader it reaches, and a new variant file gets its
+/// snapshots (or joins existing ones) with no code change.
 #[test]
-fn composed_wgsl_of_every_pass_of_every_variant() {
+fn composed_wgsl_of_every_distinct_pass() {
     let composer = Composer::default();
-    snapshot_settings("wgsl").bind(|| {
-        insta::glob!("../variants", "*.ron", |path| {
-            let loaded = variant::load(path).unwrap_or_else(|e| panic!("{e}"));
-            for pass in passes(&loaded.variant) {
-                let composed = composer
-                    .compose(&loaded.variant, &pass)
-                    .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-                insta::assert_snapshot!(pass.name(), composed.wgsl);
+    let mut files = variant::find_files(Path::new("variants")).expect("variants/");
+    files.sort();
+    // (pass, WGSL) -> the variants that compose it, in name order.
+    let mut shaders: Vec<((String, String), Vec<String>)> = Vec::new();
+    for path in &files {
+        let loaded = variant::load(path).unwrap_or_else(|e| panic!("{e}"));
+        for pass in passes(&loaded.variant) {
+            let composed = composer
+                .compose(&loaded.variant, &pass)
+                .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+            let key = (pass.name().to_string(), composed.wgsl);
+            match shaders.iter_mut().find(|(k, _)| *k == key) {
+                Some((_, users)) => users.push(loaded.name.clone()),
+                None => shaders.push((key, vec![loaded.name.clone()])),
             }
-        });
-    });
+        }
+    }
+    let mut names = Vec::new();
+    for ((pass, wgsl), users) in &shaders {
+        let name = format!("{pass}@{}", users[0]);
+        let mut settings = snapshot_settings("wgsl");
+        settings.set_description(format!(
+            "pass `{pass}` as {} variant(s) compose it: {}",
+            users.len(),
+            users.join(", ")
+        ));
+        settings.bind(|| insta::assert_snapshot!(name.clone(), wgsl));
+        names.push(format!("{name}.snap"));
+    }
+    // No snapshot is left that no shader produces.
+    let stale: Vec<String> = std::fs::read_dir("snapshots/wgsl")
+        .expect("snapshots/wgsl")
+        .filter_map(|e| e.ok()?.file_name().into_string().ok())
+        .filter(|f| f.ends_with(".snap") && !names.contains(f))
+        .collect();
+    assert!(
+        stale.is_empty(),
+        "snapshots of no composed shader (delete them): {stale:?}"
+    );
 }
 
 #[test]

@@ -3,9 +3,10 @@
 
 use std::fmt::Write as _;
 
-use super::plots::Plot;
-use super::report::{count, grouped, label};
+use super::columns::{self, Measured};
+use super::report::{grouped, label};
 use super::{CellRecord, Results};
+use crate::plot::Plot;
 
 fn esc(s: &str) -> String {
     s.replace('&', "&amp;")
@@ -27,8 +28,8 @@ tr.failed td { background: #fdecec; color: #900; }
 .meta td { text-align: left; }
 .plots { display: flex; flex-wrap: wrap; gap: 16px; }
 figure { margin: 0; }
-figure img.plot { width: 660px; border: 1px solid #ddd; }
-figcaption { font-size: 13px; color: #555; max-width: 660px; }
+figure img.plot { width: 880px; border: 1px solid #ddd; }
+figcaption { font-size: 13px; color: #555; max-width: 880px; }
 .cards { display: flex; flex-wrap: wrap; gap: 14px; }
 .card { border: 1px solid #ddd; padding: 6px; font-size: 12px; width: 330px; }
 .card img { width: 320px; display: block; margin-bottom: 4px; image-rendering: pixelated; }
@@ -54,6 +55,7 @@ pub fn page(results: &Results, plots: &[Plot]) -> String {
         results.cells.len(),
         results.failed()
     );
+    at_a_glance(&mut h, results);
     if !plots.is_empty() {
         let _ = write!(h, "<h2>Plots</h2><div class=\"plots\">");
         for p in plots {
@@ -121,74 +123,95 @@ fn provenance(h: &mut String, results: &Results) {
     }
 }
 
+/// Per scene and parameters: the fastest exact variant and its speed-up, the most accurate
+/// lossy one, and what failed.
+fn at_a_glance(h: &mut String, results: &Results) {
+    let _ = write!(
+        h,
+        "<h2>At a glance</h2><table class=\"meta\"><tr><th class=\"name\">scene</th>\
+         <th class=\"name\">fastest exact (within 1 LSB, no light dropped)</th>\
+         <th class=\"name\">most accurate lossy</th><th class=\"name\">failed</th></tr>"
+    );
+    for (group, cells) in grouped(results) {
+        let shown = |c: &CellRecord| c.ok() && !c.spec.debug_view;
+        let exact = |c: &CellRecord| {
+            c.error.as_ref().is_some_and(|e| e.max_abs_8bit <= 1)
+                && c.stats.as_ref().is_none_or(|s| s.dropped_lights == 0)
+        };
+        // Groups are fastest first.
+        let fastest = cells
+            .iter()
+            .find(|c| shown(c) && exact(c))
+            .map_or("-".into(), |c| {
+                format!(
+                    "{} ({:.2} ms{})",
+                    label(c),
+                    c.total_ms().unwrap_or(f64::NAN),
+                    c.speedup_vs_naive
+                        .map_or(String::new(), |x| format!(", {x:.1}x naive"))
+                )
+            });
+        let lossy = cells
+            .iter()
+            .filter(|c| shown(c) && !exact(c))
+            .filter_map(|c| Some((c.error.as_ref()?.rmse_8bit, c)))
+            .min_by(|a, b| a.0.total_cmp(&b.0))
+            .map_or("-".into(), |(rmse, c)| {
+                format!("{} (RMSE {rmse:.3} LSB)", label(c))
+            });
+        let failed: Vec<String> = cells.iter().filter(|c| !c.ok()).map(|c| label(c)).collect();
+        let failed = if failed.is_empty() {
+            "none".to_string()
+        } else {
+            format!("{}: {}", failed.len(), failed.join(", "))
+        };
+        let _ = write!(
+            h,
+            "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
+            esc(&group),
+            esc(&fastest),
+            esc(&lossy),
+            esc(&failed)
+        );
+    }
+    let _ = write!(h, "</table>");
+}
+
 fn summary(h: &mut String, results: &Results) {
     let _ = write!(h, "<h2>Results</h2>");
+    let rows: Vec<Measured> = results.cells.iter().map(CellRecord::measured).collect();
+    let cols = columns::table_columns(&rows, |s| s.html);
     for (group, cells) in grouped(results) {
         let _ = write!(
             h,
-            "<h3>{}</h3><table><tr><th class=\"name\">variant</th><th>GPU ms</th><th>spread</th>\
-             <th>× naive</th><th>max 8-bit</th><th>PSNR dB</th><th>mean FLIP</th>\
-             <th>useful / evaluated</th><th>bytes/px</th><th>cluster KiB</th><th>dropped</th>\
-             <th class=\"name\">skipped</th><th class=\"name\">vs baseline</th></tr>",
+            "<h3>{}</h3><table><tr><th class=\"name\">variant</th>",
             esc(&group)
         );
+        for c in &cols {
+            let _ = write!(h, "<th>{}</th>", esc(c.heading));
+        }
+        let _ = write!(h, "</tr>");
         for c in cells {
-            row(h, c);
+            let name = esc(&label(c));
+            if let Some(why) = &c.failure {
+                let _ = write!(
+                    h,
+                    "<tr class=\"failed\"><td class=\"name\">{name}</td><td colspan=\"{}\" class=\"name\"><span class=\"failure\">{}</span></td></tr>",
+                    cols.len(),
+                    esc(why)
+                );
+                continue;
+            }
+            let class = if c.pareto { " class=\"pareto\"" } else { "" };
+            let m = c.measured();
+            let _ = write!(h, "<tr{class}><td class=\"name\">{name}</td>");
+            for col in &cols {
+                let _ = write!(h, "<td>{}</td>", esc(&(col.text)(&m)));
+            }
+            let _ = write!(h, "</tr>");
         }
         let _ = write!(h, "</table>");
     }
-}
-
-fn row(h: &mut String, c: &CellRecord) {
-    let name = esc(&label(c));
-    if let Some(why) = &c.failure {
-        let _ = write!(
-            h,
-            "<tr class=\"failed\"><td class=\"name\">{name}</td><td colspan=\"12\" class=\"name\"><span class=\"failure\">{}</span></td></tr>",
-            esc(why)
-        );
-        return;
-    }
-    let class = if c.pareto { " class=\"pareto\"" } else { "" };
-    let spread = c
-        .gpu_ms_spread
-        .get("total")
-        .and_then(|v| v.as_array())
-        .map_or(String::new(), |a| {
-            let f = |i: usize| a.get(i).and_then(|v| v.as_f64()).unwrap_or(f64::NAN);
-            format!("{:.2}–{:.2}", f(0), f(1))
-        });
-    let e = c.error.as_ref();
-    let s = c.stats.as_ref();
-    let _ = write!(
-        h,
-        "<tr{class}><td class=\"name\">{name}</td><td>{:.2}</td><td>{spread}</td><td>{}</td>\
-         <td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td class=\"name\">{}</td><td class=\"name\">{}</td></tr>",
-        c.total_ms().unwrap_or(f64::NAN),
-        c.speedup_vs_naive
-            .map_or("–".into(), |x| format!("{x:.1}×")),
-        e.map_or("–".into(), |e| e.max_abs_8bit.to_string()),
-        e.map_or("–".into(), |e| e
-            .psnr_db
-            .map_or("∞".into(), |p| format!("{p:.1}"))),
-        e.map_or("–".into(), |e| format!("{:.4}", e.flip_mean)),
-        s.map_or("–".into(), |s| format!(
-            "{} / {}",
-            count(s.useful_light_evals),
-            count(s.light_evals)
-        )),
-        s.map_or("–".into(), |s| s.frame_bytes_per_pixel.to_string()),
-        s.map_or("–".into(), |s| format!(
-            "{:.0}",
-            s.cluster_bytes as f64 / 1024.0
-        )),
-        s.map_or("–".into(), |s| s.dropped_lights.to_string()),
-        esc(&c.skipped_passes.join(", ")),
-        c.vs_baseline.as_ref().map_or(String::new(), |b| format!(
-            "time ×{:.2}, max8 {:+}, RMSE8 {:+.3}",
-            b.time_ratio, b.max_abs_8bit_change, b.rmse_8bit_change
-        )),
-    );
 }
 
 fn images(h: &mut String, results: &Results) {

@@ -2,11 +2,13 @@
 //! timed over several frames and measured against the CPU reference; then speed-ups against
 //! naive forward, the time-error Pareto front, and a report (JSON, CSV, HTML, terminal).
 
+mod columns;
 mod html;
 mod plan;
 mod plots;
 mod report;
 
+pub use columns::{COLUMNS, Cell, Column, Measured, Shown, count};
 pub use plan::{
     CellSpec, ParamsRecord, PlannedCell, Study, Sweep, VariantEntry, expand, find_variants,
     parse_shard, parse_sweep, shard,

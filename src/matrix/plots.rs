@@ -1,22 +1,15 @@
 //! The report's plots, as SVG (plotters): time against error with the Pareto front, time
 //! against light count per pipeline, time against cluster count, and time per pass.
 
-use plotters::coord::Shift;
 use plotters::prelude::*;
 
 use super::report::{grouped, label};
 use super::{CellRecord, Results};
-
-/// One plot of the report.
-pub struct Plot {
-    /// File name under plots/.
-    pub file: String,
-    pub title: String,
-    pub svg: String,
-}
+use crate::plot::{self, Area, FONT, Plot, number_label, numbered_key, series_color};
 
 const SIZE: (u32, u32) = (880, 520);
-const FONT: &str = "sans-serif";
+/// Width of the plot beside a numbered key.
+const KEY_SPLIT: u32 = 560;
 
 fn pipeline_color(c: &CellRecord) -> RGBColor {
     match c.spec.pipeline.as_deref() {
@@ -26,33 +19,6 @@ fn pipeline_color(c: &CellRecord) -> RGBColor {
         Some("DeferredScissor") => RGBColor(255, 127, 14),
         _ => RGBColor(127, 127, 127),
     }
-}
-
-fn series_color(i: usize) -> RGBColor {
-    // Tableau 20: the ten hues, then their light tints.
-    const COLORS: [RGBColor; 20] = [
-        RGBColor(31, 119, 180),
-        RGBColor(255, 127, 14),
-        RGBColor(44, 160, 44),
-        RGBColor(214, 39, 40),
-        RGBColor(148, 103, 189),
-        RGBColor(140, 86, 75),
-        RGBColor(227, 119, 194),
-        RGBColor(127, 127, 127),
-        RGBColor(188, 189, 34),
-        RGBColor(23, 190, 207),
-        RGBColor(174, 199, 232),
-        RGBColor(255, 187, 120),
-        RGBColor(152, 223, 138),
-        RGBColor(255, 152, 150),
-        RGBColor(197, 176, 213),
-        RGBColor(196, 156, 148),
-        RGBColor(247, 182, 210),
-        RGBColor(199, 199, 199),
-        RGBColor(219, 219, 141),
-        RGBColor(158, 218, 229),
-    ];
-    COLORS[i % COLORS.len()]
 }
 
 /// Every plot the results support.
@@ -67,24 +33,21 @@ pub fn all(results: &Results) -> Vec<Plot> {
         if shown.len() < 4 {
             continue;
         }
-        let mut add = |kind: &str, title: String, svg: Option<String>| {
-            if let Some(svg) = svg {
-                plots.push(Plot {
-                    file: format!("{kind}_{n}.svg"),
-                    title,
-                    svg,
-                });
+        let mut add = |kind: &str, title: String, draw: &dyn Fn(&Area) -> Drawn| {
+            let file = format!("{kind}_{n}.svg");
+            if let Some(p) = plot::svg(&file, &title, SIZE, |a| drawn(draw(a))) {
+                plots.push(p);
             }
         };
         add(
             "time_error",
             format!("GPU time against error: {group}"),
-            draw(|a| time_error(a, &shown)),
+            &|a| time_error(a, &shown),
         );
         add(
             "time_clusters",
             format!("GPU time against cluster count: {group}"),
-            draw(|a| time_clusters(a, &shown)),
+            &|a| time_clusters(a, &shown),
         );
         // Naive forward's light loop would flatten every other bar; the table has it.
         let fast: Vec<&CellRecord> = shown
@@ -95,35 +58,24 @@ pub fn all(results: &Results) -> Vec<Plot> {
         add(
             "passes",
             format!("GPU time per pass (naive forward left out): {group}"),
-            draw(|a| passes(a, &fast)),
+            &|a| passes(a, &fast),
         );
     }
-    if let Some(svg) = draw(|a| time_lights(a, results)) {
-        plots.push(Plot {
-            file: "time_lights.svg".into(),
-            title: "GPU time against light count".into(),
-            svg,
-        });
-    }
+    let lights = plot::svg(
+        "time_lights.svg",
+        "GPU time against light count",
+        SIZE,
+        |a| drawn(time_lights(a, results)),
+    );
+    plots.extend(lights);
     plots
 }
 
-type Area<'a> = DrawingArea<SVGBackend<'a>, Shift>;
 type Drawn = Result<bool, Box<dyn std::error::Error>>;
 
-/// Run a drawing into an SVG string; None when it had nothing to draw or failed.
-fn draw(f: impl FnOnce(&Area<'_>) -> Drawn) -> Option<String> {
-    let mut svg = String::new();
-    let drawn = {
-        let area = SVGBackend::with_string(&mut svg, SIZE).into_drawing_area();
-        let drawn = area
-            .fill(&WHITE)
-            .map_err(|e| e.into())
-            .and_then(|()| f(&area));
-        let presented = area.present();
-        drawn.ok().filter(|d| *d && presented.is_ok())
-    };
-    drawn.map(|_| svg)
+/// Some(()) when a drawing drew something without error.
+fn drawn(d: Drawn) -> Option<()> {
+    d.ok().filter(|&d| d).map(|_| ())
 }
 
 fn log_range(values: impl Iterator<Item = f64>) -> (f64, f64) {
@@ -134,7 +86,7 @@ fn log_range(values: impl Iterator<Item = f64>) -> (f64, f64) {
 /// Errors below this show at it on the log axis (an exact image has RMSE 0).
 const ERROR_FLOOR: f64 = 1e-3;
 
-fn time_error(area: &Area<'_>, cells: &[&CellRecord]) -> Drawn {
+fn time_error(area: &Area, cells: &[&CellRecord]) -> Drawn {
     let points: Vec<(f64, f64, &CellRecord)> = cells
         .iter()
         .filter_map(|c| {
@@ -145,9 +97,11 @@ fn time_error(area: &Area<'_>, cells: &[&CellRecord]) -> Drawn {
     if points.len() < 2 {
         return Ok(false);
     }
+    // Points carry numbers; the key beside the plot names them.
+    let (plot_area, key_area) = area.split_horizontally(KEY_SPLIT);
     let (t0, t1) = log_range(points.iter().map(|p| p.0));
     let e1 = points.iter().map(|p| p.1).fold(0.0, f64::max).max(0.1) * 3.0;
-    let mut chart = ChartBuilder::on(area)
+    let mut chart = ChartBuilder::on(&plot_area)
         .margin(16)
         .x_label_area_size(44)
         .y_label_area_size(64)
@@ -156,7 +110,7 @@ fn time_error(area: &Area<'_>, cells: &[&CellRecord]) -> Drawn {
         .configure_mesh()
         .x_desc("GPU time per frame, ms (log)")
         .y_desc("RMSE against the reference, 8-bit LSB (log; 0.001 = exact)")
-        .label_style((FONT, 14))
+        .label_style((FONT, 13))
         .draw()?;
     let mut front: Vec<(f64, f64)> = points
         .iter()
@@ -190,24 +144,25 @@ fn time_error(area: &Area<'_>, cells: &[&CellRecord]) -> Drawn {
             .label(name)
             .legend(move |(x, y)| Circle::new((x + 8, y), 5, color.filled()));
     }
-    chart.draw_series(points.iter().map(|p| {
-        Text::new(
-            format!("{}{}", if p.2.pareto { "* " } else { "" }, label(p.2)),
-            (p.0, p.1),
-            (FONT, 11).into_font().color(&RGBColor(60, 60, 60)),
-        )
-    }))?;
-    chart
-        .configure_series_labels()
-        .position(SeriesLabelPosition::UpperRight)
-        .background_style(WHITE.mix(0.85))
-        .border_style(BLACK)
-        .label_font((FONT, 13))
-        .draw()?;
+    chart.draw_series(
+        points
+            .iter()
+            .enumerate()
+            .map(|(i, p)| number_label(i, (p.0, p.1))),
+    )?;
+    plot::legend(&mut chart, SeriesLabelPosition::UpperRight);
+    let key: Vec<(String, RGBColor)> = points
+        .iter()
+        .map(|p| {
+            let mark = if p.2.pareto { "* " } else { "" };
+            (format!("{mark}{}", label(p.2)), pipeline_color(p.2))
+        })
+        .collect();
+    numbered_key(&key_area, "* = Pareto front", &key);
     Ok(true)
 }
 
-fn time_clusters(area: &Area<'_>, cells: &[&CellRecord]) -> Drawn {
+fn time_clusters(area: &Area, cells: &[&CellRecord]) -> Drawn {
     let points: Vec<(f64, f64, &CellRecord)> = cells
         .iter()
         .filter(|c| !c.spec.post)
@@ -219,9 +174,10 @@ fn time_clusters(area: &Area<'_>, cells: &[&CellRecord]) -> Drawn {
     if points.len() < 2 {
         return Ok(false);
     }
+    let (plot_area, key_area) = area.split_horizontally(KEY_SPLIT);
     let c1 = points.iter().map(|p| p.0).fold(0.0, f64::max) * 1.25;
     let t1 = points.iter().map(|p| p.1).fold(0.0, f64::max) * 1.15;
-    let mut chart = ChartBuilder::on(area)
+    let mut chart = ChartBuilder::on(&plot_area)
         .margin(16)
         .x_label_area_size(44)
         .y_label_area_size(64)
@@ -230,25 +186,34 @@ fn time_clusters(area: &Area<'_>, cells: &[&CellRecord]) -> Drawn {
         .configure_mesh()
         .x_desc("clusters in the grid")
         .y_desc("GPU time per frame, ms")
-        .label_style((FONT, 14))
+        .label_style((FONT, 13))
         .draw()?;
     chart.draw_series(
         points
             .iter()
             .map(|p| Circle::new((p.0, p.1), 5, pipeline_color(p.2).filled())),
     )?;
-    chart.draw_series(points.iter().map(|p| {
-        let g = p.2.spec.grid.unwrap_or_default();
-        Text::new(
-            format!("{} ({}x{}x{})", label(p.2), g[0], g[1], g[2]),
-            (p.0, p.1),
-            (FONT, 11).into_font().color(&RGBColor(60, 60, 60)),
-        )
-    }))?;
+    chart.draw_series(
+        points
+            .iter()
+            .enumerate()
+            .map(|(i, p)| number_label(i, (p.0, p.1))),
+    )?;
+    let key: Vec<(String, RGBColor)> = points
+        .iter()
+        .map(|p| {
+            let g = p.2.spec.grid.unwrap_or_default();
+            (
+                format!("{} ({}x{}x{})", label(p.2), g[0], g[1], g[2]),
+                pipeline_color(p.2),
+            )
+        })
+        .collect();
+    numbered_key(&key_area, "variant (grid)", &key);
     Ok(true)
 }
 
-fn passes(area: &Area<'_>, cells: &[&CellRecord]) -> Drawn {
+fn passes(area: &Area, cells: &[&CellRecord]) -> Drawn {
     let mut names: Vec<String> = Vec::new();
     for c in cells {
         for k in c.gpu_ms.keys() {
@@ -309,17 +274,11 @@ fn passes(area: &Area<'_>, cells: &[&CellRecord]) -> Drawn {
             .label(name.clone())
             .legend(move |(x, y)| Rectangle::new([(x, y - 5), (x + 12, y + 5)], color.filled()));
     }
-    chart
-        .configure_series_labels()
-        .position(SeriesLabelPosition::UpperRight)
-        .background_style(WHITE.mix(0.85))
-        .border_style(BLACK)
-        .label_font((FONT, 12))
-        .draw()?;
+    plot::legend(&mut chart, SeriesLabelPosition::UpperRight);
     Ok(true)
 }
 
-fn time_lights(area: &Area<'_>, results: &Results) -> Drawn {
+fn time_lights(area: &Area, results: &Results) -> Drawn {
     // One series per variant (and per scene and size, when a study has several).
     let mut series: Vec<(String, Vec<(f64, f64)>)> = Vec::new();
     for c in &results.cells {
@@ -361,12 +320,6 @@ fn time_lights(area: &Area<'_>, results: &Results) -> Drawn {
             .legend(move |(x, y)| PathElement::new([(x, y), (x + 16, y)], color.stroke_width(2)));
         chart.draw_series(pts.iter().map(|p| Circle::new(*p, 4, color.filled())))?;
     }
-    chart
-        .configure_series_labels()
-        .position(SeriesLabelPosition::UpperLeft)
-        .background_style(WHITE.mix(0.85))
-        .border_style(BLACK)
-        .label_font((FONT, 13))
-        .draw()?;
+    plot::legend(&mut chart, SeriesLabelPosition::UpperLeft);
     Ok(true)
 }

@@ -6,12 +6,13 @@ use rand::{Rng, SeedableRng};
 use rayon::prelude::*;
 use serde::Serialize;
 
+use super::StudyError;
 use super::table::{Table, sig};
-use super::{Plot, StudyError};
 use crate::compose::Composer;
 use crate::cpu::normals::*;
 use crate::cpu::normals::{decode, encode};
 use crate::gpu::Gpu;
+use crate::plot::Plot;
 use crate::variant::{NORMAL_BITS, NormalCodec};
 
 /// Significant digits the table prints, and at most 4 decimals (1e-4 degrees, 17 times the
@@ -448,54 +449,54 @@ pub fn meyer_f32_max_deg() -> f64 {
 /// Max error against bits per codec (GPU), with the covering bound.
 pub fn plot(rows: &[CodecRow]) -> Option<Plot> {
     use plotters::prelude::*;
-    super::svg_plot("codecs.svg", (880, 520), |area| {
-        let mut chart = ChartBuilder::on(area)
-            .caption("Normal codecs: max angular error (GPU)", ("sans-serif", 20))
-            .margin(12)
-            .x_label_area_size(40)
-            .y_label_area_size(70)
-            .build_cartesian_2d(15u32..33u32, (1e-4f64..10.0).log_scale())
-            .ok()?;
-        chart
-            .configure_mesh()
-            .x_desc("bits per normal")
-            .y_desc("max error (degrees)")
-            .draw()
-            .ok()?;
-        let colors = [
-            RGBColor(31, 119, 180),
-            RGBColor(255, 127, 14),
-            RGBColor(44, 160, 44),
-            RGBColor(214, 39, 40),
-        ];
-        for (codec, color) in NormalCodec::packed(32).iter().zip(colors) {
-            let points: Vec<(u32, f64)> = rows
-                .iter()
-                .filter(|r| {
-                    r.source == "gpu" && r.sampling == "uniform" && r.codec == codec.label()
-                })
-                .map(|r| (r.bits, r.max_deg.max(1e-4)))
+    crate::plot::svg(
+        "codecs.svg",
+        "Normal codecs: max error against bits",
+        (880, 520),
+        |area| {
+            let mut chart = ChartBuilder::on(area)
+                .caption("Normal codecs: max angular error (GPU)", ("sans-serif", 20))
+                .margin(12)
+                .x_label_area_size(40)
+                .y_label_area_size(70)
+                .build_cartesian_2d(15u32..33u32, (1e-4f64..10.0).log_scale())
+                .ok()?;
+            chart
+                .configure_mesh()
+                .x_desc("bits per normal")
+                .y_desc("max error (degrees)")
+                .draw()
+                .ok()?;
+            for (i, codec) in NormalCodec::packed(32).iter().enumerate() {
+                let color = crate::plot::series_color(i);
+                let points: Vec<(u32, f64)> = rows
+                    .iter()
+                    .filter(|r| {
+                        r.source == "gpu" && r.sampling == "uniform" && r.codec == codec.label()
+                    })
+                    .map(|r| (r.bits, r.max_deg.max(1e-4)))
+                    .collect();
+                chart
+                    .draw_series(LineSeries::new(points.clone(), color.stroke_width(2)))
+                    .ok()?
+                    .label(codec.label())
+                    .legend(move |(x, y)| PathElement::new([(x, y), (x + 16, y)], color));
+                chart
+                    .draw_series(points.iter().map(|&p| Circle::new(p, 4, color.filled())))
+                    .ok()?;
+            }
+            let bound: Vec<(u32, f64)> = (16..=32)
+                .step_by(4)
+                .map(|b| (b, covering_bound_deg(b as f64)))
                 .collect();
             chart
-                .draw_series(LineSeries::new(points.clone(), color.stroke_width(2)))
+                .draw_series(LineSeries::new(bound, BLACK.stroke_width(1)))
                 .ok()?
-                .label(codec.label())
-                .legend(move |(x, y)| PathElement::new([(x, y), (x + 16, y)], color));
-            chart
-                .draw_series(points.iter().map(|&p| Circle::new(p, 4, color.filled())))
-                .ok()?;
-        }
-        let bound: Vec<(u32, f64)> = (16..=32)
-            .step_by(4)
-            .map(|b| (b, covering_bound_deg(b as f64)))
-            .collect();
-        chart
-            .draw_series(LineSeries::new(bound, BLACK.stroke_width(1)))
-            .ok()?
-            .label("covering bound")
-            .legend(|(x, y)| PathElement::new([(x, y), (x + 16, y)], BLACK));
-        super::legend(&mut chart, SeriesLabelPosition::MiddleRight)
-    })
+                .label("covering bound")
+                .legend(|(x, y)| PathElement::new([(x, y), (x + 16, y)], BLACK));
+            crate::plot::legend(&mut chart, SeriesLabelPosition::MiddleRight)
+        },
+    )
 }
 
 #[cfg(test)]

@@ -4,11 +4,12 @@
 use glam::DVec3;
 use serde::Serialize;
 
+use super::StudyError;
 use super::table::{Table, sig};
-use super::{Plot, StudyError};
 use crate::compose::Composer;
 use crate::cpu::depth::DepthMapping;
 use crate::gpu::Gpu;
+use crate::plot::Plot;
 use crate::render::Renderer;
 use crate::scene::MeshBuilder;
 use crate::scene::{Camera, Scene, SceneParams};
@@ -411,63 +412,68 @@ fn envelope(points: &[(f64, f64)], bins: usize) -> Vec<(f64, f64)> {
 pub fn plot(study: &DepthStudy) -> Option<Plot> {
     use plotters::prelude::*;
     const FLOOR: f64 = 1e-9;
-    super::svg_plot("depth.svg", (880, 560), |area| {
-        let mut chart = ChartBuilder::on(area)
-            .caption(
-                "Depth: relative error of rebuilt view depth",
-                ("sans-serif", 20),
-            )
-            .margin(12)
-            .x_label_area_size(40)
-            .y_label_area_size(70)
-            .build_cartesian_2d((0.1f64..1e4).log_scale(), (FLOOR..1.0).log_scale())
-            .ok()?;
-        chart
-            .configure_mesh()
-            .x_desc("view depth (near 0.05)")
-            .y_desc("max relative error")
-            .x_label_formatter(&|v| format!("{v:e}"))
-            .y_label_formatter(&|v| format!("{v:.0e}"))
-            .draw()
-            .ok()?;
-        for (i, curve) in study.curves.iter().enumerate() {
-            let color = Palette99::pick(i).to_rgba();
-            let points: Vec<(f64, f64)> = envelope(&curve.points, 60)
-                .into_iter()
-                .map(|(z, e)| (z, e.max(FLOOR)))
-                .collect();
+    crate::plot::svg(
+        "depth.svg",
+        "Depth: relative error of rebuilt view depth",
+        (880, 560),
+        |area| {
+            let mut chart = ChartBuilder::on(area)
+                .caption(
+                    "Depth: relative error of rebuilt view depth",
+                    ("sans-serif", 20),
+                )
+                .margin(12)
+                .x_label_area_size(40)
+                .y_label_area_size(70)
+                .build_cartesian_2d((0.1f64..1e4).log_scale(), (FLOOR..1.0).log_scale())
+                .ok()?;
             chart
-                .draw_series(LineSeries::new(points, color.stroke_width(2)))
-                .ok()?
-                .label(curve.setup.clone())
-                .legend(move |(x, y)| PathElement::new([(x, y), (x + 16, y)], color));
-        }
-        // Reed's model for the three distinct cases: fixed point (either direction),
-        // standard float, reversed float.
-        let model = |format, reversed| {
-            let setup = Setup {
-                format,
-                mapping: DepthMapping {
-                    reversed,
-                    infinite_far: true,
-                },
+                .configure_mesh()
+                .x_desc("view depth (near 0.05)")
+                .y_desc("max relative error")
+                .x_label_formatter(&|v| format!("{v:e}"))
+                .y_label_formatter(&|v| format!("{v:.0e}"))
+                .draw()
+                .ok()?;
+            for (i, curve) in study.curves.iter().enumerate() {
+                let color = crate::plot::series_color(i);
+                let points: Vec<(f64, f64)> = envelope(&curve.points, 60)
+                    .into_iter()
+                    .map(|(z, e)| (z, e.max(FLOOR)))
+                    .collect();
+                chart
+                    .draw_series(LineSeries::new(points, color.stroke_width(2)))
+                    .ok()?
+                    .label(curve.setup.clone())
+                    .legend(move |(x, y)| PathElement::new([(x, y), (x + 16, y)], color));
+            }
+            // Reed's model for the three distinct cases: fixed point (either direction),
+            // standard float, reversed float.
+            let model = |format, reversed| {
+                let setup = Setup {
+                    format,
+                    mapping: DepthMapping {
+                        reversed,
+                        infinite_far: true,
+                    },
+                };
+                let points: Vec<(f64, f64)> = (0..=60)
+                    .map(|k| {
+                        let z = NEAREST * (FARTHEST / NEAREST).powf(k as f64 / 60.0);
+                        (z, setup.model_relative_error(z))
+                    })
+                    .collect();
+                DashedLineSeries::new(points, 6, 4, BLACK.stroke_width(1))
             };
-            let points: Vec<(f64, f64)> = (0..=60)
-                .map(|k| {
-                    let z = NEAREST * (FARTHEST / NEAREST).powf(k as f64 / 60.0);
-                    (z, setup.model_relative_error(z))
-                })
-                .collect();
-            DashedLineSeries::new(points, 6, 4, BLACK.stroke_width(1))
-        };
-        chart
-            .draw_series(model(DepthFormat::Unorm24, false))
-            .ok()?
-            .label("Reed 2015 model")
-            .legend(|(x, y)| PathElement::new([(x, y), (x + 16, y)], BLACK));
-        chart.draw_series(model(DepthFormat::Float32, true)).ok()?;
-        super::legend(&mut chart, SeriesLabelPosition::UpperLeft)
-    })
+            chart
+                .draw_series(model(DepthFormat::Unorm24, false))
+                .ok()?
+                .label("Reed 2015 model")
+                .legend(|(x, y)| PathElement::new([(x, y), (x + 16, y)], BLACK));
+            chart.draw_series(model(DepthFormat::Float32, true)).ok()?;
+            crate::plot::legend(&mut chart, SeriesLabelPosition::UpperLeft)
+        },
+    )
 }
 
 #[cfg(test)]

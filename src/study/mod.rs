@@ -10,14 +10,14 @@ pub mod table;
 use std::fmt;
 use std::path::{Path, PathBuf};
 
-use plotters::coord::{CoordTranslate, Shift};
-use plotters::prelude::*;
 use serde::Serialize;
 
 use crate::compose::Composer;
 use crate::gpu::{AdapterSummary, Gpu, GpuError};
 use crate::render::RenderError;
 pub use table::Table;
+
+use crate::plot::Plot;
 
 /// The studies.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
@@ -38,43 +38,6 @@ impl StudyName {
             StudyName::Slicing => "slicing",
         }
     }
-}
-
-/// A plot as SVG.
-pub struct Plot {
-    pub file: String,
-    pub svg: String,
-}
-
-type Area<'a> = DrawingArea<SVGBackend<'a>, Shift>;
-
-/// An SVG plot `file` of `size` pixels: `draw` paints on a white area.
-fn svg_plot(file: &str, size: (u32, u32), draw: impl FnOnce(&Area) -> Option<()>) -> Option<Plot> {
-    let mut svg = String::new();
-    {
-        let area = SVGBackend::with_string(&mut svg, size).into_drawing_area();
-        area.fill(&WHITE).ok()?;
-        draw(&area)?;
-        area.present().ok()?;
-    }
-    Some(Plot {
-        file: file.into(),
-        svg,
-    })
-}
-
-/// The legend box of every study plot.
-fn legend<'a, CT: CoordTranslate>(
-    chart: &mut ChartContext<'a, SVGBackend<'a>, CT>,
-    position: SeriesLabelPosition,
-) -> Option<()> {
-    chart
-        .configure_series_labels()
-        .position(position)
-        .background_style(WHITE.mix(0.8))
-        .border_style(BLACK)
-        .draw()
-        .ok()
 }
 
 #[derive(Debug)]

@@ -3,10 +3,11 @@
 
 use serde::Serialize;
 
+use super::StudyError;
 use super::table::{Table, sig};
-use super::{Plot, StudyError};
 use crate::compose::Composer;
 use crate::gpu::Gpu;
+use crate::plot::Plot;
 use crate::render::Renderer;
 use crate::scene::{Scene, SceneError, SceneParams, find_scene};
 use crate::variant::{Clusters, Pipeline, Variant, ZSlicing};
@@ -362,39 +363,44 @@ pub fn plot(rows: &[SlicingRow]) -> Option<Plot> {
         .filter(|r| r.error.is_none() && r.evaluations > 0)
         .collect();
     let max_ms = ok.iter().map(|r| r.shading_ms).fold(1.0, f64::max) * 1.1;
-    super::svg_plot("slicing.svg", (880, 520), |area| {
-        let mut chart = ChartBuilder::on(area)
-            .caption(
-                "Z-slicing: useful fraction of light evaluations against shading time",
-                ("sans-serif", 20),
-            )
-            .margin(12)
-            .x_label_area_size(40)
-            .y_label_area_size(60)
-            .build_cartesian_2d(0.0..max_ms, 0.0..100.0)
-            .ok()?;
-        chart
-            .configure_mesh()
-            .x_desc("shading pass, ms (median)")
-            .y_desc("useful / performed (%)")
-            .draw()
-            .ok()?;
-        let names: Vec<&str> = schemes(0.1, 100.0).iter().map(|s| s.0).collect();
-        for (i, name) in names.iter().enumerate() {
-            let color = Palette99::pick(i).to_rgba();
-            let points: Vec<(f64, f64)> = ok
-                .iter()
-                .filter(|r| r.scheme == *name)
-                .map(|r| (r.shading_ms, 100.0 * r.efficiency))
-                .collect();
+    crate::plot::svg(
+        "slicing.svg",
+        "Z-slicing: useful evaluations against shading time",
+        (880, 520),
+        |area| {
+            let mut chart = ChartBuilder::on(area)
+                .caption(
+                    "Z-slicing: useful fraction of light evaluations against shading time",
+                    ("sans-serif", 20),
+                )
+                .margin(12)
+                .x_label_area_size(40)
+                .y_label_area_size(60)
+                .build_cartesian_2d(0.0..max_ms, 0.0..100.0)
+                .ok()?;
             chart
-                .draw_series(points.iter().map(|&p| Circle::new(p, 4, color.filled())))
-                .ok()?
-                .label(*name)
-                .legend(move |(x, y)| Circle::new((x + 8, y), 4, color.filled()));
-        }
-        super::legend(&mut chart, SeriesLabelPosition::MiddleRight)
-    })
+                .configure_mesh()
+                .x_desc("shading pass, ms (median)")
+                .y_desc("useful / performed (%)")
+                .draw()
+                .ok()?;
+            let names: Vec<&str> = schemes(0.1, 100.0).iter().map(|s| s.0).collect();
+            for (i, name) in names.iter().enumerate() {
+                let color = crate::plot::series_color(i);
+                let points: Vec<(f64, f64)> = ok
+                    .iter()
+                    .filter(|r| r.scheme == *name)
+                    .map(|r| (r.shading_ms, 100.0 * r.efficiency))
+                    .collect();
+                chart
+                    .draw_series(points.iter().map(|&p| Circle::new(p, 4, color.filled())))
+                    .ok()?
+                    .label(*name)
+                    .legend(move |(x, y)| Circle::new((x + 8, y), 4, color.filled()));
+            }
+            crate::plot::legend(&mut chart, SeriesLabelPosition::MiddleRight)
+        },
+    )
 }
 
 #[cfg(test)]

@@ -1,0 +1,115 @@
+//! SVG plots (plotters), shared by the matrix report and the studies: one way to draw a plot
+//! into a string, one palette, one legend style, and a numbered key for scatter plots whose
+//! points are too many to label in place.
+
+use plotters::coord::{CoordTranslate, Shift};
+use plotters::prelude::*;
+
+/// One plot: its file name, title and SVG text.
+#[derive(Clone, Debug)]
+pub struct Plot {
+    pub file: String,
+    pub title: String,
+    pub svg: String,
+}
+
+pub type Area<'a> = DrawingArea<SVGBackend<'a>, Shift>;
+
+pub const FONT: &str = "sans-serif";
+
+/// Draw `file` at `size` pixels: `draw` paints on a white area and returns None when it
+/// has nothing to show (or failed), and then there is no plot.
+pub fn svg(
+    file: &str,
+    title: &str,
+    size: (u32, u32),
+    draw: impl FnOnce(&Area) -> Option<()>,
+) -> Option<Plot> {
+    let mut svg = String::new();
+    {
+        let area = SVGBackend::with_string(&mut svg, size).into_drawing_area();
+        area.fill(&WHITE).ok()?;
+        draw(&area)?;
+        area.present().ok()?;
+    }
+    Some(Plot {
+        file: file.into(),
+        title: title.into(),
+        svg,
+    })
+}
+
+/// The i-th colour of Tableau 20: the ten hues, then their light tints.
+pub fn series_color(i: usize) -> RGBColor {
+    const COLORS: [RGBColor; 20] = [
+        RGBColor(31, 119, 180),
+        RGBColor(255, 127, 14),
+        RGBColor(44, 160, 44),
+        RGBColor(214, 39, 40),
+        RGBColor(148, 103, 189),
+        RGBColor(140, 86, 75),
+        RGBColor(227, 119, 194),
+        RGBColor(127, 127, 127),
+        RGBColor(188, 189, 34),
+        RGBColor(23, 190, 207),
+        RGBColor(174, 199, 232),
+        RGBColor(255, 187, 120),
+        RGBColor(152, 223, 138),
+        RGBColor(255, 152, 150),
+        RGBColor(197, 176, 213),
+        RGBColor(196, 156, 148),
+        RGBColor(247, 182, 210),
+        RGBColor(199, 199, 199),
+        RGBColor(219, 219, 141),
+        RGBColor(158, 218, 229),
+    ];
+    COLORS[i % COLORS.len()]
+}
+
+/// The legend box of every plot.
+pub fn legend<'a, CT: CoordTranslate>(
+    chart: &mut ChartContext<'a, SVGBackend<'a>, CT>,
+    position: SeriesLabelPosition,
+) -> Option<()> {
+    chart
+        .configure_series_labels()
+        .position(position)
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .label_font((FONT, 12))
+        .draw()
+        .ok()
+}
+
+/// A key beside a scatter plot whose points carry numbers instead of names: one line per
+/// entry, `n  name`, in the entry's colour. Names never overlap, however close the points.
+pub fn numbered_key(area: &Area, title: &str, entries: &[(String, RGBColor)]) -> Option<()> {
+    let line = 15;
+    area.draw(&Text::new(
+        title.to_string(),
+        (4, 18),
+        (FONT, 13).into_font().style(FontStyle::Bold),
+    ))
+    .ok()?;
+    for (i, (name, color)) in entries.iter().enumerate() {
+        let y = 40 + line * i as i32;
+        area.draw(&Circle::new((10, y + 6), 4, color.filled()))
+            .ok()?;
+        area.draw(&Text::new(
+            format!("{:>2}  {name}", i + 1),
+            (20, y),
+            (FONT, 11).into_font().color(&RGBColor(40, 40, 40)),
+        ))
+        .ok()?;
+    }
+    Some(())
+}
+
+/// The number of the i-th key entry, drawn beside its point.
+pub fn number_label<C>(i: usize, at: C) -> Text<'static, C, String> {
+    Text::new(
+        format!("{}", i + 1),
+        at,
+        (FONT, 10).into_font().color(&RGBColor(40, 40, 40)),
+    )
+}
