@@ -52,29 +52,14 @@ pub struct RenderReport {
 }
 
 /// Why a cell could not run.
-#[derive(Debug)]
+#[derive(Debug, thiserror::Error)]
 pub enum RunError {
-    Scene(SceneError),
-    Render(RenderError),
+    #[error("{0}")]
+    Scene(#[from] SceneError),
+    #[error("{0}")]
+    Render(#[from] RenderError),
+    #[error("{0}")]
     Io(String),
-}
-
-impl std::fmt::Display for RunError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            RunError::Scene(e) => write!(f, "{e}"),
-            RunError::Render(e) => write!(f, "{e}"),
-            RunError::Io(e) => write!(f, "{e}"),
-        }
-    }
-}
-
-impl std::error::Error for RunError {}
-
-impl From<RenderError> for RunError {
-    fn from(e: RenderError) -> Self {
-        RunError::Render(e)
-    }
 }
 
 impl From<crate::gpu::GpuError> for RunError {

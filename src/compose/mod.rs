@@ -17,7 +17,6 @@ pub use passes::{
 };
 pub use resolver::ShaderResolver;
 
-use std::fmt;
 use std::path::{Path, PathBuf};
 
 use wesl::{Feature, ModulePath, Wesl};
@@ -35,11 +34,13 @@ pub struct ComposedPass {
 }
 
 /// Why a pass did not compose.
-#[derive(Debug)]
+#[derive(Debug, thiserror::Error)]
 pub enum ShaderError {
     /// wesl could not read, parse, import or select (its own message names the module).
+    #[error("pass `{pass}`: shader composition failed:\n{message}")]
     Wesl { pass: String, message: String },
     /// naga rejected the composed WGSL.
+    #[error("{}", naga_text(pass, message, location.as_deref(), *composed_line))]
     Naga {
         pass: String,
         message: String,
@@ -50,39 +51,28 @@ pub enum ShaderError {
     },
 }
 
-impl fmt::Display for ShaderError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            ShaderError::Wesl { pass, message } => {
-                write!(f, "pass `{pass}`: shader composition failed:\n{message}")
-            }
-            ShaderError::Naga {
-                pass,
-                message,
-                location,
-                composed_line,
-            } => {
-                match location {
-                    Some(l) => write!(f, "{}:{}:{}: ", l.file, l.line, l.column)?,
-                    None => write!(f, "pass `{pass}`: ")?,
-                }
-                write!(f, "{message}")?;
-                if let Some(l) = location {
-                    write!(f, "\n{}", l.snippet)?;
-                }
-                if let Some(line) = composed_line {
-                    write!(
-                        f,
-                        "\n(in pass `{pass}`, line {line} of its composed WGSL: `clusterlab wgsl VARIANT --pass {pass}`)"
-                    )?;
-                }
-                Ok(())
-            }
-        }
+/// A naga error at the module's own file, line and column when known, with the line of
+/// the composed WGSL to look at.
+fn naga_text(
+    pass: &str,
+    message: &str,
+    location: Option<&SourceLocation>,
+    composed_line: Option<usize>,
+) -> String {
+    let mut s = match location {
+        Some(l) => format!(
+            "{}:{}:{}: {message}\n{}",
+            l.file, l.line, l.column, l.snippet
+        ),
+        None => format!("pass `{pass}`: {message}"),
+    };
+    if let Some(line) = composed_line {
+        s.push_str(&format!(
+            "\n(in pass `{pass}`, line {line} of its composed WGSL: `clusterlab wgsl VARIANT --pass {pass}`)"
+        ));
     }
+    s
 }
-
-impl std::error::Error for ShaderError {}
 
 /// Shader capabilities beyond the WebGPU baseline that passes may use: forced early depth
 /// testing, so instrumented passes count only the fragments a GPU with early-Z shades

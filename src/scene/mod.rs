@@ -88,29 +88,20 @@ impl Scene {
 }
 
 /// Why a scene could not be made.
-#[derive(Debug, PartialEq)]
+#[derive(Debug, PartialEq, thiserror::Error)]
 pub enum SceneError {
+    #[error(
+        "unknown scene `{0}`; the built-in scenes are: {names} (see `clusterlab scenes`)",
+        names = scene_names()
+    )]
     Unknown(String),
+    #[error("{0}")]
     BadParam(String),
 }
 
-impl std::fmt::Display for SceneError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            SceneError::Unknown(name) => {
-                let names: Vec<&str> = SCENES.iter().map(|s| s.name).collect();
-                write!(
-                    f,
-                    "unknown scene `{name}`; the built-in scenes are: {} (see `clusterlab scenes`)",
-                    names.join(", ")
-                )
-            }
-            SceneError::BadParam(m) => write!(f, "{m}"),
-        }
-    }
+fn scene_names() -> String {
+    SCENES.iter().map(|s| s.name).collect::<Vec<_>>().join(", ")
 }
-
-impl std::error::Error for SceneError {}
 
 /// Generate built-in scene `name` with `params`.
 pub fn generate(name: &str, params: SceneParams) -> Result<Scene, SceneError> {

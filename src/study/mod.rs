@@ -7,7 +7,6 @@ pub mod depth;
 pub mod slicing;
 pub mod table;
 
-use std::fmt;
 use std::path::{Path, PathBuf};
 
 use serde::Serialize;
@@ -40,28 +39,14 @@ impl StudyName {
     }
 }
 
-#[derive(Debug)]
+#[derive(Debug, thiserror::Error)]
 pub enum StudyError {
-    Render(RenderError),
+    #[error("{0}")]
+    Render(#[from] RenderError),
+    #[error("{0}")]
     Usage(String),
+    #[error("{0}")]
     Io(String),
-}
-
-impl fmt::Display for StudyError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            StudyError::Render(e) => write!(f, "{e}"),
-            StudyError::Usage(m) | StudyError::Io(m) => write!(f, "{m}"),
-        }
-    }
-}
-
-impl std::error::Error for StudyError {}
-
-impl From<RenderError> for StudyError {
-    fn from(e: RenderError) -> Self {
-        StudyError::Render(e)
-    }
 }
 
 impl From<GpuError> for StudyError {

@@ -6,17 +6,18 @@ mod schema;
 pub use check::{MAX_CAP, MAX_CLUSTERS, MAX_GRID_XY, MAX_GRID_Z, NORMAL_BITS, Problem, check};
 pub use schema::*;
 
-use std::fmt;
 use std::path::{Path, PathBuf};
 
 /// Why a variant file could not be used.
-#[derive(Debug)]
+#[derive(Debug, thiserror::Error)]
 pub enum VariantError {
+    #[error("{}: cannot read: {error}", path.display())]
     Io {
         path: PathBuf,
         error: std::io::Error,
     },
     /// The text is not a well-formed variant (RON syntax, unknown field or variant, wrong type).
+    #[error("{}:{line}:{column}: {message}\n{snippet}", path.display())]
     Syntax {
         path: PathBuf,
         line: usize,
@@ -25,6 +26,7 @@ pub enum VariantError {
         snippet: String,
     },
     /// Well-formed, but some values are out of range or do not go together.
+    #[error("{}", located(path, problems))]
     Invalid {
         path: PathBuf,
         problems: Vec<LocatedProblem>,
@@ -38,41 +40,20 @@ pub struct LocatedProblem {
     pub at: Option<(usize, usize)>,
 }
 
-impl fmt::Display for VariantError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            VariantError::Io { path, error } => {
-                write!(f, "{}: cannot read: {error}", path.display())
-            }
-            VariantError::Syntax {
-                path,
-                line,
-                column,
-                message,
-                snippet,
-            } => write!(
-                f,
-                "{}:{line}:{column}: {message}\n{snippet}",
-                path.display()
-            ),
-            VariantError::Invalid { path, problems } => {
-                for (i, p) in problems.iter().enumerate() {
-                    if i > 0 {
-                        writeln!(f)?;
-                    }
-                    match p.at {
-                        Some((line, col)) => write!(f, "{}:{line}:{col}: ", path.display())?,
-                        None => write!(f, "{}: ", path.display())?,
-                    }
-                    write!(f, "field `{}` {}", p.problem.field, p.problem.message)?;
-                }
-                Ok(())
-            }
-        }
-    }
+/// The problems of an invalid file, one a line, each at its place when known.
+fn located(path: &Path, problems: &[LocatedProblem]) -> String {
+    let lines: Vec<String> = problems
+        .iter()
+        .map(|p| {
+            let at = match p.at {
+                Some((line, col)) => format!("{}:{line}:{col}", path.display()),
+                None => path.display().to_string(),
+            };
+            format!("{at}: field `{}` {}", p.problem.field, p.problem.message)
+        })
+        .collect();
+    lines.join("\n")
 }
-
-impl std::error::Error for VariantError {}
 
 /// A parsed and checked variant, with where it came from.
 #[derive(Clone, Debug)]
