@@ -1,5 +1,6 @@
-//! CPU twins of the GPU modules, in f64, written from the math (see DESIGN.md). They are the
-//! oracles that the WGSL is tested against, and `reference` shades whole frames with them.
+//! CPU twins of the GPU modules, in f64, written from the math (see docs/ARCHITECTURE.md).
+//! They are the oracles that the WGSL is tested against, and `frame` shades whole frames
+//! with them. They import only `common`: never the variant schema or the scenes.
 
 pub mod clusters;
 pub mod color;

@@ -1,5 +1,5 @@
 //! Twin of `shaders/shading/` and `shaders/common/lights.wesl`: one light's contribution to
-//! one surface point, from the formulas in DESIGN.md.
+//! one surface point, from the formulas in docs/ARCHITECTURE.md.
 
 use glam::DVec3;
 
