@@ -24,6 +24,10 @@ fn loaded(name: &str, variant: Variant) -> LoadedVariant {
     }
 }
 
+/// A depth range like the built-in scenes' cameras (for the schemes' example parameters).
+const SCENE_NEAR: f64 = 0.1;
+const SCENE_FAR: f64 = 60.0;
+
 fn clustered(pipeline: Pipeline, slicing: ZSlicing) -> Variant {
     Variant {
         description: "test".into(),
@@ -41,23 +45,11 @@ fn clustered(pipeline: Pipeline, slicing: ZSlicing) -> Variant {
 /// options (no pre-pass, active clusters, sample bounds, CPU assignment), and scissor
 /// deferred: all with exact lists and full-precision G-buffers.
 fn exact_variants() -> Vec<LoadedVariant> {
-    let schemes = [
-        ZSlicing::Linear,
-        ZSlicing::Exponential,
-        ZSlicing::NearSliceThenExponential {
-            near_slice_end: 3.0,
-        },
-        ZSlicing::OlssonCubic,
-        ZSlicing::DynamicRange {
-            source: DepthRangeSource::CurrentFrame,
-        },
-        ZSlicing::DynamicRange {
-            source: DepthRangeSource::PreviousFrame,
-        },
-    ];
+    // Every scheme of the schema's list, with parameters for the built-in scenes' cameras.
+    let schemes = ZSlicing::every(SCENE_NEAR, SCENE_FAR);
     let mut out = Vec::new();
     for pipeline in [Pipeline::ClusteredForward, Pipeline::ClusteredDeferred] {
-        for s in schemes {
+        for &s in &schemes {
             out.push(loaded(
                 &format!("{pipeline:?} {s:?}"),
                 clustered(pipeline, s),
@@ -270,14 +262,11 @@ fn assert_lists_match(gpu: &Gpu, v: &Variant, scene: &Scene, what: &str) {
 #[test]
 fn gpu_light_lists_equal_the_cpu_twin_on_random_scenes() {
     let gpu = gpu();
-    for slicing in [
-        ZSlicing::Linear,
-        ZSlicing::Exponential,
-        ZSlicing::NearSliceThenExponential {
-            near_slice_end: 2.0,
-        },
-        ZSlicing::OlssonCubic,
-    ] {
+    // Every static scheme: the twin's lists assume the camera's range.
+    let static_schemes = ZSlicing::every(SCENE_NEAR, SCENE_FAR)
+        .into_iter()
+        .filter(|s| !matches!(s, ZSlicing::DynamicRange { .. }));
+    for slicing in static_schemes {
         let v = clustered(Pipeline::ClusteredForward, slicing);
         for (name, seed) in [("atrium", 1), ("atrium", 7), ("spheres", 3)] {
             let mut p = small(name, 128, 72, Some(512));
