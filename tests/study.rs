@@ -177,7 +177,10 @@ fn slicing_counts_what_shading_does() {
     )
     .expect("slicing study");
     // Every scheme on every grid, then tiled and Olsson's clustered shading.
-    assert_eq!(rows.len(), slicing::GRIDS.len() * 6 + 2);
+    assert_eq!(
+        rows.len(),
+        slicing::GRIDS.len() * slicing::schemes(0.1, 60.0).len() + 2
+    );
     let useful = rows[0].useful_evaluations;
     for r in &rows {
         assert!(r.error.is_none(), "{} {}: {:?}", r.scheme, r.grid, r.error);
