@@ -63,6 +63,11 @@ pub enum ZSlicing {
         /// Whose depth gives the range.
         source: DepthRangeSource,
     },
+    /// Equal steps in device depth (NDC z), as a grid laid over the depth buffer is:
+    /// `slice = floor((1/near - 1/z) / (1/near - 1/far) * Z)`. Every perspective mapping
+    /// stores an affine function of 1/z, so the steps are equal whatever the mapping; most
+    /// slices crowd near the camera.
+    NdcUniform,
 }
 
 /// Where a dynamic depth range comes from.
@@ -189,6 +194,7 @@ impl ZSlicing {
             ZSlicing::DynamicRange {
                 source: DepthRangeSource::PreviousFrame,
             } => "dynamic (previous frame)",
+            ZSlicing::NdcUniform => "NDC uniform",
         }
     }
 

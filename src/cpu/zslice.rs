@@ -61,6 +61,11 @@ impl Slices {
             ZSlicing::OlssonCubic => {
                 clamp_slice(((z / near).ln() / self.olsson_ratio().ln()).floor(), n)
             }
+            // (1/near - 1/z) / (1/near - 1/far), scaled by near.
+            ZSlicing::NdcUniform => clamp_slice(
+                ((1.0 - near / z) / (1.0 - near / far) * n as f64).floor(),
+                n,
+            ),
         }
     }
 
@@ -82,6 +87,8 @@ impl Slices {
                 }
             }
             ZSlicing::OlssonCubic => near * self.olsson_ratio().powi(k as i32),
+            // 1/z falls in equal steps from 1/near to 1/far.
+            ZSlicing::NdcUniform => near / (1.0 - t * (1.0 - near / far)),
         }
     }
 
