@@ -39,6 +39,7 @@ fn composed_wgsl_of_every_distinct_pass() {
         }
     }
     let mut names = Vec::new();
+    let mut stale_headers = Vec::new();
     for ((pass, wgsl), users) in &shaders {
         let name = format!("{pass}@{}", users[0]);
         let mut settings = snapshot_settings("wgsl");
@@ -48,8 +49,33 @@ fn composed_wgsl_of_every_distinct_pass() {
             users.join(", ")
         ));
         settings.bind(|| insta::assert_snapshot!(name.clone(), wgsl));
+        // insta compares the body only: check the header still names every user.
+        let file = format!("snapshots/wgsl/{name}.snap");
+        let header = std::fs::read_to_string(&file)
+            .ok()
+            .and_then(|t| {
+                t.lines()
+                    .find(|l| l.starts_with("description:"))
+                    .map(String::from)
+            })
+            .unwrap_or_default();
+        let listed: Vec<&str> = header
+            .split(": ")
+            .nth(2)
+            .unwrap_or("")
+            .trim_end_matches('"')
+            .split(", ")
+            .collect();
+        if listed != users.iter().map(String::as_str).collect::<Vec<_>>() {
+            stale_headers.push(file);
+        }
         names.push(format!("{name}.snap"));
     }
+    assert!(
+        stale_headers.is_empty(),
+        "snapshot headers that do not list the variants sharing the shader (rewrite them \
+         with `INSTA_FORCE_UPDATE=1 INSTA_UPDATE=always cargo test --test compose`): {stale_headers:?}"
+    );
     // No snapshot is left that no shader produces.
     let stale: Vec<String> = std::fs::read_dir("snapshots/wgsl")
         .expect("snapshots/wgsl")
