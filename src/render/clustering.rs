@@ -3,7 +3,7 @@
 //! buffers they clear and their dispatches.
 
 use super::clusters::{ClusterBuffers, SCAN_BLOCK};
-use super::passes::ComputePipelines;
+use super::passes::{ComputePipelines, set_compute_groups};
 use crate::compose::ClusterPass;
 use crate::gpu::TimestampSlot;
 
@@ -40,14 +40,6 @@ pub struct Extent {
     pub lights: u32,
 }
 
-fn set_groups(pass: &mut wgpu::ComputePass<'_>, groups: &[Option<wgpu::BindGroup>]) {
-    for (i, g) in groups.iter().enumerate() {
-        if let Some(g) = g {
-            pass.set_bind_group(i as u32, g, &[]);
-        }
-    }
-}
-
 /// Encode one clustering pass: clear what it accumulates into, then its dispatches.
 pub fn encode(
     pass: ClusterPass,
@@ -73,7 +65,7 @@ pub fn encode(
         label: Some(<&str>::from(pass)),
         timestamp_writes: TimestampSlot::compute(slot),
     });
-    set_groups(&mut cp, groups);
+    set_compute_groups(&mut cp, groups);
     let pixels = (
         dispatch_size(extent.width, 8),
         dispatch_size(extent.height, 8),
@@ -119,7 +111,7 @@ pub fn encode_visible_count(
     // The `active_clusters` counter: the third u32 of the stats.
     encoder.clear_buffer(&c.stats, 8, Some(4));
     let mut cp = encoder.begin_compute_pass(&Default::default());
-    set_groups(&mut cp, groups);
+    set_compute_groups(&mut cp, groups);
     cp.set_pipeline(p.get("mark_visible"));
     cp.dispatch_workgroups(
         dispatch_size(extent.width, 8),

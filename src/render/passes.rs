@@ -164,3 +164,38 @@ pub fn clear_attachment(view: &wgpu::TextureView) -> Option<wgpu::RenderPassColo
         },
     })
 }
+
+/// Begin render pass `label` with these attachments, timed in `slot`, with a pass's bind
+/// groups set (a group it does not use is a gap).
+pub fn begin_render<'e>(
+    encoder: &'e mut wgpu::CommandEncoder,
+    label: &str,
+    colors: &[Option<wgpu::RenderPassColorAttachment<'_>>],
+    depth: Option<wgpu::RenderPassDepthStencilAttachment<'_>>,
+    slot: Option<TimestampSlot<'_>>,
+    groups: &[Option<wgpu::BindGroup>],
+) -> wgpu::RenderPass<'e> {
+    let mut rp = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+        label: Some(label),
+        color_attachments: colors,
+        depth_stencil_attachment: depth,
+        timestamp_writes: TimestampSlot::render(slot),
+        occlusion_query_set: None,
+        multiview_mask: None,
+    });
+    for (i, g) in groups.iter().enumerate() {
+        if let Some(g) = g {
+            rp.set_bind_group(i as u32, g, &[]);
+        }
+    }
+    rp
+}
+
+/// Set a pass's bind groups on a compute pass (a group it does not use is a gap).
+pub fn set_compute_groups(cp: &mut wgpu::ComputePass<'_>, groups: &[Option<wgpu::BindGroup>]) {
+    for (i, g) in groups.iter().enumerate() {
+        if let Some(g) = g {
+            cp.set_bind_group(i as u32, g, &[]);
+        }
+    }
+}

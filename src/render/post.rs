@@ -6,7 +6,7 @@
 //! its bright and blurred parts in two more; only the images a variant's steps use exist.
 
 use super::RenderError;
-use super::passes::ComputePipelines;
+use super::passes::{ComputePipelines, set_compute_groups};
 use super::reflect::PassLayout;
 use super::resources::{FrameResources, Target};
 use crate::compose::{ComposedPass, PostPass};
@@ -266,11 +266,7 @@ impl PostChain {
             timestamp_writes: TimestampSlot::compute(slot),
         });
         for s in self.steps.iter().filter(|s| s.pass == pass) {
-            for (i, g) in s.groups.iter().enumerate() {
-                if let Some(g) = g {
-                    cp.set_bind_group(i as u32, g, &[]);
-                }
-            }
+            set_compute_groups(&mut cp, &s.groups);
             cp.set_pipeline(&s.pipeline);
             match &self.blur_dispatch {
                 Some(b) if pass == PostPass::BloomBlur && self.indirect_blur => {

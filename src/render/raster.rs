@@ -2,7 +2,7 @@
 //! forward shading). Their pipelines, attachments and draws.
 
 use super::gbuffer;
-use super::passes::{clear_attachment, color_target, render_pipeline};
+use super::passes::{begin_render, clear_attachment, color_target, render_pipeline};
 use super::resources::{DepthSetup, SceneBuffers, Targets};
 use crate::compose::{ComposedPass, RasterPass};
 use crate::gpu::{Gpu, TimestampSlot};
@@ -92,19 +92,8 @@ pub fn encode(
             depth(!variant.depth_prepass),
         ),
     };
-    let mut rp = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-        label: Some(<&str>::from(pass)),
-        color_attachments: &colors,
-        depth_stencil_attachment: depth,
-        timestamp_writes: TimestampSlot::render(slot),
-        occlusion_query_set: None,
-        multiview_mask: None,
-    });
-    for (i, g) in groups.iter().enumerate() {
-        if let Some(g) = g {
-            rp.set_bind_group(i as u32, g, &[]);
-        }
-    }
+    let label = <&str>::from(pass);
+    let mut rp = begin_render(encoder, label, &colors, depth, slot, groups);
     rp.set_pipeline(&pipelines[0]);
     rp.set_vertex_buffer(0, scene.vertices.slice(..));
     rp.set_index_buffer(scene.indices.slice(..), wgpu::IndexFormat::Uint32);

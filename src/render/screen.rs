@@ -2,7 +2,7 @@
 //! (deferred resolve, scissor-rectangle lights, the debug views, tonemapping). Their
 //! pipelines, bindings, attachments and draws.
 
-use super::passes::{clear_attachment, color_target, render_pipeline};
+use super::passes::{begin_render, clear_attachment, color_target, render_pipeline};
 use super::resources::{FrameResources, LDR_FORMAT};
 use crate::compose::{ComposedPass, ScreenPass};
 use crate::gpu::{Gpu, TimestampSlot};
@@ -76,19 +76,8 @@ pub fn encode(
         ScreenPass::Resolve | ScreenPass::ScissorLights => &t.hdr.view,
         ScreenPass::DebugView | ScreenPass::Tonemap => &t.ldr.view,
     };
-    let mut rp = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-        label: Some(<&str>::from(pass)),
-        color_attachments: &[clear_attachment(target)],
-        depth_stencil_attachment: None,
-        timestamp_writes: TimestampSlot::render(slot),
-        occlusion_query_set: None,
-        multiview_mask: None,
-    });
-    for (i, g) in groups.iter().enumerate() {
-        if let Some(g) = g {
-            rp.set_bind_group(i as u32, g, &[]);
-        }
-    }
+    let colors = [clear_attachment(target)];
+    let mut rp = begin_render(encoder, pass.into(), &colors, None, slot, groups);
     rp.set_pipeline(&pipelines[0]);
     rp.draw(0..3, 0..1);
     if pass == ScreenPass::ScissorLights {
