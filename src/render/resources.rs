@@ -1,5 +1,5 @@
 //! GPU-side scene data: the view uniform, vertex, index and light buffers, render targets,
-//! and the bind group layouts shared by the passes.
+//! counters, and which of them fills each bind group slot of the scene passes.
 
 use bytemuck::{Pod, Zeroable};
 use glam::DMat4;
