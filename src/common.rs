@@ -15,16 +15,91 @@ pub struct Vertex {
     pub position: [f32; 3],
     pub normal: [f32; 3],
     pub albedo: [f32; 3],
+    /// Perceptual roughness and metallic, each in [0, 1] (read by GGX shading only).
+    pub material: [f32; 2],
 }
 
-/// A point light. Mirrors `shaders/common/lights.wesl`.
+/// A point or spot light, 48 bytes. Mirrors `shaders/common/lights.wesl`.
+///
+/// Three 16-byte rows: position and radius; colour (already times the intensity: the shaders
+/// only ever use the product) and the outer cone's cosine; the cone's axis and the inner
+/// cone's cosine. A point light is a spot whose outer cosine is -1 (the whole sphere).
+/// Folding the intensity into the colour keeps the spot cone inside 48 bytes instead of 64:
+/// the light loop reads one light per evaluation, so its size is read bandwidth.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct Light {
     pub position: [f32; 3],
+    /// Distance at which the light's contribution reaches exactly zero.
     pub radius: f32,
+    /// Linear RGB radiant intensity: colour times intensity.
     pub color: [f32; 3],
-    pub intensity: f32,
+    /// Cosine of the outer cone's half-angle: no light at or beyond it. -1 for a point light.
+    pub cos_outer: f32,
+    /// Unit cone axis (spot lights; zero for point lights).
+    pub direction: [f32; 3],
+    /// Cosine of the inner cone's half-angle: full light within it, a smooth step between
+    /// the two cones.
+    pub cos_inner: f32,
+}
+
+/// Largest outer cone half-angle a spot may have, in degrees (a wider cone is a point light
+/// with a dark half, which the cone culling does not model).
+pub const MAX_SPOT_ANGLE_DEGREES: f64 = 90.0;
+
+impl Light {
+    /// A point light of `color` times `intensity`.
+    pub fn point(position: [f32; 3], radius: f32, color: [f32; 3], intensity: f32) -> Light {
+        Light {
+            position,
+            radius,
+            color: color.map(|c| c * intensity),
+            cos_outer: -1.0,
+            direction: [0.0; 3],
+            cos_inner: -1.0,
+        }
+    }
+
+    /// A spot light shining along `direction` (normalised here), full within `inner_degrees`
+    /// of its axis and dark from `outer_degrees` on (0 < inner <= outer <= 90).
+    pub fn spot(
+        position: [f32; 3],
+        radius: f32,
+        color: [f32; 3],
+        intensity: f32,
+        direction: [f64; 3],
+        inner_degrees: f64,
+        outer_degrees: f64,
+    ) -> Light {
+        let d = glam::DVec3::from(direction).normalize_or(glam::DVec3::NEG_Y);
+        let outer = outer_degrees.clamp(0.0, MAX_SPOT_ANGLE_DEGREES);
+        let inner = inner_degrees.clamp(0.0, outer);
+        Light {
+            direction: d.as_vec3().to_array(),
+            cos_outer: outer.to_radians().cos() as f32,
+            cos_inner: inner.to_radians().cos() as f32,
+            ..Light::point(position, radius, color, intensity)
+        }
+    }
+
+    /// Whether this light is a spot (its outer cone is narrower than the whole sphere).
+    pub fn is_spot(&self) -> bool {
+        self.cos_outer > -1.0
+    }
+}
+
+/// The light-against-cluster test of spot lights. Both are conservative: a spot that lights
+/// any point of a cluster is always in its list.
+#[derive(
+    Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, JsonSchema, EnumIter,
+)]
+pub enum SpotTest {
+    /// The bounding sphere of the cone (its spherical sector), tested like a point light.
+    Sphere,
+    /// The bounding sphere, then the cone against the cluster's bounding sphere (Wronski
+    /// 2017, "Cull that cone"): a cluster beside or behind the cone is left out.
+    #[default]
+    Cone,
 }
 
 /// Which way depth runs and where the projection's far plane is.

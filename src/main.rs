@@ -160,7 +160,7 @@ struct MatrixArgs {
     #[arg(long, value_delimiter = ',')]
     scenes: Vec<String>,
     /// A swept parameter: lights=64,256,...  radius=1,2..4,...  grid=16x9x24,...
-    /// Repeat for a grid of sweeps.
+    /// spots=0,0.5,1  skipping=on,off. Repeat for a grid of sweeps.
     #[arg(long, value_parser = clusterlab::matrix::parse_sweep)]
     sweep: Vec<clusterlab::matrix::Sweep>,
     /// Image size of every cell, WIDTHxHEIGHT (default: each scene's).
@@ -211,6 +211,9 @@ struct RenderArgs {
     /// Time of the frame in seconds (lights and camera move with it).
     #[arg(long)]
     time: Option<f64>,
+    /// Fraction of the lights that are spots, in 0..=1 (default: the scene's).
+    #[arg(long, value_parser = parse_fraction)]
+    spots: Option<f32>,
     /// Frames to render; times are the median per pass.
     #[arg(long, default_value_t = 1)]
     frames: u32,
@@ -232,6 +235,15 @@ struct RenderArgs {
     /// Print one JSON object instead of a summary.
     #[arg(long)]
     json: bool,
+}
+
+/// A fraction in 0..=1.
+fn parse_fraction(s: &str) -> Result<f32, String> {
+    s.trim()
+        .parse::<f32>()
+        .ok()
+        .filter(|f| (0.0..=1.0).contains(f))
+        .ok_or_else(|| format!("`{s}` is not a fraction in 0..=1 (e.g. 0.5)"))
 }
 
 fn parse_size(s: &str) -> Result<(u32, u32), String> {
@@ -434,8 +446,15 @@ fn scenes() {
         let d = &s.defaults;
         println!("{:<10} {}", s.name, s.description);
         println!(
-            "           default: {}x{}, {} lights, radius {}..{}, seed {}, time {}",
-            d.width, d.height, d.lights, d.radius_range.0, d.radius_range.1, d.seed, d.time
+            "           default: {}x{}, {} lights ({} spots), radius {}..{}, seed {}, time {}",
+            d.width,
+            d.height,
+            d.lights,
+            d.spots,
+            d.radius_range.0,
+            d.radius_range.1,
+            d.seed,
+            d.time
         );
     }
 }
@@ -473,6 +492,7 @@ fn render(args: &RenderArgs) -> Result<bool, String> {
     params.seed = args.seed.unwrap_or(params.seed);
     params.radius_range = args.radius.unwrap_or(params.radius_range);
     params.time = args.time.unwrap_or(params.time);
+    params.spots = args.spots.unwrap_or(params.spots);
     if params.width == 0 || params.height == 0 {
         return Err(format!(
             "size {}x{}: width and height must be at least 1",

@@ -172,6 +172,7 @@ fn capped_lists_drop_lights_exactly_when_the_cap_bites() {
         &grid,
         &cpu::cluster_bounds(&grid),
         &cpu::view_lights(&scene.lights, scene.camera.view()),
+        SpotTest::Cone,
         None,
         None,
     );
@@ -219,7 +220,7 @@ fn assert_lists_match(gpu: &Gpu, v: &Variant, scene: &Scene, what: &str) {
     let grid: Grid = Grid::of(v, scene);
     let bounds = cpu::cluster_bounds(&grid);
     let lights = cpu::view_lights(&scene.lights, scene.camera.view());
-    let want = cpu::assign(&grid, &bounds, &lights, None, None);
+    let want = cpu::assign(&grid, &bounds, &lights, SpotTest::Cone, None, None);
     let mut compared = 0;
     for (c, set) in got.iter().enumerate() {
         let expected: BTreeSet<u32> = want.list(c).iter().copied().collect();
@@ -230,7 +231,7 @@ fn assert_lists_match(gpu: &Gpu, v: &Variant, scene: &Scene, what: &str) {
             "{what}: cluster {c} not ascending"
         );
         for &i in set.symmetric_difference(&expected) {
-            let (center, radius) = lights[i as usize];
+            let cpu::ViewLight { center, radius, .. } = lights[i as usize];
             let b = bounds[c].expect("a listed cluster has a box");
             let (x, y) = (c as u32 % grid.x, (c as u32 / grid.x) % grid.y);
             let wider = cpu::sphere_touches_cluster(&grid, center, radius * (1.0 + 1e-4), &b, x, y);
@@ -280,12 +281,7 @@ fn gpu_light_lists_equal_the_cpu_twin_on_random_scenes() {
 /// A light at view position `p` (x right, y up, -z forward) with `radius`.
 fn light_at_view(scene: &Scene, p: DVec3, radius: f32) -> Light {
     let world = scene.camera.view().inverse().transform_point3(p);
-    Light {
-        position: world.as_vec3().to_array(),
-        radius,
-        color: [1.0, 1.0, 1.0],
-        intensity: 1.0,
-    }
+    Light::point(world.as_vec3().to_array(), radius, [1.0; 3], 1.0)
 }
 
 #[test]
@@ -483,7 +479,14 @@ fn lists_that_outgrow_their_buffer_grow_it_and_stay_exact() {
     );
     let grid = Grid::of(&v.variant, &scene);
     let lights = cpu::view_lights(&scene.lights, scene.camera.view());
-    let want = cpu::assign(&grid, &cpu::cluster_bounds(&grid), &lights, None, None);
+    let want = cpu::assign(
+        &grid,
+        &cpu::cluster_bounds(&grid),
+        &lights,
+        SpotTest::Cone,
+        None,
+        None,
+    );
     let total = want.indices.len() as u64;
     // f32 and f64 may decide a borderline light differently (see assert_lists_match).
     assert!(

@@ -321,11 +321,8 @@ fn gpu_light_assignment_keeps_every_touching_light() {
         (-12.0..12.0f64, -4.0..10.0f64, -12.0..14.0f64),
         prop_oneof![1 => Just(0.0f32), 4 => 0.01..8.0f32],
     )
-        .prop_map(|((x, y, z), radius)| Light {
-            position: [x as f32, y as f32, z as f32],
-            radius,
-            color: [1.0; 3],
-            intensity: 1.0,
+        .prop_map(|((x, y, z), radius)| {
+            Light::point([x as f32, y as f32, z as f32], radius, [1.0; 3], 1.0)
         });
     let variants: Vec<_> = clusterlab::stress::cases()
         .into_iter()

@@ -22,6 +22,11 @@ pub fn feature_flags(v: &Variant) -> Vec<(&'static str, bool)> {
             "blinn_phong",
             matches!(v.shading.model, ShadingModel::BlinnPhong { .. }),
         ),
+        ("ggx", v.shading.model == ShadingModel::Ggx),
+        (
+            "spot_cone_test",
+            p.is_clustered() && clusters.spot_test == SpotTest::Cone,
+        ),
         ("clustered", p.is_clustered()),
         ("deferred", deferred),
         ("depth_prepass", v.depth_prepass),
@@ -94,7 +99,7 @@ pub fn feature_flags(v: &Variant) -> Vec<(&'static str, bool)> {
 pub fn constants_module(v: &Variant) -> String {
     let clusters = v.clusters();
     let (shininess, specular) = match v.shading.model {
-        ShadingModel::Lambert => (1.0, 0.0),
+        ShadingModel::Lambert | ShadingModel::Ggx => (1.0, 0.0),
         ShadingModel::BlinnPhong {
             shininess,
             specular,

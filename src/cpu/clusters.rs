@@ -5,8 +5,7 @@
 use glam::{DMat4, DVec2, DVec3};
 
 use super::zslice::Slices;
-use crate::common::Light;
-use crate::common::ZSlicing;
+use crate::common::{Light, SpotTest, ZSlicing};
 
 /// Relative padding of every box (as in the shaders).
 pub const BOUNDS_PADDING: f64 = 1e-4;
@@ -163,15 +162,120 @@ pub fn sphere_touches_cluster(
         && reaches(center.y, top, -1.0)
 }
 
-/// Light positions in view space, with their radii.
-pub fn view_lights(lights: &[Light], view_from_world: DMat4) -> Vec<(DVec3, f64)> {
+/// Widening of a spot's outer cone, in cosine, before it is tested (the shading compares
+/// an f32 cosine with rounding near 1e-7 against the cone's).
+pub const CONE_COS_SLACK: f64 = 1e-6;
+/// Relative widening of a spot's bounding sphere and of the cone test's distances.
+pub const SPOT_SLACK: f64 = 1e-5;
+
+/// A spot's cone in view space: apex, unit axis, range, and the cosine and sine of its outer
+/// half-angle widened by [`CONE_COS_SLACK`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ViewCone {
+    pub apex: DVec3,
+    pub axis: DVec3,
+    pub range: f64,
+    pub cos: f64,
+    pub sin: f64,
+}
+
+/// A light in view space: the sphere every cluster test starts from (a point light's own,
+/// a spot's bounding sphere), and a spot's cone.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ViewLight {
+    pub center: DVec3,
+    pub radius: f64,
+    pub cone: Option<ViewCone>,
+}
+
+/// The smallest sphere around the spherical sector of a cone (apex, unit axis, range r,
+/// half-angle with cosine c): for half-angles up to 45 degrees the sphere through the apex and
+/// the rim, centre at r / (2c) along the axis; up to 90 the sphere of the rim circle, centre
+/// at r c, radius r sqrt(1 - c^2); wider, the light's own sphere.
+pub fn cone_bounding_sphere(apex: DVec3, axis: DVec3, range: f64, cos: f64) -> (DVec3, f64) {
+    let (center, radius) = if cos >= std::f64::consts::FRAC_1_SQRT_2 {
+        let r = range / (2.0 * cos);
+        (apex + axis * r, r)
+    } else if cos > 0.0 {
+        (
+            apex + axis * (range * cos),
+            range * ((1.0 - cos) * (1.0 + cos)).sqrt(),
+        )
+    } else {
+        (apex, range)
+    };
+    (center, radius * (1.0 + SPOT_SLACK))
+}
+
+/// Wronski 2017 ("Cull that cone"): whether a cone's spherical sector may reach the sphere
+/// (center, radius). Rejects a sphere wholly beside the cone (its distance to the cone's
+/// side, measured in the plane of the axis, above its radius), beyond the range along the
+/// axis, or behind the apex. Conservative: each rejection is of a region the cone misses.
+pub fn cone_touches_sphere(cone: &ViewCone, center: DVec3, radius: f64) -> bool {
+    let d = center - cone.apex;
+    let along = d.dot(cone.axis);
+    let across = (d - cone.axis * along).length();
+    let slack = SPOT_SLACK * (radius + d.length()) + 1e-6;
+    let beside = cone.cos * across - along * cone.sin > radius + slack;
+    let beyond = along > radius + cone.range + slack;
+    let behind = along < -radius - slack;
+    !(beside || beyond || behind)
+}
+
+/// Lights in view space, for cluster tests.
+pub fn view_lights(lights: &[Light], view_from_world: DMat4) -> Vec<ViewLight> {
     lights
         .iter()
         .map(|l| {
-            let p = DVec3::from(l.position.map(f64::from));
-            (view_from_world.transform_point3(p), l.radius as f64)
+            let apex = view_from_world.transform_point3(DVec3::from(l.position.map(f64::from)));
+            let range = l.radius as f64;
+            if !l.is_spot() {
+                return ViewLight {
+                    center: apex,
+                    radius: range,
+                    cone: None,
+                };
+            }
+            let axis = view_from_world
+                .transform_vector3(DVec3::from(l.direction.map(f64::from)))
+                .normalize_or_zero();
+            let cos = l.cos_outer as f64 - CONE_COS_SLACK;
+            let (center, radius) = cone_bounding_sphere(apex, axis, range, cos);
+            ViewLight {
+                center,
+                radius,
+                cone: Some(ViewCone {
+                    apex,
+                    axis,
+                    range,
+                    cos,
+                    sin: ((1.0 - cos) * (1.0 + cos)).max(0.0).sqrt(),
+                }),
+            }
         })
         .collect()
+}
+
+/// The full test of a light against cluster (x, y) with box `b`: the sphere test, then with
+/// `SpotTest::Cone` a spot's cone against the box's bounding sphere.
+pub fn light_touches_cluster(
+    grid: &Grid,
+    light: &ViewLight,
+    spot_test: SpotTest,
+    b: &Aabb,
+    x: u32,
+    y: u32,
+) -> bool {
+    if !sphere_touches_cluster(grid, light.center, light.radius, b, x, y) {
+        return false;
+    }
+    match (light.cone, spot_test) {
+        (Some(cone), SpotTest::Cone) => {
+            let mid = (b.min + b.max) * 0.5;
+            cone_touches_sphere(&cone, mid, (b.max - b.min).length() * 0.5)
+        }
+        _ => true,
+    }
 }
 
 /// Compacted light lists, as the GPU builds them.
@@ -194,13 +298,14 @@ impl ClusterLists {
     }
 }
 
-/// Assign lights to clusters: each list holds, in ascending index order, the lights whose
-/// sphere touches the cluster, up to `cap` if given. Clusters where `active` is false get
-/// empty lists.
+/// Assign lights to clusters: each list holds, in ascending index order, the lights that
+/// touch the cluster (`light_touches_cluster`), up to `cap` if given. Clusters where `active`
+/// is false get empty lists.
 pub fn assign(
     grid: &Grid,
     bounds: &[Option<Aabb>],
-    lights: &[(DVec3, f64)],
+    lights: &[ViewLight],
+    spot_test: SpotTest,
     cap: Option<u32>,
     active: Option<&[bool]>,
 ) -> ClusterLists {
@@ -217,8 +322,8 @@ pub fn assign(
             && active.is_none_or(|a| a[c])
         {
             let (x, y) = (c as u32 % grid.x, (c as u32 / grid.x) % grid.y);
-            for (i, &(center, radius)) in lights.iter().enumerate() {
-                if sphere_touches_cluster(grid, center, radius, b, x, y) {
+            for (i, light) in lights.iter().enumerate() {
+                if light_touches_cluster(grid, light, spot_test, b, x, y) {
                     touching += 1;
                     if cap.is_none_or(|cap| kept < cap) {
                         out.indices.push(i as u32);
@@ -232,4 +337,61 @@ pub fn assign(
         out.counts.push(kept);
     }
     out
+}
+
+/// A light's own cone in view space, not widened: apex, unit axis, range, outer cosine.
+fn exact_view_cone(light: &Light, view_from_world: DMat4) -> (DVec3, DVec3, f64, f64) {
+    let apex = view_from_world.transform_point3(DVec3::from(light.position.map(f64::from)));
+    let axis = view_from_world
+        .transform_vector3(DVec3::from(light.direction.map(f64::from)))
+        .normalize_or_zero();
+    (apex, axis, light.radius as f64, light.cos_outer as f64)
+}
+
+/// Whether view-space point `p` is clearly lit by the spot (apex, axis, range, outer
+/// cosine): closer than the range by a relative 1e-4, inside the cone by 2e-6 in cosine, so
+/// that no rounding of the GPU's can decide it.
+pub fn clearly_in_sector(cone: (DVec3, DVec3, f64, f64), p: DVec3) -> bool {
+    let (apex, axis, range, cos_outer) = cone;
+    let d = p - apex;
+    let len = d.length();
+    len > 0.0 && len < range * (1.0 - 1e-4) && d.dot(axis) / len > cos_outer + 2e-6
+}
+
+/// An independent f64 check of the cone tests: a point of the frustum piece of tile (x, y)
+/// (y from the top) between view depths z0 and z1 that the spot clearly lights, sampled on
+/// an n x n x n lattice of the piece (its corners and faces included); None when no sample
+/// is lit.
+pub fn spot_point_in_piece(
+    grid: &Grid,
+    light: &Light,
+    view_from_world: DMat4,
+    x: u32,
+    y: u32,
+    (z0, z1): (f64, f64),
+    n: u32,
+) -> Option<DVec3> {
+    let cone = exact_view_cone(light, view_from_world);
+    let step = DVec2::new(2.0 / grid.x as f64, 2.0 / grid.y as f64);
+    let t = |i: u32| i as f64 / (n - 1).max(1) as f64;
+    for i in 0..n {
+        for j in 0..n {
+            let ndc = DVec2::new(
+                -1.0 + (x as f64 + t(i)) * step.x,
+                1.0 - (y as f64 + t(j)) * step.y,
+            );
+            let ray = DVec3::new(
+                ndc.x * grid.tan_half_fov_y * grid.aspect,
+                ndc.y * grid.tan_half_fov_y,
+                -1.0,
+            );
+            for k in 0..n {
+                let p = ray * (z0 + (z1 - z0) * t(k));
+                if clearly_in_sector(cone, p) {
+                    return Some(p);
+                }
+            }
+        }
+    }
+    None
 }

@@ -13,17 +13,22 @@ pub const MIN_DISTANCE_SQUARED: f64 = 1e-4;
 pub struct ShadingParams {
     /// (shininess, specular strength) for Blinn-Phong; None for Lambert.
     pub blinn_phong: Option<(f64, f64)>,
+    /// Metallic-roughness GGX instead of Lambert or Blinn-Phong.
+    pub ggx: bool,
     pub ambient: f64,
     /// Toon bands applied to each light's diffuse term (toon in the shading pass).
     pub toon_bands: Option<u32>,
 }
 
-/// A surface point: world position, unit normal, linear albedo.
+/// A surface point: world position, unit normal, linear albedo (GGX: base colour), and
+/// perceptual roughness and metallic.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Surface {
     pub position: DVec3,
     pub normal: DVec3,
     pub albedo: DVec3,
+    pub roughness: f64,
+    pub metallic: f64,
 }
 
 /// Karis's window: (1 - (d/r)^4)^2 clamped to [0, 1]; zero for d >= r.
@@ -55,6 +60,81 @@ pub fn blinn_phong(n: DVec3, l: DVec3, v: DVec3, shininess: f64) -> f64 {
     n.dot(h.normalize()).max(0.0).powf(shininess)
 }
 
+/// The cone's angular falloff for `l`, the unit vector from the surface to the light: 1 for
+/// a point light and inside the inner cone, 0 at and beyond the outer cone, a smoothstep of
+/// the cosine between them.
+pub fn spot_factor(light: &Light, l: DVec3) -> f64 {
+    let cos_outer = light.cos_outer as f64;
+    let cos_inner = light.cos_inner as f64;
+    if cos_outer <= -1.0 {
+        return 1.0;
+    }
+    let cos_angle = -l.dot(DVec3::from(light.direction.map(f64::from)));
+    if cos_angle <= cos_outer {
+        return 0.0;
+    }
+    if cos_angle >= cos_inner {
+        return 1.0;
+    }
+    let t = (cos_angle - cos_outer) / (cos_inner - cos_outer);
+    t * t * (3.0 - 2.0 * t)
+}
+
+/// Smallest perceptual roughness GGX shades with (as in the shaders).
+pub const MIN_PERCEPTUAL_ROUGHNESS: f64 = 0.045;
+
+/// GGX's alpha for a perceptual roughness: its square, after the clamp.
+pub fn ggx_alpha(roughness: f64) -> f64 {
+    let r = roughness.clamp(MIN_PERCEPTUAL_ROUGHNESS, 1.0);
+    r * r
+}
+
+/// Trowbridge-Reitz normal distribution `alpha^2 / (pi ((n.h)^2 (alpha^2 - 1) + 1)^2)`.
+pub fn d_ggx(n_dot_h: f64, alpha: f64) -> f64 {
+    let a2 = alpha * alpha;
+    let f = n_dot_h * n_dot_h * (a2 - 1.0) + 1.0;
+    a2 / (std::f64::consts::PI * f * f)
+}
+
+/// Height-correlated Smith visibility `G2 / (4 n.l n.v)` (Heitz 2014, eq. 99):
+/// `0.5 / (n.l sqrt((n.v)^2 (1 - a^2) + a^2) + n.v sqrt((n.l)^2 (1 - a^2) + a^2))`.
+pub fn v_smith_ggx_correlated(n_dot_v: f64, n_dot_l: f64, alpha: f64) -> f64 {
+    let a2 = alpha * alpha;
+    let gv = n_dot_l * (n_dot_v * n_dot_v * (1.0 - a2) + a2).sqrt();
+    let gl = n_dot_v * (n_dot_l * n_dot_l * (1.0 - a2) + a2).sqrt();
+    0.5 / (gv + gl)
+}
+
+/// Schlick's Fresnel `f0 + (1 - f0) (1 - v.h)^5`.
+pub fn f_schlick(v_dot_h: f64, f0: DVec3) -> DVec3 {
+    f0 + (DVec3::ONE - f0) * (1.0 - v_dot_h).powi(5)
+}
+
+/// The specular BRDF `D V F` (without n.l), zero where light or eye is below the surface.
+pub fn ggx_specular(n: DVec3, l: DVec3, v: DVec3, alpha: f64, f0: DVec3) -> DVec3 {
+    let (n_dot_l, n_dot_v) = (n.dot(l), n.dot(v));
+    let h = l + v;
+    if n_dot_l <= 0.0 || n_dot_v <= 0.0 || h.length_squared() <= 0.0 {
+        return DVec3::ZERO;
+    }
+    let h = h.normalize();
+    d_ggx(n.dot(h).max(0.0), alpha)
+        * v_smith_ggx_correlated(n_dot_v, n_dot_l, alpha)
+        * f_schlick(v.dot(h).max(0.0), f0)
+}
+
+/// Metallic-roughness GGX (Filament) times pi and n.l: `((1 - m) base + pi D V F) n.l`,
+/// f0 = 0.04 for dielectrics and the base colour for metals.
+pub fn ggx(n: DVec3, l: DVec3, v: DVec3, base: DVec3, roughness: f64, metallic: f64) -> DVec3 {
+    let n_dot_l = n.dot(l);
+    if n_dot_l <= 0.0 || n.dot(v) <= 0.0 || (l + v).length_squared() <= 0.0 {
+        return DVec3::ZERO;
+    }
+    let f0 = DVec3::splat(0.04).lerp(base, metallic);
+    let specular = ggx_specular(n, l, v, ggx_alpha(roughness), f0);
+    ((1.0 - metallic) * base + std::f64::consts::PI * specular) * n_dot_l
+}
+
 /// Light of `light` reflected from `s` towards the eye (`to_eye` is a unit vector).
 pub fn light_contribution(s: &Surface, to_eye: DVec3, light: &Light, p: &ShadingParams) -> DVec3 {
     let position = DVec3::from(light.position.map(f64::from));
@@ -65,16 +145,25 @@ pub fn light_contribution(s: &Surface, to_eye: DVec3, light: &Light, p: &Shading
         return DVec3::ZERO;
     }
     let l = if d > 0.0 { to_light / d } else { DVec3::ZERO };
-    let mut diffuse = s.normal.dot(l).max(0.0);
-    if let Some(bands) = p.toon_bands {
-        diffuse = toon_ramp(diffuse, bands);
+    let cone = spot_factor(light, l);
+    if cone <= 0.0 {
+        return DVec3::ZERO;
     }
-    let mut reflected = s.albedo * diffuse;
-    if let Some((shininess, specular)) = p.blinn_phong {
-        reflected += DVec3::splat(specular * blinn_phong(s.normal, l, to_eye, shininess));
-    }
+    let reflected = if p.ggx {
+        ggx(s.normal, l, to_eye, s.albedo, s.roughness, s.metallic)
+    } else {
+        let mut diffuse = s.normal.dot(l).max(0.0);
+        if let Some(bands) = p.toon_bands {
+            diffuse = toon_ramp(diffuse, bands);
+        }
+        let mut reflected = s.albedo * diffuse;
+        if let Some((shininess, specular)) = p.blinn_phong {
+            reflected += DVec3::splat(specular * blinn_phong(s.normal, l, to_eye, shininess));
+        }
+        reflected
+    };
     let color = DVec3::from(light.color.map(f64::from));
-    reflected * color * (light.intensity as f64 * attenuation(d, radius))
+    reflected * color * (cone * attenuation(d, radius))
 }
 
 /// The full shading of a point: every light, then the ambient term.

@@ -12,9 +12,9 @@ pub struct RasterTruth {
     pub height: u32,
     /// World position; w = 1 where covered, 0 where background.
     pub position: Vec<[f32; 4]>,
-    /// Unit world normal (xyz).
+    /// Unit world normal (xyz), perceptual roughness (w).
     pub normal: Vec<[f32; 4]>,
-    /// Linear albedo (rgb).
+    /// Linear albedo (rgb), metallic (w).
     pub albedo: Vec<[f32; 4]>,
 }
 
@@ -31,6 +31,8 @@ impl RasterTruth {
             position: DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64),
             normal: DVec3::new(n[0] as f64, n[1] as f64, n[2] as f64).normalize_or_zero(),
             albedo: DVec3::new(a[0] as f64, a[1] as f64, a[2] as f64),
+            roughness: n[3] as f64,
+            metallic: a[3] as f64,
         }
     }
 }

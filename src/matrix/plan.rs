@@ -19,10 +19,12 @@ pub enum Sweep {
     Grid(Vec<(u32, u32, u32)>),
     /// `skip_unneeded` on and off: what skipping saves on the same frame.
     Skipping(Vec<bool>),
+    /// Fractions of spot lights, each in 0..=1.
+    Spots(Vec<f32>),
 }
 
 /// Parse `lights=64,256`, `radius=1,2..4` (a single value r means r..r),
-/// `grid=16x9x24,32x18x48` or `skipping=on,off`.
+/// `grid=16x9x24,32x18x48`, `skipping=on,off` or `spots=0,0.5,1`.
 pub fn parse_sweep(s: &str) -> Result<Sweep, String> {
     let (name, values) = s
         .split_once('=')
@@ -92,8 +94,18 @@ pub fn parse_sweep(s: &str) -> Result<Sweep, String> {
             })
             .collect::<Result<_, _>>()
             .map(Sweep::Skipping),
+        "spots" => items
+            .iter()
+            .map(|v| {
+                v.parse::<f32>()
+                    .ok()
+                    .filter(|f| (0.0..=1.0).contains(f))
+                    .ok_or_else(|| bad(v, "a spot fraction in 0..=1"))
+            })
+            .collect::<Result<_, _>>()
+            .map(Sweep::Spots),
         other => Err(format!(
-            "`{other}` cannot be swept; sweep lights, radius, grid or skipping"
+            "`{other}` cannot be swept; sweep lights, radius, grid, skipping or spots"
         )),
     }
 }
@@ -153,6 +165,9 @@ pub struct ParamsRecord {
     pub radius: [f32; 2],
     pub seed: u64,
     pub time: f64,
+    /// Fraction of spot lights (absent in results written before spots: 0).
+    #[serde(default)]
+    pub spots: f32,
 }
 
 impl From<SceneParams> for ParamsRecord {
@@ -164,6 +179,7 @@ impl From<SceneParams> for ParamsRecord {
             radius: [p.radius_range.0, p.radius_range.1],
             seed: p.seed,
             time: p.time,
+            spots: p.spots,
         }
     }
 }
@@ -177,6 +193,7 @@ impl From<ParamsRecord> for SceneParams {
             radius_range: (p.radius[0], p.radius[1]),
             seed: p.seed,
             time: p.time,
+            spots: p.spots,
         }
     }
 }
@@ -209,8 +226,16 @@ impl CellSpec {
     pub fn group(&self) -> String {
         let p = &self.params;
         format!(
-            "{} {}x{} {} lights r{}..{} seed {} t{}",
-            self.scene, p.width, p.height, p.lights, p.radius[0], p.radius[1], p.seed, p.time
+            "{} {}x{} {} lights r{}..{} seed {} t{} spots {}",
+            self.scene,
+            p.width,
+            p.height,
+            p.lights,
+            p.radius[0],
+            p.radius[1],
+            p.seed,
+            p.time,
+            p.spots
         )
     }
 
@@ -280,6 +305,7 @@ struct Point {
     radius: Option<(f32, f32)>,
     grid: Option<(u32, u32, u32)>,
     skipping: Option<bool>,
+    spots: Option<f32>,
 }
 
 fn sweep_points(sweeps: &[Sweep]) -> Vec<Point> {
@@ -302,6 +328,10 @@ fn sweep_points(sweeps: &[Sweep]) -> Vec<Point> {
                 })),
                 Sweep::Skipping(v) => next.extend(v.iter().map(|&on| Point {
                     skipping: Some(on),
+                    ..p.clone()
+                })),
+                Sweep::Spots(v) => next.extend(v.iter().map(|&f| Point {
+                    spots: Some(f),
                     ..p.clone()
                 })),
             }
@@ -327,6 +357,10 @@ fn make_cell(
     if let Some((a, b)) = point.radius {
         params.radius_range = (a, b);
         sweep.insert("radius".to_string(), format!("{a}..{b}"));
+    }
+    if let Some(f) = point.spots {
+        params.spots = f;
+        sweep.insert("spots".to_string(), f.to_string());
     }
     let mut loaded = entry.loaded.clone();
     let mut grid = None;

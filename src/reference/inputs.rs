@@ -12,12 +12,13 @@ impl ShadingParams {
     pub fn of(v: &Variant) -> Self {
         Self {
             blinn_phong: match v.shading.model {
-                ShadingModel::Lambert => None,
+                ShadingModel::Lambert | ShadingModel::Ggx => None,
                 ShadingModel::BlinnPhong {
                     shininess,
                     specular,
                 } => Some((shininess as f64, specular as f64)),
             },
+            ggx: v.shading.model == ShadingModel::Ggx,
             ambient: v.shading.ambient as f64,
             toon_bands: v
                 .post

@@ -120,7 +120,7 @@ impl ClusterBuffers {
                 "cluster stats",
                 std::mem::size_of::<ClusterStats>() as u64,
             ),
-            light_view: storage(gpu, "view-space lights", lights.max(1) as u64 * 16),
+            light_view: storage(gpu, "view-space lights", lights.max(1) as u64 * 48),
             light_ranges: storage(gpu, "light cluster ranges", lights.max(1) as u64 * 16),
             fill_cursors: storage(gpu, "fill cursors", n * 4),
             sample_depths: storage(gpu, "cluster sample depths", n * 8),

@@ -13,7 +13,8 @@ use crate::variant::{LightLists, Variant};
 pub struct CpuAssignment {
     grid: Grid,
     bounds: Vec<Option<cpu_clusters::Aabb>>,
-    lights: Vec<(glam::DVec3, f64)>,
+    lights: Vec<cpu_clusters::ViewLight>,
+    spot_test: crate::common::SpotTest,
     cap: Option<u32>,
 }
 
@@ -24,6 +25,7 @@ impl CpuAssignment {
             bounds: cpu_clusters::cluster_bounds(&grid),
             grid,
             lights: cpu_clusters::view_lights(&scene.lights, scene.camera.view()),
+            spot_test: variant.clusters().spot_test,
             cap: match variant.clusters().lists {
                 LightLists::Exact => None,
                 LightLists::Capped { max_per_cluster } => Some(max_per_cluster),
@@ -82,7 +84,14 @@ impl Renderer<'_> {
             return Ok(None);
         };
         let start = Instant::now();
-        let lists = cpu_clusters::assign(&cpu.grid, &cpu.bounds, &cpu.lights, cpu.cap, None);
+        let lists = cpu_clusters::assign(
+            &cpu.grid,
+            &cpu.bounds,
+            &cpu.lights,
+            cpu.spot_test,
+            cpu.cap,
+            None,
+        );
         let ms = start.elapsed().as_secs_f64() * 1e3;
         let c = self.res.clusters.as_mut().expect("clustered");
         if !c.upload_lists(self.gpu, &lists) {

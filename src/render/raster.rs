@@ -33,7 +33,7 @@ pub fn pipelines(
     match pass {
         RasterPass::DepthPrepass => vec![build(None, &[], d.state(d.compare(), true))],
         RasterPass::GBuffer => {
-            let formats = gbuffer::formats(variant.gbuffer().layout);
+            let formats = gbuffer::formats(variant);
             let targets: Vec<_> = formats.into_iter().map(color_target).collect();
             vec![build(Some("fs_main"), &targets, d.state(d.compare(), true))]
         }

@@ -117,8 +117,9 @@ impl SceneBuffers {
     }
 
     pub fn vertex_layout() -> wgpu::VertexBufferLayout<'static> {
-        const ATTRIBUTES: [wgpu::VertexAttribute; 3] =
-            wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32x3];
+        const ATTRIBUTES: [wgpu::VertexAttribute; 4] = wgpu::vertex_attr_array![
+            0 => Float32x3, 1 => Float32x3, 2 => Float32x3, 3 => Float32x2
+        ];
         wgpu::VertexBufferLayout {
             array_stride: std::mem::size_of::<Vertex>() as u64,
             step_mode: wgpu::VertexStepMode::Vertex,
@@ -278,7 +279,7 @@ impl FrameResources {
             hdr: Target::new(gpu, "hdr", w, h, gpu.hdr_format),
             ldr: Target::new(gpu, "ldr", w, h, LDR_FORMAT),
             gbuffer: if variant.pipeline.is_deferred() {
-                super::gbuffer::targets(gpu, variant.gbuffer().layout, w, h)
+                super::gbuffer::targets(gpu, variant, w, h)
             } else {
                 Vec::new()
             },

@@ -67,7 +67,7 @@ impl Renderer<'_> {
             light_evals: sum(&self.res.counters.evals)?,
             useful_light_evals: sum(&self.res.counters.useful)?,
             gbuffer_bytes_per_pixel: if self.variant.pipeline.is_deferred() {
-                gbuffer::bytes_per_pixel(self.variant.gbuffer().layout)
+                gbuffer::bytes_per_pixel(&self.variant)
             } else {
                 0
             },

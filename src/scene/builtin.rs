@@ -22,6 +22,7 @@ const fn defaults(lights: u32, radius_range: (f32, f32)) -> SceneParams {
         radius_range,
         seed: 1,
         time: 1.0,
+        spots: 0.0,
     }
 }
 
@@ -31,6 +32,15 @@ pub static SCENES: &[SceneInfo] = &[
         description: "a procedural hall after the Sponza atrium: tiled floor, walls, two rows of columns, beams, galleries, curtains, spheres; real overdraw; the camera walks down the hall at 3 units/s",
         defaults: defaults(1024, (1.0, 3.0)),
         generate: atrium,
+    },
+    SceneInfo {
+        name: "stage",
+        description: "a gallery of plinths and statues lit from above by narrow downward spots (spot fraction 1 by default): where cone culling matters; the camera walks along it at 2 units/s",
+        defaults: SceneParams {
+            spots: 1.0,
+            ..defaults(512, (7.0, 10.0))
+        },
+        generate: stage,
     },
     SceneInfo {
         name: "spheres",
@@ -86,12 +96,12 @@ impl LightMotion {
             (self.frequency.y * t + self.phase.y).sin(),
             (self.frequency.z * t + self.phase.z).sin(),
         );
-        Light {
-            position: (self.base + self.amplitude * wave).as_vec3().to_array(),
-            radius: self.radius,
-            color: self.color,
-            intensity: self.intensity,
-        }
+        Light::point(
+            (self.base + self.amplitude * wave).as_vec3().to_array(),
+            self.radius,
+            self.color,
+            self.intensity,
+        )
     }
 }
 
@@ -139,6 +149,44 @@ fn random_lights(
             motion.at(p.time)
         })
         .collect()
+}
+
+/// Turn a fraction `p.spots` of `lights` into spots aimed along `aim` (unit, tilted by up to
+/// `tilt` in x and z), with outer half-angles in `outer_degrees` and the inner cone at 50-90%
+/// of the outer. A stream of its own (seeded from the scene's seed) decides, so the lights'
+/// positions and colours are the same whatever the fraction. A spot keeps its light's
+/// intensity: it lights less, only where it points.
+fn make_spots(
+    lights: &mut [Light],
+    p: &SceneParams,
+    aim: DVec3,
+    tilt: f64,
+    outer_degrees: (f64, f64),
+) {
+    let mut rng = Pcg64Mcg::seed_from_u64(p.seed ^ 0x5b07_11c3_5eed_0000);
+    for light in lights {
+        // Every draw happens for every light, so light i's cone is the same at any fraction.
+        let is_spot = rng.random_range(0.0..1.0) < p.spots as f64;
+        let direction = aim
+            + DVec3::new(
+                rng.random_range(-tilt..=tilt),
+                0.0,
+                rng.random_range(-tilt..=tilt),
+            );
+        let outer = rng.random_range(outer_degrees.0..=outer_degrees.1);
+        let inner = outer * rng.random_range(0.5..0.9);
+        if is_spot {
+            *light = Light::spot(
+                light.position,
+                light.radius,
+                light.color,
+                1.0,
+                direction.to_array(),
+                inner,
+                outer,
+            );
+        }
+    }
 }
 
 /// A saturated colour of hue `h` in [0, 1), mixed a little towards white.
@@ -202,6 +250,7 @@ fn atrium(p: SceneParams) -> Scene {
     let mut rng = Pcg64Mcg::seed_from_u64(p.seed);
     let mut m = MeshBuilder::default();
     let (hx, hz, height) = (16.0, 7.0, 12.0);
+    m.set_material(0.8, 0.0);
 
     // Floor of 2 m tiles in two shades.
     let tile = 2.0;
@@ -268,6 +317,7 @@ fn atrium(p: SceneParams) -> Scene {
         }
     }
     // Roof beams across the hall.
+    m.set_material(0.6, 0.0);
     for i in 0..6 {
         let x = -12.5 + 5.0 * i as f64;
         m.cuboid(
@@ -276,21 +326,23 @@ fn atrium(p: SceneParams) -> Scene {
             WOOD,
         );
     }
-    // A few spheres on the floor.
+    // A few spheres on the floor: polished metal and lacquer, alternately.
     for (i, color) in SPHERE_COLORS.iter().enumerate() {
+        m.set_material(0.25 + 0.1 * i as f32, (i % 2) as f32);
         let r = rng.random_range(0.5..1.0);
         let x = -8.0 + 5.0 * i as f64 + rng.random_range(-1.0..1.0);
         let z = rng.random_range(-1.5..1.5);
         m.sphere(DVec3::new(x, r, z), r, 16, 32, *color);
     }
 
-    let lights = random_lights(
+    let mut lights = random_lights(
         &mut rng,
         &p,
         DVec3::new(-hx + 0.5, 0.2, -hz + 0.2),
         DVec3::new(hx - 0.5, height - 0.5, hz - 0.2),
         180.0,
     );
+    make_spots(&mut lights, &p, DVec3::NEG_Y, 0.8, (20.0, 60.0));
     let cams = camera_pair(
         &m,
         DVec3::new(-14.0, 1.8, 0.8),
@@ -301,24 +353,84 @@ fn atrium(p: SceneParams) -> Scene {
     finish("atrium", p, m, lights, cams)
 }
 
+/// A gallery 32 x 12, open above: a floor of two stones, a back wall, two rows of plinths
+/// with statues (spheres of metal and stone), lit by lights hung 5-7 units up that point
+/// down (spots by default, outer half-angles 10-30 degrees).
+fn stage(p: SceneParams) -> Scene {
+    let mut rng = Pcg64Mcg::seed_from_u64(p.seed);
+    let mut m = MeshBuilder::default();
+    let (hx, hz) = (16.0, 6.0);
+    m.set_material(0.55, 0.0);
+    for i in 0..8 {
+        let x0 = -hx + 4.0 * i as f64;
+        let albedo = if i % 2 == 0 { PALE_STONE } else { DARK_TILE };
+        m.axis_rect(1, 0.0, [-hz, x0], [hz, x0 + 4.0], true, albedo);
+    }
+    m.set_material(0.9, 0.0);
+    m.axis_rect(2, -hz, [-hx, 0.0], [hx, 8.0], true, SANDSTONE);
+    for side in [-1.0, 1.0] {
+        for i in 0..7 {
+            let x = -12.0 + 4.0 * i as f64;
+            let z = side * 2.5;
+            m.set_material(0.7, 0.0);
+            // Plinths stand in the floor; statues sink into their tops.
+            m.cuboid(
+                DVec3::new(x - 0.6, -0.1, z - 0.6),
+                DVec3::new(x + 0.6, 1.2, z + 0.6),
+                PALE_STONE,
+            );
+            let r = rng.random_range(0.45..0.7);
+            m.set_material(
+                rng.random_range(0.1..0.6),
+                if (i + (side > 0.0) as usize).is_multiple_of(2) {
+                    1.0
+                } else {
+                    0.0
+                },
+            );
+            m.sphere(DVec3::new(x, 1.15 + r, z), r, 16, 32, SPHERE_COLORS[i % 4]);
+        }
+    }
+    let mut lights = random_lights(
+        &mut rng,
+        &p,
+        DVec3::new(-hx + 1.0, 5.0, -hz + 0.5),
+        DVec3::new(hx - 1.0, 7.0, hz - 0.5),
+        1500.0,
+    );
+    make_spots(&mut lights, &p, DVec3::NEG_Y, 0.35, (10.0, 30.0));
+    let cams = camera_pair(
+        &m,
+        DVec3::new(-15.5, 3.6, 5.0),
+        DVec3::new(0.0, 0.6, -1.0),
+        DVec3::new(2.0, 0.0, 0.0),
+        p.time,
+    );
+    finish("stage", p, m, lights, cams)
+}
+
 fn spheres(p: SceneParams) -> Scene {
     let mut rng = Pcg64Mcg::seed_from_u64(p.seed);
     let mut m = MeshBuilder::default();
+    m.set_material(0.7, 0.0);
     m.axis_rect(1, 0.0, [-10.0, -10.0], [10.0, 10.0], true, PALE_STONE);
     for i in 0..4 {
         for k in 0..3 {
+            // Roughness across the columns, metal on the middle row.
+            m.set_material(0.15 + 0.25 * i as f32, if k == 1 { 1.0 } else { 0.0 });
             let r = rng.random_range(0.5..1.2);
             let center = DVec3::new(-4.5 + 3.0 * i as f64, r, -3.0 + 3.0 * k as f64);
             m.sphere(center, r, 24, 48, SPHERE_COLORS[(i + k) % 4]);
         }
     }
-    let lights = random_lights(
+    let mut lights = random_lights(
         &mut rng,
         &p,
         DVec3::new(-7.0, 0.2, -6.0),
         DVec3::new(7.0, 3.5, 5.0),
         12.0,
     );
+    make_spots(&mut lights, &p, DVec3::NEG_Y, 0.6, (20.0, 50.0));
     let cams = camera_pair(
         &m,
         DVec3::new(0.2, 6.0, 9.0),
@@ -331,6 +443,7 @@ fn spheres(p: SceneParams) -> Scene {
 
 fn plane() -> MeshBuilder {
     let mut m = MeshBuilder::default();
+    m.set_material(0.5, 0.0);
     m.axis_rect(1, 0.0, [-20.0, -20.0], [20.0, 20.0], true, PALE_STONE);
     m
 }
@@ -348,13 +461,14 @@ fn plane_camera(m: &MeshBuilder, t: f64) -> (Camera, Camera) {
 fn empty(p: SceneParams) -> Scene {
     let mut rng = Pcg64Mcg::seed_from_u64(p.seed);
     let m = plane();
-    let lights = random_lights(
+    let mut lights = random_lights(
         &mut rng,
         &p,
         DVec3::new(-8.0, 0.2, -8.0),
         DVec3::new(8.0, 3.0, 4.0),
         4.0,
     );
+    make_spots(&mut lights, &p, DVec3::NEG_Y, 0.8, (20.0, 60.0));
     let cams = plane_camera(&m, p.time);
     finish("empty", p, m, lights, cams)
 }
@@ -370,10 +484,13 @@ fn one_light(p: SceneParams) -> Scene {
         4.0,
     );
     if let Some(first) = lights.first_mut() {
-        // The one light sits above the centre; more lights (--lights) scatter around it.
+        // The one light sits above the centre; more lights (--lights) scatter around it. Its
+        // colour's largest channel is its intensity (`hue_to_rgb` peaks at 1).
+        let intensity = first.color.into_iter().fold(0.0, f32::max);
         first.position = [0.0, 1.5, 0.0];
-        first.color = [1.0, 0.95, 0.85];
+        first.color = [1.0, 0.95, 0.85].map(|c| c * intensity);
     }
+    make_spots(&mut lights, &p, DVec3::NEG_Y, 0.8, (20.0, 60.0));
     let cams = plane_camera(&m, p.time);
     finish("one_light", p, m, lights, cams)
 }

@@ -9,13 +9,24 @@ use super::Vertex;
 pub struct MeshBuilder {
     pub vertices: Vec<Vertex>,
     pub indices: Vec<u32>,
+    /// (perceptual roughness, metallic) of the primitives added from now on.
+    pub material: [f32; 2],
 }
 
-fn vertex(p: DVec3, n: DVec3, albedo: [f32; 3]) -> Vertex {
-    Vertex {
-        position: p.as_vec3().to_array(),
-        normal: n.normalize().as_vec3().to_array(),
-        albedo,
+impl MeshBuilder {
+    fn vertex(&self, p: DVec3, n: DVec3, albedo: [f32; 3]) -> Vertex {
+        Vertex {
+            position: p.as_vec3().to_array(),
+            normal: n.normalize().as_vec3().to_array(),
+            albedo,
+            material: self.material,
+        }
+    }
+
+    /// Set the (roughness, metallic) of what is added next. Both are rounded to a multiple of
+    /// 1/255, so G-buffer layouts that keep them in 8 bits keep them exactly.
+    pub fn set_material(&mut self, roughness: f32, metallic: f32) {
+        self.material = [roughness, metallic].map(|x| (x.clamp(0.0, 1.0) * 255.0).round() / 255.0);
     }
 }
 
@@ -24,7 +35,7 @@ impl MeshBuilder {
     pub fn quad(&mut self, corners: [DVec3; 4], normal: DVec3, albedo: [f32; 3]) {
         let base = self.vertices.len() as u32;
         for c in corners {
-            self.vertices.push(vertex(c, normal, albedo));
+            self.vertices.push(self.vertex(c, normal, albedo));
         }
         self.indices
             .extend([base, base + 1, base + 2, base, base + 2, base + 3]);
@@ -106,9 +117,10 @@ impl MeshBuilder {
         let start = self.vertices.len() as u32;
         for i in 0..=segments {
             let d = around(i);
-            self.vertices.push(vertex(base + d * radius, d, albedo));
             self.vertices
-                .push(vertex(base + d * radius + up, d, albedo));
+                .push(self.vertex(base + d * radius, d, albedo));
+            self.vertices
+                .push(self.vertex(base + d * radius + up, d, albedo));
         }
         for i in 0..segments {
             let (a, b) = (start + 2 * i, start + 2 * i + 2);
@@ -117,9 +129,9 @@ impl MeshBuilder {
         for (y, normal) in [(height, DVec3::Y), (0.0, DVec3::NEG_Y)] {
             let center = self.vertices.len() as u32;
             self.vertices
-                .push(vertex(base + DVec3::Y * y, normal, albedo));
+                .push(self.vertex(base + DVec3::Y * y, normal, albedo));
             for i in 0..=segments {
-                self.vertices.push(vertex(
+                self.vertices.push(self.vertex(
                     base + around(i) * radius + DVec3::Y * y,
                     normal,
                     albedo,
@@ -155,7 +167,8 @@ impl MeshBuilder {
                     polar.cos(),
                     -polar.sin() * azimuth.sin(),
                 );
-                self.vertices.push(vertex(center + n * radius, n, albedo));
+                self.vertices
+                    .push(self.vertex(center + n * radius, n, albedo));
             }
         }
         let row = slices + 1;

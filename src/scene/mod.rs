@@ -1,5 +1,6 @@
-//! Seeded synthetic scenes: geometry, materials (per-vertex albedo), point lights and a
-//! camera, all deterministic functions of their parameters.
+//! Seeded synthetic scenes: geometry, materials (per-vertex albedo, roughness and
+//! metallic), point and spot lights and a camera, all deterministic functions of their
+//! parameters.
 
 mod builtin;
 mod mesh;
@@ -48,6 +49,9 @@ pub struct SceneParams {
     pub seed: u64,
     /// Time of the frame in seconds: lights and camera move with it.
     pub time: f64,
+    /// Fraction of the lights that are spots, in [0, 1] (drawn per light from a stream of
+    /// its own, so the lights' positions and colours do not depend on it).
+    pub spots: f32,
 }
 
 /// Time between the previous frame and this one (motion vectors, previous-frame depth).
@@ -116,6 +120,12 @@ pub fn generate(name: &str, params: SceneParams) -> Result<Scene, SceneError> {
         return Err(SceneError::BadParam(format!(
             "{} lights: at most {MAX_LIGHTS}",
             params.lights
+        )));
+    }
+    if !(0.0..=1.0).contains(&params.spots) {
+        return Err(SceneError::BadParam(format!(
+            "spot fraction {}: it must be in 0..=1",
+            params.spots
         )));
     }
     let (lo, hi) = params.radius_range;

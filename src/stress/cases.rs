@@ -176,12 +176,12 @@ fn default_camera(m: &MeshBuilder) -> Camera {
 }
 
 fn light(position: DVec3, radius: f32, intensity: f32) -> Light {
-    Light {
-        position: position.as_vec3().to_array(),
+    Light::point(
+        position.as_vec3().to_array(),
         radius,
-        color: [1.0, 0.9, 0.8],
+        [1.0, 0.9, 0.8],
         intensity,
-    }
+    )
 }
 
 /// `n` lights on a lattice over the room, radius `r`, total power about 60.
@@ -192,9 +192,8 @@ fn lattice(n: u32, r: f32) -> Vec<Light> {
             let (a, b, c) = (i % side, (i / side) % side, i / (side * side));
             let t = |k: u32| (k as f64 + 0.5) / side as f64;
             let p = DVec3::new(-5.5 + 11.0 * t(a), 0.2 + 3.5 * t(c), -5.5 + 11.0 * t(b));
-            let mut l = light(p, r, 60.0 / n.max(1) as f32);
-            l.color = [0.5 + 0.5 * t(a) as f32, 0.6, 1.0 - 0.5 * t(b) as f32];
-            l
+            let color = [0.5 + 0.5 * t(a) as f32, 0.6, 1.0 - 0.5 * t(b) as f32];
+            Light::point(p.as_vec3().to_array(), r, color, 60.0 / n.max(1) as f32)
         })
         .collect()
 }
@@ -215,6 +214,8 @@ fn scene(
             radius_range: (0.0, 0.0),
             seed: 0,
             time: 1.0,
+            spots: lights.iter().filter(|l| l.is_spot()).count() as f32
+                / lights.len().max(1) as f32,
         },
         vertices: mesh.vertices,
         indices: mesh.indices,
@@ -485,7 +486,7 @@ pub fn all() -> Vec<Case> {
             lattice(27, 3.0)
                 .into_iter()
                 .map(|mut l| {
-                    l.intensity = 0.0;
+                    l.color = [0.0; 3];
                     l
                 })
                 .collect(),
@@ -501,7 +502,8 @@ pub fn all() -> Vec<Case> {
             lattice(8, 3.0)
                 .into_iter()
                 .map(|mut l| {
-                    l.intensity = 1e6;
+                    // The lattice's colours carry its intensity, 60/8: make it 1e6.
+                    l.color = l.color.map(|c| c / (60.0 / 8.0) * 1e6);
                     l
                 })
                 .collect(),
@@ -616,6 +618,7 @@ pub fn all() -> Vec<Case> {
             position: p,
             normal: [0.0; 3],
             albedo: RED,
+            material: [0.5, 0.0],
         };
         m.vertices.extend([
             zero([0.0, 0.5, 2.0]),

@@ -156,6 +156,7 @@ pub fn planes_scene(columns: u32, rows: u32) -> (Scene, Vec<f64>) {
             radius_range: (1.0, 1.0),
             seed: 0,
             time: 0.0,
+            spots: 0.0,
         },
         vertices: mesh.vertices,
         indices: mesh.indices,

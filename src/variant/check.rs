@@ -64,6 +64,17 @@ pub fn check(v: &Variant) -> Vec<Problem> {
     }
     check_normals(v, &mut out);
     check_shading(&v.shading, &mut out);
+    if v.shading.model == ShadingModel::Ggx
+        && v.post
+            .toon
+            .as_ref()
+            .is_some_and(|t| t.mode == ToonMode::PerLight)
+    {
+        out.push(problem(
+            "post.toon.mode",
+            "PerLight bands the Lambert diffuse term, which the Ggx model does not have; use mode: PostProcess with Ggx, or a Lambert or BlinnPhong model",
+        ));
+    }
     check_post(&v.post, v, &mut out);
     check_debug_view(v, &mut out);
     out

@@ -5,7 +5,7 @@
 //! that `schemars` derives from these types.
 
 use crate::common::DepthMapping;
-pub use crate::common::{DepthRangeSource, NormalCodec, PostEffect, ZSlicing};
+pub use crate::common::{DepthRangeSource, NormalCodec, PostEffect, SpotTest, ZSlicing};
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 use strum::IntoEnumIterator;
@@ -125,6 +125,8 @@ pub struct Clusters {
     /// Olsson 2012's explicit bounds: shrink each active cluster's box in depth to the
     /// samples it holds, so fewer lights touch it. Needs `active_clusters`.
     pub sample_bounds: bool,
+    /// How a spot light is tested against a cluster (point lights always use their sphere).
+    pub spot_test: SpotTest,
 }
 
 impl Default for Clusters {
@@ -136,6 +138,7 @@ impl Default for Clusters {
             lists: LightLists::Exact,
             active_clusters: false,
             sample_bounds: false,
+            spot_test: SpotTest::Cone,
         }
     }
 }
@@ -264,6 +267,10 @@ pub enum ShadingModel {
         /// Strength of the white highlight, in 0..=1.
         specular: f32,
     },
+    /// Metallic-roughness GGX as Filament documents it: Trowbridge-Reitz distribution,
+    /// height-correlated Smith visibility (Heitz 2014), Schlick Fresnel, Lambert diffuse
+    /// `(1 - metallic) base`; roughness and metallic come from each material.
+    Ggx,
 }
 
 /// Post-processing effects; each is off unless given.
