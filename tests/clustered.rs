@@ -87,6 +87,20 @@ fn exact_variants() -> Vec<LoadedVariant> {
     let mut cpu = clustered(Pipeline::ClusteredForward, ZSlicing::Exponential);
     cpu.clusters.as_mut().unwrap().assignment = Assignment::Cpu;
     out.push(loaded("forward CPU assignment", cpu));
+    // Both spot tests, and GGX shading from each G-buffer layout that keeps it exactly.
+    for pipeline in [Pipeline::ClusteredForward, Pipeline::ClusteredDeferred] {
+        let mut v = clustered(pipeline, ZSlicing::Exponential);
+        v.clusters.as_mut().unwrap().spot_test = SpotTest::Sphere;
+        out.push(loaded(&format!("{pipeline:?} spot sphere test"), v));
+        let mut v = clustered(pipeline, ZSlicing::Exponential);
+        v.shading.model = ShadingModel::Ggx;
+        out.push(loaded(&format!("{pipeline:?} GGX"), v));
+    }
+    let mut cpu_spots = clustered(Pipeline::ClusteredForward, ZSlicing::Exponential);
+    let c = cpu_spots.clusters.as_mut().unwrap();
+    c.assignment = Assignment::Cpu;
+    c.spot_test = SpotTest::Cone;
+    out.push(loaded("forward CPU assignment, cone test", cpu_spots));
     out.push(loaded(
         "scissor",
         Variant {
@@ -133,14 +147,22 @@ fn max_lsb(a: &FrameOutput, b: &FrameOutput) -> u32 {
 fn clustered_output_equals_naive_output() {
     let gpu = gpu();
     let composer = Composer::default();
-    let mut cases: Vec<(&str, Option<u32>)> = SCENES.iter().map(|s| (s.name, None)).collect();
+    // Every scene at its defaults (the stage's lights are all spots), then light counts from
+    // 0 to 4096 with half and all of them spots.
+    let mut cases: Vec<(&str, Option<u32>, Option<f32>)> =
+        SCENES.iter().map(|s| (s.name, None, None)).collect();
     cases.extend([
-        ("atrium", Some(0)),
-        ("atrium", Some(1)),
-        ("atrium", Some(4096)),
+        ("atrium", Some(0), None),
+        ("atrium", Some(1), None),
+        ("atrium", Some(4096), None),
+        ("atrium", Some(4096), Some(0.5)),
+        ("stage", Some(0), None),
+        ("stage", Some(4096), None),
     ]);
-    for (scene_name, lights) in cases {
-        let scene = scene::generate(scene_name, small(scene_name, 96, 54, lights)).unwrap();
+    for (scene_name, lights, spots) in cases {
+        let mut params = small(scene_name, 96, 54, lights);
+        params.spots = spots.unwrap_or(params.spots);
+        let scene = scene::generate(scene_name, params).unwrap();
         for v in exact_variants() {
             // Two frames, so previous-frame z-ranges are in use.
             let frame = render(&gpu, &v.variant, &scene, 2);
@@ -148,9 +170,10 @@ fn clustered_output_equals_naive_output() {
             let (reference, _) = reference_frame(&gpu, &composer, &v, &scene).unwrap();
             let e = clusterlab::metrics::compare(&frame, &reference);
             let what = format!(
-                "{} on {scene_name} with {} lights",
+                "{} on {scene_name} with {} lights ({} spots)",
                 v.name,
-                scene.lights.len()
+                scene.lights.len(),
+                scene.lights.iter().filter(|l| l.is_spot()).count()
             );
             assert!(e.max_abs_8bit <= 1 && e.nan_pixels == 0, "{what}: {e:?}");
             assert!(

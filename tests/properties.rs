@@ -8,7 +8,8 @@ use clusterlab::cpu::clusters::{self as cpu, Grid};
 use clusterlab::cpu::normals as codec;
 use clusterlab::cpu::zslice::Slices;
 use clusterlab::twins::{gpu_codecs, gpu_zslices};
-use clusterlab::variant::{NormalCodec, ZSlicing};
+use clusterlab::scene::Light;
+use clusterlab::variant::{NormalCodec, SpotTest, ZSlicing};
 use glam::DVec3;
 use proptest::prelude::*;
 use proptest::test_runner::{Config, TestRunner};
@@ -223,6 +224,93 @@ proptest! {
             cpu::sphere_touches_cluster(&grid, center, radius, &b, x, y),
             "light at {center:?} radius {radius} holds {p:?} of cluster ({x}, {y}, {k}) but is rejected"
         );
+    }
+}
+
+/// A spot light with its apex at view-space `apex` (view = world: the grids here put the eye
+/// at the origin looking down -z), axis `axis`, range and cone angles.
+fn view_spot(apex: DVec3, axis: DVec3, range: f64, inner: f64, outer: f64) -> Light {
+    Light::spot(
+        apex.as_vec3().to_array(),
+        range as f32,
+        [1.0; 3],
+        1.0,
+        axis.to_array(),
+        inner,
+        outer,
+    )
+}
+
+/// A unit vector a random angle (below `max_degrees`) away from `axis`.
+fn tilted(axis: DVec3, angle_degrees: f64, turn: f64) -> DVec3 {
+    let a = axis.normalize();
+    let side = a.any_orthonormal_vector();
+    let side = glam::DQuat::from_axis_angle(a, turn) * side;
+    glam::DQuat::from_axis_angle(side, angle_degrees.to_radians()) * a
+}
+
+proptest! {
+    #![proptest_config(Config::with_cases(1000))]
+
+    /// A spot whose cone holds a point of the cluster (the point lies within its outer angle
+    /// and range) is never rejected by the cone test; nor by the sphere test.
+    #[test]
+    fn the_cone_test_never_rejects_a_spot_that_lights_the_cluster(
+        (grid, p) in frustum_point(),
+        offset in (-1.0..=1.0f64, -1.0..=1.0f64, -1.0..=1.0f64),
+        scale in 0.01..3.0f64,
+        outer in prop_oneof![1 => Just(0.05f64), 1 => Just(89.9f64), 6 => 0.5..89.5f64],
+        inner_fraction in 0.0..=1.0f64,
+        (within, turn) in (0.0..0.999f64, 0.0..std::f64::consts::TAU),
+        reach in 1.0001..3.0f64,
+    ) {
+        let (x, y, k) = cluster_of(&grid, p);
+        let b = cpu::cluster_bounds(&grid)[grid.index(x, y, k)].expect("box");
+        let size = (b.max - b.min).length().max(1e-6);
+        let apex = p + DVec3::new(offset.0, offset.1, offset.2) * size * scale;
+        prop_assume!(apex.distance(p) > 1e-9);
+        // The axis points within the outer angle of the direction to p.
+        let axis = tilted(p - apex, outer * within, turn);
+        let range = apex.distance(p) * reach;
+        let light = view_spot(apex, axis, range, outer * inner_fraction, outer);
+        // Only cones whose f32 cosine still admits p count (a 0.05 degree cone is 1 - 4e-7).
+        let cos_p = (p - apex).normalize().dot(DVec3::from(light.direction.map(f64::from)));
+        prop_assume!(cos_p > light.cos_outer as f64);
+        let v = cpu::view_lights(&[light], glam::DMat4::IDENTITY)[0];
+        for test in [SpotTest::Sphere, SpotTest::Cone] {
+            prop_assert!(
+                cpu::light_touches_cluster(&grid, &v, test, &b, x, y),
+                "{test:?}: spot at {apex:?} along {axis:?} (outer {outer} degrees, range {range}) lights {p:?} of cluster ({x}, {y}, {k}) but is rejected"
+            );
+        }
+    }
+
+    /// Against an independent f64 twin that samples the cluster's frustum piece: whenever a
+    /// sample is clearly lit by the spot, the cone test keeps the spot; and the cone test
+    /// keeps no more than the sphere test.
+    #[test]
+    fn the_cone_test_keeps_every_spot_a_sample_of_the_cluster_sees(
+        (grid, p) in frustum_point(),
+        offset in (-1.0..=1.0f64, -1.0..=1.0f64, -1.0..=1.0f64),
+        scale in 0.1..4.0f64,
+        aim in (-1.0..=1.0f64, -1.0..=1.0f64, -1.0..=1.0f64),
+        outer in 1.0..89.9f64,
+        reach in 0.2..3.0f64,
+    ) {
+        let (x, y, k) = cluster_of(&grid, p);
+        let b = cpu::cluster_bounds(&grid)[grid.index(x, y, k)].expect("box");
+        let size = (b.max - b.min).length().max(1e-6);
+        let apex = p + DVec3::new(offset.0, offset.1, offset.2) * size * scale;
+        let axis = DVec3::new(aim.0, aim.1, aim.2);
+        prop_assume!(axis.length() > 1e-3);
+        let light = view_spot(apex, axis, size * reach, outer * 0.5, outer);
+        let v = cpu::view_lights(&[light], glam::DMat4::IDENTITY)[0];
+        let cone = cpu::light_touches_cluster(&grid, &v, SpotTest::Cone, &b, x, y);
+        let sphere = cpu::light_touches_cluster(&grid, &v, SpotTest::Sphere, &b, x, y);
+        prop_assert!(!cone || sphere, "the cone test keeps what the sphere test rejects");
+        if let Some(q) = cpu::spot_point_in_piece(&grid, &light, glam::DMat4::IDENTITY, x, y, grid.slice_depths(k), 7) {
+            prop_assert!(cone, "spot at {apex:?} along {axis:?} (outer {outer}) lights {q:?} of cluster ({x}, {y}, {k}) but the cone test rejects it");
+        }
     }
 }
 

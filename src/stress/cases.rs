@@ -744,5 +744,221 @@ pub fn all() -> Vec<Case> {
         },
         with_slicing(ZSlicing::OlssonCubic, "olsson"),
     ));
+    spot_cases(&mut cases);
     cases
+}
+
+/// A spot at `p` along `axis` (world space).
+fn spot(p: DVec3, axis: DVec3, radius: f32, inner: f64, outer: f64, intensity: f32) -> Light {
+    Light::spot(
+        p.as_vec3().to_array(),
+        radius,
+        [1.0, 0.9, 0.8],
+        intensity,
+        axis.to_array(),
+        inner,
+        outer,
+    )
+}
+
+/// Every pipeline, the clustered ones again with the bounding-sphere spot test, and Forward+
+/// with GGX shading: the spot cases run each test and each shading model.
+fn with_spot_tests() -> Vec<(String, Variant)> {
+    let mut out = pipelines();
+    for (n, mut v) in clustered() {
+        if let Some(c) = &mut v.clusters {
+            c.spot_test = SpotTest::Sphere;
+        }
+        out.push((format!("{n}_sphere_test"), v));
+    }
+    let mut ggx = variant("forward_plus_ggx", Pipeline::ClusteredForward);
+    ggx.shading.model = ShadingModel::Ggx;
+    out.push(("forward_plus_ggx".into(), ggx));
+    out
+}
+
+/// `n` unit vectors spread over the sphere (a Fibonacci spiral).
+fn spread_directions(n: u32) -> impl Iterator<Item = DVec3> {
+    let golden = std::f64::consts::PI * (3.0 - 5f64.sqrt());
+    (0..n).map(move |i| {
+        let y = 1.0 - 2.0 * (i as f64 + 0.5) / n as f64;
+        let r = (1.0 - y * y).sqrt();
+        let phi = golden * i as f64;
+        DVec3::new(r * phi.cos(), y, r * phi.sin())
+    })
+}
+
+/// The spot lights' cases: extreme cone angles, apexes on cluster corners and planes, cones
+/// along and against the view, behind the camera, at the near plane, grazing a cluster, and
+/// ten thousand at one point. Each runs every pipeline and both spot tests.
+fn spot_cases(cases: &mut Vec<Case>) {
+    let down = DVec3::NEG_Y;
+    let overhead = |outer: f64, inner: f64| -> Vec<Light> {
+        (0..9)
+            .map(|i| {
+                let p = DVec3::new(-3.0 + 3.0 * (i % 3) as f64, 2.5, -3.0 + 3.0 * (i / 3) as f64);
+                spot(p, down + DVec3::new(0.1 * (i % 3) as f64, 0.0, 0.0), 5.0, inner, outer, 8.0)
+            })
+            .collect()
+    };
+    for (name, what, outer, inner) in [
+        (
+            "spot_outer_0_01_degrees",
+            "spots with a 0.01 degree outer cone (its cosine rounds to 1 in f32: they light nothing, everywhere)",
+            0.01,
+            0.005,
+        ),
+        (
+            "spot_outer_89_9_degrees",
+            "spots with an 89.9 degree outer cone: nearly a hemisphere",
+            89.9,
+            60.0,
+        ),
+        (
+            "spot_inner_equals_outer",
+            "inner cone equal to the outer: a hard edge",
+            30.0,
+            30.0,
+        ),
+    ] {
+        cases.push(case(
+            name,
+            what,
+            lit_room(name, SIZE, overhead(outer, inner)),
+            with_spot_tests(),
+        ));
+    }
+    let m = room();
+    let cam = default_camera(&m);
+    let world_from_view = cam.view().inverse();
+    let to_world = |p: DVec3| world_from_view.transform_point3(p);
+    let dir_to_world = |d: DVec3| world_from_view.transform_vector3(d);
+    let grid = (8u32, 6u32, 12u32);
+    let tan = (cam.fov_y / 2.0).tan();
+    let aspect = SIZE.0 as f64 / SIZE.1 as f64;
+    let slices = Slices {
+        scheme: ZSlicing::Exponential,
+        near: cam.near,
+        far: cam.far,
+        count: grid.2,
+        tan_half_fov_y: tan,
+        tiles_y: grid.1,
+    };
+    // A view-space corner of the grid: tile corner (i, j) at the start of slice k.
+    let corner = |i: u32, j: u32, k: u32| {
+        let z = slices.start(k);
+        DVec3::new(
+            (2.0 * i as f64 / grid.0 as f64 - 1.0) * tan * aspect * z,
+            (1.0 - 2.0 * j as f64 / grid.1 as f64) * tan * z,
+            -z,
+        )
+    };
+    let on_corners: Vec<Light> = (0..16)
+        .map(|n| {
+            let p = corner(1 + n % 6, 1 + n % 4, 2 + n % 9);
+            let axis = spread_directions(16).nth(n as usize).expect("16 directions");
+            spot(to_world(p), dir_to_world(axis), 2.5, 15.0, 25.0, 4.0)
+        })
+        .collect();
+    cases.push(case(
+        "spot_apex_on_cluster_corner",
+        "spot apexes exactly on cluster corners, axes in 16 directions",
+        scene("spot_apex_on_cluster_corner", SIZE, room(), on_corners, cam),
+        with_spot_tests(),
+    ));
+    let on_planes: Vec<Light> = (0..=grid.0)
+        .map(|i| {
+            let z = 3.0 + i as f64 * 0.5;
+            let x = (2.0 * i as f64 / grid.0 as f64 - 1.0) * tan * aspect * z;
+            let axis = DVec3::new(if i % 2 == 0 { 1.0 } else { -1.0 }, -0.5, 0.0);
+            spot(to_world(DVec3::new(x, 0.2, -z)), dir_to_world(axis), 3.0, 10.0, 20.0, 4.0)
+        })
+        .collect();
+    cases.push(case(
+        "spot_apex_on_tile_plane",
+        "spot apexes exactly on tile planes, pointing across them",
+        scene("spot_apex_on_tile_plane", SIZE, room(), on_planes, cam),
+        with_spot_tests(),
+    ));
+    let forward = (cam.target - cam.eye).normalize();
+    let along: Vec<Light> = (0..5)
+        .map(|i| {
+            let p = cam.eye + forward * (0.5 + i as f64) + DVec3::new(0.3 * i as f64 - 0.6, 0.0, 0.0);
+            spot(p, forward, 8.0, 5.0, 12.0, 20.0)
+        })
+        .collect();
+    cases.push(case(
+        "spot_axis_along_view",
+        "spots pointing straight away from the camera",
+        scene("spot_axis_along_view", SIZE, room(), along, cam),
+        with_spot_tests(),
+    ));
+    let against: Vec<Light> = (0..5)
+        .map(|i| {
+            let p = cam.target + forward * (0.5 * i as f64) + DVec3::new(0.5 * i as f64 - 1.0, 0.5, 0.0);
+            spot(p, -forward, 9.0, 10.0, 25.0, 20.0)
+        })
+        .collect();
+    cases.push(case(
+        "spot_axis_against_view",
+        "spots pointing straight at the camera",
+        scene("spot_axis_against_view", SIZE, room(), against, cam),
+        with_spot_tests(),
+    ));
+    let behind: Vec<Light> = (0..5)
+        .map(|i| {
+            let p = cam.eye - forward * (1.0 + 0.5 * i as f64) + DVec3::new(0.4 * i as f64 - 0.8, 0.0, 0.0);
+            spot(p, forward + DVec3::new(0.0, -0.1 * i as f64, 0.0), 12.0, 8.0, 20.0, 40.0)
+        })
+        .collect();
+    cases.push(case(
+        "spot_apex_behind_camera",
+        "spot apexes behind the camera, cones pointing into the view",
+        scene("spot_apex_behind_camera", SIZE, room(), behind, cam),
+        with_spot_tests(),
+    ));
+    let at_near: Vec<Light> = (0..5)
+        .map(|i| {
+            let p = to_world(DVec3::new(0.02 * i as f64 - 0.04, 0.0, -cam.near));
+            let axis = dir_to_world(DVec3::new(0.0, -0.3 * i as f64, -1.0));
+            spot(p, axis, 9.0, 10.0, 30.0, 30.0)
+        })
+        .collect();
+    cases.push(case(
+        "spot_apex_at_near_plane",
+        "spot apexes on the near plane",
+        scene("spot_apex_at_near_plane", SIZE, room(), at_near, cam),
+        with_spot_tests(),
+    ));
+    // Each cone's side passes exactly through a cluster corner: the axis is turned from the
+    // corner's direction by the outer angle.
+    let grazing: Vec<Light> = (0..12)
+        .map(|n| {
+            let apex = DVec3::new(-1.0 + 0.2 * n as f64, 1.0, -2.0);
+            let q = corner(2 + n % 5, 1 + n % 4, 3 + n % 7);
+            let to_q = (q - apex).normalize();
+            let outer = 10.0 + 5.0 * (n % 4) as f64;
+            let side = to_q.cross(DVec3::Y).normalize_or(DVec3::X);
+            let axis = glam::DQuat::from_axis_angle(side, outer.to_radians()) * to_q;
+            let range = ((q - apex).length() * 1.5) as f32;
+            spot(to_world(apex), dir_to_world(axis), range, outer * 0.5, outer, 6.0)
+        })
+        .collect();
+    cases.push(case(
+        "spot_grazing_cluster",
+        "cones whose side passes exactly through a cluster corner",
+        scene("spot_grazing_cluster", SIZE, room(), grazing, cam),
+        with_spot_tests(),
+    ));
+    let point = DVec3::new(0.3, 2.2, 0.4);
+    let crowd: Vec<Light> = spread_directions(10_000)
+        .enumerate()
+        .map(|(i, d)| spot(point, d, 4.0, 5.0 + (i % 30) as f64, 10.0 + (i % 60) as f64, 0.01))
+        .collect();
+    cases.push(case(
+        "spots_10000_at_one_point",
+        "10000 spots at one point, axes spread over the sphere",
+        lit_room("spots_10000_at_one_point", SIZE, crowd),
+        with_spot_tests(),
+    ));
 }

@@ -208,7 +208,7 @@ pub fn missing_light(
             c as u32 / (grid.x * grid.y),
         );
         for (i, light) in lights.iter().enumerate() {
-            if listed.binary_search(&(i as u32)).is_ok() {
+            if listed.contains(&(i as u32)) {
                 continue;
             }
             let key = (c, bytemuck::bytes_of(&scene.lights[i]));
