@@ -796,8 +796,19 @@ fn spot_cases(cases: &mut Vec<Case>) {
     let overhead = |outer: f64, inner: f64| -> Vec<Light> {
         (0..9)
             .map(|i| {
-                let p = DVec3::new(-3.0 + 3.0 * (i % 3) as f64, 2.5, -3.0 + 3.0 * (i / 3) as f64);
-                spot(p, down + DVec3::new(0.1 * (i % 3) as f64, 0.0, 0.0), 5.0, inner, outer, 8.0)
+                let p = DVec3::new(
+                    -3.0 + 3.0 * (i % 3) as f64,
+                    2.5,
+                    -3.0 + 3.0 * (i / 3) as f64,
+                );
+                spot(
+                    p,
+                    down + DVec3::new(0.1 * (i % 3) as f64, 0.0, 0.0),
+                    5.0,
+                    inner,
+                    outer,
+                    8.0,
+                )
             })
             .collect()
     };
@@ -856,7 +867,9 @@ fn spot_cases(cases: &mut Vec<Case>) {
     let on_corners: Vec<Light> = (0..16)
         .map(|n| {
             let p = corner(1 + n % 6, 1 + n % 4, 2 + n % 9);
-            let axis = spread_directions(16).nth(n as usize).expect("16 directions");
+            let axis = spread_directions(16)
+                .nth(n as usize)
+                .expect("16 directions");
             spot(to_world(p), dir_to_world(axis), 2.5, 15.0, 25.0, 4.0)
         })
         .collect();
@@ -871,7 +884,14 @@ fn spot_cases(cases: &mut Vec<Case>) {
             let z = 3.0 + i as f64 * 0.5;
             let x = (2.0 * i as f64 / grid.0 as f64 - 1.0) * tan * aspect * z;
             let axis = DVec3::new(if i % 2 == 0 { 1.0 } else { -1.0 }, -0.5, 0.0);
-            spot(to_world(DVec3::new(x, 0.2, -z)), dir_to_world(axis), 3.0, 10.0, 20.0, 4.0)
+            spot(
+                to_world(DVec3::new(x, 0.2, -z)),
+                dir_to_world(axis),
+                3.0,
+                10.0,
+                20.0,
+                4.0,
+            )
         })
         .collect();
     cases.push(case(
@@ -883,7 +903,8 @@ fn spot_cases(cases: &mut Vec<Case>) {
     let forward = (cam.target - cam.eye).normalize();
     let along: Vec<Light> = (0..5)
         .map(|i| {
-            let p = cam.eye + forward * (0.5 + i as f64) + DVec3::new(0.3 * i as f64 - 0.6, 0.0, 0.0);
+            let p =
+                cam.eye + forward * (0.5 + i as f64) + DVec3::new(0.3 * i as f64 - 0.6, 0.0, 0.0);
             spot(p, forward, 8.0, 5.0, 12.0, 20.0)
         })
         .collect();
@@ -895,7 +916,9 @@ fn spot_cases(cases: &mut Vec<Case>) {
     ));
     let against: Vec<Light> = (0..5)
         .map(|i| {
-            let p = cam.target + forward * (0.5 * i as f64) + DVec3::new(0.5 * i as f64 - 1.0, 0.5, 0.0);
+            let p = cam.target
+                + forward * (0.5 * i as f64)
+                + DVec3::new(0.5 * i as f64 - 1.0, 0.5, 0.0);
             spot(p, -forward, 9.0, 10.0, 25.0, 20.0)
         })
         .collect();
@@ -907,8 +930,16 @@ fn spot_cases(cases: &mut Vec<Case>) {
     ));
     let behind: Vec<Light> = (0..5)
         .map(|i| {
-            let p = cam.eye - forward * (1.0 + 0.5 * i as f64) + DVec3::new(0.4 * i as f64 - 0.8, 0.0, 0.0);
-            spot(p, forward + DVec3::new(0.0, -0.1 * i as f64, 0.0), 12.0, 8.0, 20.0, 40.0)
+            let p = cam.eye - forward * (1.0 + 0.5 * i as f64)
+                + DVec3::new(0.4 * i as f64 - 0.8, 0.0, 0.0);
+            spot(
+                p,
+                forward + DVec3::new(0.0, -0.1 * i as f64, 0.0),
+                12.0,
+                8.0,
+                20.0,
+                40.0,
+            )
         })
         .collect();
     cases.push(case(
@@ -941,7 +972,14 @@ fn spot_cases(cases: &mut Vec<Case>) {
             let side = to_q.cross(DVec3::Y).normalize_or(DVec3::X);
             let axis = glam::DQuat::from_axis_angle(side, outer.to_radians()) * to_q;
             let range = ((q - apex).length() * 1.5) as f32;
-            spot(to_world(apex), dir_to_world(axis), range, outer * 0.5, outer, 6.0)
+            spot(
+                to_world(apex),
+                dir_to_world(axis),
+                range,
+                outer * 0.5,
+                outer,
+                6.0,
+            )
         })
         .collect();
     cases.push(case(
@@ -953,7 +991,16 @@ fn spot_cases(cases: &mut Vec<Case>) {
     let point = DVec3::new(0.3, 2.2, 0.4);
     let crowd: Vec<Light> = spread_directions(10_000)
         .enumerate()
-        .map(|(i, d)| spot(point, d, 4.0, 5.0 + (i % 30) as f64, 10.0 + (i % 60) as f64, 0.01))
+        .map(|(i, d)| {
+            spot(
+                point,
+                d,
+                4.0,
+                5.0 + (i % 30) as f64,
+                10.0 + (i % 60) as f64,
+                0.01,
+            )
+        })
         .collect();
     cases.push(case(
         "spots_10000_at_one_point",
