@@ -84,16 +84,16 @@ enum Command {
         /// Codecs: uniform unit vectors to sample.
         #[arg(long, default_value_t = 1 << 20)]
         samples: usize,
-        /// Slicing: image size, WIDTHxHEIGHT.
+        /// Slicing and cones: image size, WIDTHxHEIGHT.
         #[arg(long, default_value = "640x360", value_parser = parse_size)]
         size: (u32, u32),
-        /// Slicing: comma-separated built-in scenes (default: all).
+        /// Slicing and cones: comma-separated built-in scenes (default: all).
         #[arg(long, value_delimiter = ',')]
         scenes: Vec<String>,
-        /// Slicing: lights in every scene (default: each scene's own).
+        /// Slicing and cones: lights in every scene (default: each scene's own).
         #[arg(long)]
         lights: Option<u32>,
-        /// Slicing: timed frames per run (the median is reported).
+        /// Slicing and cones: timed frames per run (the median is reported).
         #[arg(long, default_value_t = 3)]
         frames: u32,
         #[command(flatten)]

@@ -122,8 +122,8 @@ pub fn run_case(gpu: &Gpu, composer: &Composer, case: &Case, name: &str, v: &Var
                         ),
                     },
                 ));
-                checks.push(match missing_light(gpu, composer, v, &case.scene) {
-                    Ok(None) => check(
+                checks.push(match missing_lights(gpu, composer, v, &case.scene) {
+                    Ok((_, None)) => check(
                         "no dropped light",
                         stats.dropped_lights == 0,
                         format!(
@@ -131,7 +131,11 @@ pub fn run_case(gpu: &Gpu, composer: &Composer, case: &Case, name: &str, v: &Var
                             stats.dropped_lights
                         ),
                     ),
-                    Ok(Some(why)) => check("no dropped light", false, why),
+                    Ok((n, Some(why))) => check(
+                        "no dropped light",
+                        false,
+                        format!("{n} light-cluster pairs missing; first: {why}"),
+                    ),
                     Err(e) => check("no dropped light", false, e),
                 });
             }
@@ -169,14 +173,15 @@ pub fn run_case(gpu: &Gpu, composer: &Composer, case: &Case, name: &str, v: &Var
     }
 }
 
-/// A light that clearly touches a cluster (still with its radius 1e-4 smaller) but is not in
-/// the GPU's list for it, named with the cluster; None when there is none.
-pub fn missing_light(
+/// Light-cluster pairs where the light clearly lights part of the cluster (see
+/// `clearly_touches`) but is not in the GPU's list for it: their count, and the first named
+/// with its cluster.
+pub fn missing_lights(
     gpu: &Gpu,
     composer: &Composer,
     v: &Variant,
     scene: &Scene,
-) -> Result<Option<String>, String> {
+) -> Result<(u64, Option<String>), String> {
     let mut r = Renderer::new(gpu, composer, v, scene).map_err(|e| e.to_string())?;
     // Twice: with the previous frame's depth range, the second frame's lists are built on
     // the range the first left, which is the range read back after it.
@@ -199,16 +204,19 @@ pub fn missing_light(
     // Identical lights touch identical clusters: decide each distinct light once (a stress
     // case may stack thousands at one point).
     let mut decided: HashMap<(usize, &[u8]), bool> = HashMap::new();
+    let (mut missing, mut first) = (0u64, None);
     for (c, b) in bounds.iter().enumerate() {
         let Some(b) = b else { continue };
-        let listed = lists.list(c);
+        // Sorted here: the check must not depend on the GPU having sorted its lists.
+        let mut listed = lists.list(c).to_vec();
+        listed.sort_unstable();
         let (x, y, k) = (
             c as u32 % grid.x,
             (c as u32 / grid.x) % grid.y,
             c as u32 / (grid.x * grid.y),
         );
         for (i, light) in lights.iter().enumerate() {
-            if listed.contains(&(i as u32)) {
+            if listed.binary_search(&(i as u32)).is_ok() {
                 continue;
             }
             let key = (c, bytemuck::bytes_of(&scene.lights[i]));
@@ -216,21 +224,24 @@ pub fn missing_light(
                 clearly_touches(&grid, &scene.lights[i], light, view, b, (x, y, k))
             });
             if touches {
+                missing += 1;
                 let what = if light.cone.is_some() {
                     "spot"
                 } else {
                     "light"
                 };
-                return Ok(Some(format!(
-                    "{what} {i} (view-space centre {:.4?}, radius {}) touches cluster {c} (tile {x}, {y}, slice {k}) but is not in its list of {}",
-                    light.center.to_array(),
-                    light.radius,
-                    listed.len()
-                )));
+                first.get_or_insert_with(|| {
+                    format!(
+                        "{what} {i} (view-space centre {:.4?}, radius {}) touches cluster {c} (tile {x}, {y}, slice {k}) but is not in its list of {}",
+                        light.center.to_array(),
+                        light.radius,
+                        listed.len()
+                    )
+                });
             }
         }
     }
-    Ok(None)
+    Ok((missing, first))
 }
 
 /// Whether a light clearly lights part of a cluster, decided independently of the cluster

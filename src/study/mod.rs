@@ -3,6 +3,7 @@
 //! JSON) and a plot, from the same code that renders the frames.
 
 pub mod codecs;
+pub mod cones;
 pub mod depth;
 pub mod slicing;
 pub mod table;
@@ -27,6 +28,9 @@ pub enum StudyName {
     Depth,
     /// Culling efficiency of each z-slicing scheme and grid on each built-in scene.
     Slicing,
+    /// Spot lights culled by their bounding sphere against the cone test, at spot fractions
+    /// 0, 0.5 and 1 on each built-in scene; lights missed (must be 0).
+    Cones,
 }
 
 impl StudyName {
@@ -35,6 +39,7 @@ impl StudyName {
             StudyName::Codecs => "codecs",
             StudyName::Depth => "depth",
             StudyName::Slicing => "slicing",
+            StudyName::Cones => "cones",
         }
     }
 }
@@ -99,7 +104,8 @@ pub struct StudyOutput {
     pub csv: String,
     pub plot: Option<Plot>,
     /// False when the study found a disagreement it exists to rule out (codecs: GPU and
-    /// CPU differ at the printed precision; slicing: a run failed).
+    /// CPU differ at the printed precision; slicing: a run failed; cones: a run failed or
+    /// missed a light).
     pub ok: bool,
 }
 
@@ -173,6 +179,19 @@ pub fn run(
             )?;
             let ok = rows.iter().all(|r| r.error.is_none());
             output(name, slicing::table(&rows), &rows, slicing::plot(&rows), ok)
+        }
+        StudyName::Cones => {
+            let scenes: Vec<&str> = options.scenes.iter().map(|s| s.as_str()).collect();
+            let rows = cones::run(
+                gpu,
+                composer,
+                &scenes,
+                options.size,
+                options.lights,
+                options.frames,
+            )?;
+            let ok = cones::all_exact(&rows);
+            output(name, cones::table(&rows), &rows, None, ok)
         }
     }
 }
