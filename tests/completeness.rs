@@ -193,3 +193,33 @@ fn every_post_effect_has_a_shipped_variant_whose_frame_runs_it() {
     }
     assert!(missing.is_empty(), "{}", missing.join("\n"));
 }
+
+#[test]
+fn every_spot_test_has_stress_runs_a_shipped_variant_and_a_study() {
+    let spot_cases: Vec<stress::Case> = stress::cases()
+        .into_iter()
+        .filter(|c| c.scene.lights.iter().any(|l| l.is_spot()))
+        .collect();
+    let shipped = shipped();
+    let mut missing = Vec::new();
+    if spot_cases.is_empty() {
+        missing.push("no stress case has spot lights".to_string());
+    }
+    for test in variant::SpotTest::iter() {
+        let runs_it =
+            |v: &variant::Variant| v.pipeline.is_clustered() && v.clusters().spot_test == test;
+        for case in &spot_cases {
+            if !case.variants.iter().any(|(_, v)| runs_it(v)) {
+                missing.push(format!(
+                    "{test:?}: stress case `{}` does not run it",
+                    case.name
+                ));
+            }
+        }
+        if !shipped.iter().any(|v| runs_it(&v.variant)) {
+            missing.push(format!("{test:?}: no shipped variant uses it"));
+        }
+    }
+    // `study cones` iterates SpotTest::iter() itself.
+    assert!(missing.is_empty(), "{}", missing.join("\n"));
+}

@@ -561,8 +561,9 @@ mod tests {
             ("radius=4..2", "MIN is above MAX"),
             ("grid=16x9", "is not a grid XxYxZ"),
             ("grid=0x1x1", "whole numbers >= 1"),
-            ("fov=60", "sweep lights, radius, grid or skipping"),
+            ("fov=60", "sweep lights, radius, grid, skipping or spots"),
             ("skipping=maybe", "is not on or off"),
+            ("spots=1.5", "`1.5` in `spots=1.5` is not a spot fraction in 0..=1"),
         ] {
             let e = parse_sweep(bad).unwrap_err();
             assert!(e.contains(says), "{bad}: {e}");

@@ -3,6 +3,7 @@
 //! and useful, shading time, and lights missing from a cluster they light (must be 0).
 
 use serde::Serialize;
+use strum::IntoEnumIterator;
 
 use super::{StudyError, Table};
 use crate::compose::Composer;
@@ -100,7 +101,8 @@ pub fn run(
             let scene = crate::scene::generate(name, params)
                 .map_err(|e| StudyError::Usage(e.to_string()))?;
             let mut sphere_evals = None;
-            for test in [SpotTest::Sphere, SpotTest::Cone] {
+            // The schema's list, the sphere test first: the others are measured against it.
+            for test in SpotTest::iter() {
                 let mut row = ConeRow {
                     scene: name.to_string(),
                     width: size.0,
