@@ -563,7 +563,10 @@ mod tests {
             ("grid=0x1x1", "whole numbers >= 1"),
             ("fov=60", "sweep lights, radius, grid, skipping or spots"),
             ("skipping=maybe", "is not on or off"),
-            ("spots=1.5", "`1.5` in `spots=1.5` is not a spot fraction in 0..=1"),
+            (
+                "spots=1.5",
+                "`1.5` in `spots=1.5` is not a spot fraction in 0..=1",
+            ),
         ] {
             let e = parse_sweep(bad).unwrap_err();
             assert!(e.contains(says), "{bad}: {e}");
