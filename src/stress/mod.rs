@@ -208,7 +208,13 @@ pub fn missing_lights(
     for (c, b) in bounds.iter().enumerate() {
         let Some(b) = b else { continue };
         // Sorted here: the check must not depend on the GPU having sorted its lists.
-        let mut listed = lists.list(c).to_vec();
+        // A list past the end of what was read back (an overflowing frame) lists nothing.
+        let (start, count) = (lists.offsets[c] as usize, lists.counts[c] as usize);
+        let mut listed = lists
+            .indices
+            .get(start..start + count)
+            .unwrap_or_default()
+            .to_vec();
         listed.sort_unstable();
         let (x, y, k) = (
             c as u32 % grid.x,
