@@ -227,8 +227,7 @@ pub fn view_lights(lights: &[Light], view_from_world: DMat4) -> Vec<ViewLight> {
     lights
         .iter()
         .map(|l| {
-            let apex = view_from_world.transform_point3(DVec3::from(l.position.map(f64::from)));
-            let range = l.radius as f64;
+            let (apex, axis, range, cos_outer) = exact_view_cone(l, view_from_world);
             if !l.is_spot() {
                 return ViewLight {
                     center: apex,
@@ -236,10 +235,7 @@ pub fn view_lights(lights: &[Light], view_from_world: DMat4) -> Vec<ViewLight> {
                     cone: None,
                 };
             }
-            let axis = view_from_world
-                .transform_vector3(DVec3::from(l.direction.map(f64::from)))
-                .normalize_or_zero();
-            let cos = l.cos_outer as f64 - CONE_COS_SLACK;
+            let cos = cos_outer - CONE_COS_SLACK;
             let (center, radius) = cone_bounding_sphere(apex, axis, range, cos);
             ViewLight {
                 center,
@@ -339,7 +335,8 @@ pub fn assign(
     out
 }
 
-/// A light's own cone in view space, not widened: apex, unit axis, range, outer cosine.
+/// A light's own cone in view space, not widened: apex, unit axis, range, outer cosine (a
+/// point light's axis is zero).
 fn exact_view_cone(light: &Light, view_from_world: DMat4) -> (DVec3, DVec3, f64, f64) {
     let apex = view_from_world.transform_point3(DVec3::from(light.position.map(f64::from)));
     let axis = view_from_world

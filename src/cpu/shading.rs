@@ -11,13 +11,22 @@ pub const MIN_DISTANCE_SQUARED: f64 = 1e-4;
 /// What shading needs from a variant.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ShadingParams {
-    /// (shininess, specular strength) for Blinn-Phong; None for Lambert.
-    pub blinn_phong: Option<(f64, f64)>,
-    /// Metallic-roughness GGX instead of Lambert or Blinn-Phong.
-    pub ggx: bool,
+    pub brdf: Brdf,
     pub ambient: f64,
     /// Toon bands applied to each light's diffuse term (toon in the shading pass).
     pub toon_bands: Option<u32>,
+}
+
+/// The BRDF of a shading model.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Brdf {
+    Lambert,
+    BlinnPhong {
+        shininess: f64,
+        specular: f64,
+    },
+    /// Metallic-roughness GGX, with each surface's roughness and metallic.
+    Ggx,
 }
 
 /// A surface point: world position, unit normal, linear albedo (GGX: base colour), and
@@ -149,18 +158,17 @@ pub fn light_contribution(s: &Surface, to_eye: DVec3, light: &Light, p: &Shading
     if cone <= 0.0 {
         return DVec3::ZERO;
     }
-    let reflected = if p.ggx {
-        ggx(s.normal, l, to_eye, s.albedo, s.roughness, s.metallic)
-    } else {
-        let mut diffuse = s.normal.dot(l).max(0.0);
-        if let Some(bands) = p.toon_bands {
-            diffuse = toon_ramp(diffuse, bands);
-        }
-        let mut reflected = s.albedo * diffuse;
-        if let Some((shininess, specular)) = p.blinn_phong {
-            reflected += DVec3::splat(specular * blinn_phong(s.normal, l, to_eye, shininess));
-        }
-        reflected
+    let diffuse = || {
+        let d = s.normal.dot(l).max(0.0);
+        s.albedo * p.toon_bands.map_or(d, |bands| toon_ramp(d, bands))
+    };
+    let reflected = match p.brdf {
+        Brdf::Lambert => diffuse(),
+        Brdf::BlinnPhong {
+            shininess,
+            specular,
+        } => diffuse() + DVec3::splat(specular * blinn_phong(s.normal, l, to_eye, shininess)),
+        Brdf::Ggx => ggx(s.normal, l, to_eye, s.albedo, s.roughness, s.metallic),
     };
     let color = DVec3::from(light.color.map(f64::from));
     reflected * color * (cone * attenuation(d, radius))

@@ -4,21 +4,24 @@
 use crate::common::DepthMapping;
 use crate::cpu::clusters::Grid;
 use crate::cpu::post::{CameraPair, PostParams};
-use crate::cpu::shading::ShadingParams;
+use crate::cpu::shading::{Brdf, ShadingParams};
 use crate::scene::Scene;
 use crate::variant::{ShadingModel, ToonMode, Variant};
 
 impl ShadingParams {
     pub fn of(v: &Variant) -> Self {
         Self {
-            blinn_phong: match v.shading.model {
-                ShadingModel::Lambert | ShadingModel::Ggx => None,
+            brdf: match v.shading.model {
+                ShadingModel::Lambert => Brdf::Lambert,
                 ShadingModel::BlinnPhong {
                     shininess,
                     specular,
-                } => Some((shininess as f64, specular as f64)),
+                } => Brdf::BlinnPhong {
+                    shininess: shininess as f64,
+                    specular: specular as f64,
+                },
+                ShadingModel::Ggx => Brdf::Ggx,
             },
-            ggx: v.shading.model == ShadingModel::Ggx,
             ambient: v.shading.ambient as f64,
             toon_bands: v
                 .post

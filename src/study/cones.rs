@@ -168,17 +168,12 @@ pub fn table(rows: &[ConeRow]) -> Table {
     );
     for r in rows {
         if let Some(e) = &r.error {
-            t.row(
-                [
-                    r.scene.clone(),
-                    r.spot_fraction.to_string(),
-                    r.spot_test.clone(),
-                    format!("FAILED: {e}"),
-                ]
-                .into_iter()
-                .chain(std::iter::repeat_n(String::new(), 5))
-                .collect(),
-            );
+            let names = vec![
+                r.scene.clone(),
+                r.spot_fraction.to_string(),
+                r.spot_test.clone(),
+            ];
+            t.failed_row(names, e);
             continue;
         }
         t.row(vec![

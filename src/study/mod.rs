@@ -142,6 +142,7 @@ pub fn run(
     composer: &Composer,
     options: &StudyOptions,
 ) -> Result<StudyOutput, StudyError> {
+    let scenes: Vec<&str> = options.scenes.iter().map(|s| s.as_str()).collect();
     match name {
         StudyName::Codecs => {
             if options.samples == 0 {
@@ -168,7 +169,6 @@ pub fn run(
             )
         }
         StudyName::Slicing => {
-            let scenes: Vec<&str> = options.scenes.iter().map(|s| s.as_str()).collect();
             let rows = slicing::run(
                 gpu,
                 composer,
@@ -181,7 +181,6 @@ pub fn run(
             output(name, slicing::table(&rows), &rows, slicing::plot(&rows), ok)
         }
         StudyName::Cones => {
-            let scenes: Vec<&str> = options.scenes.iter().map(|s| s.as_str()).collect();
             let rows = cones::run(
                 gpu,
                 composer,

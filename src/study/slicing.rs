@@ -288,16 +288,7 @@ pub fn table(rows: &[SlicingRow]) -> Table {
         });
         for r in ranked {
             if let Some(e) = &r.error {
-                t.row(
-                    [
-                        format!("{s} / {}", r.scheme),
-                        r.grid.clone(),
-                        format!("FAILED: {e}"),
-                    ]
-                    .into_iter()
-                    .chain(std::iter::repeat_n(String::new(), 8))
-                    .collect(),
-                );
+                t.failed_row(vec![format!("{s} / {}", r.scheme), r.grid.clone()], e);
                 continue;
             }
             t.row(vec![

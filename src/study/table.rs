@@ -25,6 +25,17 @@ impl Table {
         self.rows.push(cells);
     }
 
+    /// A row for a run that failed: the cells that name it, then the error, then blanks.
+    pub fn failed_row(&mut self, names: Vec<String>, error: &str) {
+        let blanks = self.columns.len().saturating_sub(names.len() + 1);
+        let cells = names
+            .into_iter()
+            .chain([format!("FAILED: {error}")])
+            .chain(std::iter::repeat_n(String::new(), blanks))
+            .collect();
+        self.row(cells);
+    }
+
     fn widths(&self) -> Vec<usize> {
         self.columns
             .iter()
