@@ -27,6 +27,7 @@ impl Timings {
 }
 
 /// Where a pass writes its timestamps (when the adapter has them).
+#[derive(Clone, Copy)]
 pub struct TimestampSlot<'a> {
     query_set: &'a wgpu::QuerySet,
     index: u32,
@@ -45,6 +46,18 @@ impl<'a> TimestampSlot<'a> {
             query_set: s.query_set,
             beginning_of_pass_write_index: Some(s.index * 2),
             end_of_pass_write_index: Some(s.index * 2 + 1),
+        })
+    }
+
+    /// The beginning (`end` false) or the end of a pass that runs as two compute passes.
+    pub fn compute_part(
+        slot: Option<Self>,
+        end: bool,
+    ) -> Option<wgpu::ComputePassTimestampWrites<'a>> {
+        slot.map(|s| wgpu::ComputePassTimestampWrites {
+            query_set: s.query_set,
+            beginning_of_pass_write_index: (!end).then_some(s.index * 2),
+            end_of_pass_write_index: end.then_some(s.index * 2 + 1),
         })
     }
 }

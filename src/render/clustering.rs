@@ -2,7 +2,7 @@
 //! build cluster boxes and assign lights (count, prefix sum, fill). Their entry points, the
 //! buffers they clear and their dispatches.
 
-use super::clusters::{ClusterBuffers, SCAN_BLOCK};
+use super::clusters::{ClusterBuffers, SCAN_BLOCK, SORT_DISPATCH_BYTES};
 use super::passes::{ComputePipelines, set_compute_groups};
 use crate::compose::ClusterPass;
 use crate::gpu::TimestampSlot;
@@ -27,6 +27,7 @@ pub fn entries(pass: ClusterPass) -> &'static [&'static str] {
             "scan_blocks",
             "fill_lists",
             "finish_lists",
+            "sort_long_lists",
         ],
         ClusterPass::MarkActive => &["mark_active", "mark_visible"],
         ClusterPass::DepthRange => &["reduce", "finalize"],
@@ -58,12 +59,20 @@ pub fn encode(
         ClusterPass::LightAssign => {
             encoder.clear_buffer(&c.counts, 0, None);
             encoder.clear_buffer(&c.fill_cursors, 0, None);
+            encoder.clear_buffer(&c.sort_jobs, 0, Some(16));
         }
         ClusterPass::DepthRange | ClusterPass::ClusterBounds => {}
     }
+    // Light assignment ends with a second compute pass (the long-list sort, dispatched
+    // indirectly); the first pass then writes the beginning timestamp, the second the end.
+    let sorts = pass == ClusterPass::LightAssign;
     let mut cp = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
         label: Some(<&str>::from(pass)),
-        timestamp_writes: TimestampSlot::compute(slot),
+        timestamp_writes: if sorts {
+            TimestampSlot::compute_part(slot, false)
+        } else {
+            TimestampSlot::compute(slot)
+        },
     });
     set_compute_groups(&mut cp, groups);
     let pixels = (
@@ -95,6 +104,18 @@ pub fn encode(
     for (entry, (x, y, z)) in dispatches {
         cp.set_pipeline(p.get(entry));
         cp.dispatch_workgroups(x, y, z);
+    }
+    drop(cp);
+    if sorts {
+        // As many workgroups as finish_lists found lists too long to sort alone.
+        encoder.copy_buffer_to_buffer(&c.sort_jobs, 0, &c.sort_dispatch, 0, SORT_DISPATCH_BYTES);
+        let mut cp = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("sort long lists"),
+            timestamp_writes: TimestampSlot::compute_part(slot, true),
+        });
+        set_compute_groups(&mut cp, groups);
+        cp.set_pipeline(p.get("sort_long_lists"));
+        cp.dispatch_workgroups_indirect(&c.sort_dispatch, 0);
     }
 }
 

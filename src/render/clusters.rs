@@ -55,7 +55,11 @@ mod binding {
     pub const LIGHT_RANGES: u32 = 9;
     pub const FILL_CURSORS: u32 = 10;
     pub const SAMPLE_DEPTHS: u32 = 11;
+    pub const SORT_JOBS: u32 = 12;
 }
+
+/// Bytes of an indirect dispatch's arguments (x, y, z).
+pub const SORT_DISPATCH_BYTES: u64 = 12;
 
 /// Clusters of one scan workgroup (`SCAN_BLOCK` in light_assign.wesl).
 pub const SCAN_BLOCK: u32 = 256;
@@ -74,6 +78,12 @@ pub struct ClusterBuffers {
     pub light_ranges: wgpu::Buffer,
     pub fill_cursors: wgpu::Buffer,
     pub sample_depths: wgpu::Buffer,
+    /// The long lists to sort (`SortJobs` in build_bindings.wesl): a 16-byte header, then
+    /// (cluster, entries) each.
+    pub sort_jobs: wgpu::Buffer,
+    /// The indirect dispatch of the long-list sort, copied from `sort_jobs`' header (a
+    /// buffer cannot be bound for storage and read as indirect arguments in one dispatch).
+    pub sort_dispatch: wgpu::Buffer,
     /// Entries the index buffer holds.
     pub index_capacity: u32,
 }
@@ -124,6 +134,13 @@ impl ClusterBuffers {
             light_ranges: storage(gpu, "light cluster ranges", lights.max(1) as u64 * 16),
             fill_cursors: storage(gpu, "fill cursors", n * 4),
             sample_depths: storage(gpu, "cluster sample depths", n * 8),
+            sort_jobs: storage(gpu, "long-list sort jobs", 16 + n * 8),
+            sort_dispatch: gpu.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("long-list sort dispatch"),
+                size: SORT_DISPATCH_BYTES,
+                usage: wgpu::BufferUsages::INDIRECT | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            }),
             index_capacity,
         }
     }
@@ -143,6 +160,8 @@ impl ClusterBuffers {
             &self.light_ranges,
             &self.fill_cursors,
             &self.sample_depths,
+            &self.sort_jobs,
+            &self.sort_dispatch,
         ]
         .iter()
         .map(|b| b.size())
@@ -171,6 +190,7 @@ impl ClusterBuffers {
             binding::LIGHT_RANGES => &self.light_ranges,
             binding::FILL_CURSORS => &self.fill_cursors,
             binding::SAMPLE_DEPTHS => &self.sample_depths,
+            binding::SORT_JOBS => &self.sort_jobs,
             _ => return None,
         })
     }
