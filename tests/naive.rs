@@ -196,3 +196,47 @@ fn bad_requests_get_a_clear_message_and_exit_code_1() {
         assert!(!stderr.contains("panicked"), "{args:?} panicked: {stderr}");
     }
 }
+
+/// Where the adapter's driver ends a shader's loops early (llvmpipe), a frame whose light
+/// loop would pass the cap is refused, naming the cap, rather than shaded with lights left
+/// out; at the cap it renders, and the last light is not left out. Elsewhere there is no cap.
+#[test]
+fn light_loops_past_the_adapters_loop_cap_are_refused() {
+    use clusterlab::compose::Composer;
+    use clusterlab::render::Renderer;
+    use clusterlab::scene::Light;
+    let gpu = gpu();
+    let v = load("naive_forward").variant;
+    let base = clusterlab::scene::generate("one_light", small("one_light", 32, 18, Some(1)))
+        .expect("scene");
+    let cap = clusterlab::gpu::expect::max_lights_per_pixel(&gpu);
+    let with_lights = |n: u32| {
+        // Dark specks far away, then one bright light above the plane, last in the list.
+        let mut scene = base.clone();
+        scene.lights = vec![Light::point([100.0; 3], 0.01, [0.0; 3], 0.0); n as usize - 1];
+        scene
+            .lights
+            .push(Light::point([0.0, 1.5, 0.0], 6.0, [1.0; 3], 20.0));
+        scene.params.lights = n;
+        scene
+    };
+    let n = cap.unwrap_or(65535);
+    let mut r = Renderer::new(&gpu, &Composer::default(), &v, &with_lights(n)).expect("renders");
+    let lit = r.render().expect("frame").ldr.iter().map(|p| p[0]).max();
+    assert!(
+        lit > Some(200),
+        "{n} lights: the last light is left out ({lit:?})"
+    );
+    drop(r);
+    match (
+        cap,
+        Renderer::new(&gpu, &Composer::default(), &v, &with_lights(n + 1)),
+    ) {
+        (Some(_), Err(e)) => {
+            let message = e.to_string();
+            assert!(message.contains("ends a shader's loops"), "{message}");
+        }
+        (Some(_), Ok(_)) => panic!("{} lights on a capped adapter were not refused", n + 1),
+        (None, r) => assert!(r.is_ok(), "no cap here, yet refused"),
+    }
+}

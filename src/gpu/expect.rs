@@ -94,3 +94,22 @@ pub fn allowance(gpu: &Gpu, check: Check<'_>) -> Option<&'static Deviation> {
         .iter()
         .find(|d| d.check == check && d.on.holds_for(gpu.backend, gpu.hdr_format))
 }
+
+/// Iterations Mesa's llvmpipe (lavapipe and its OpenGL driver) lets one shader invocation
+/// loop in all, over every loop together (`LP_MAX_TGSI_LOOP_ITERATIONS`); past it the loops
+/// end early without a word. Measured: naive forward with 65536 lights leaves the last one
+/// out.
+pub const LLVMPIPE_LOOP_ITERATIONS: u32 = 65535;
+
+/// Iterations kept for the other loops of a shading invocation (a codec's neighbour
+/// search, the list lookup), which share the cap with its light loop.
+const OTHER_LOOPS: u32 = 1024;
+
+/// The most lights a per-pixel light loop may visit on this adapter, where its driver caps
+/// a shader's loop iterations; None where it does not.
+pub fn max_lights_per_pixel(gpu: &Gpu) -> Option<u32> {
+    gpu.adapter
+        .name
+        .contains("llvmpipe")
+        .then_some(LLVMPIPE_LOOP_ITERATIONS - OTHER_LOOPS)
+}

@@ -31,7 +31,7 @@ use crate::compose::{self, ComposedPass, Composer, FramePlan, Pass, PassId, Shad
 use crate::cpu::clusters::ClusterLists;
 use crate::gpu::{Gpu, GpuError, TimestampSlot, Timings, read_texture};
 use crate::scene::Scene;
-use crate::variant::{Assignment, Variant, ZSlicing};
+use crate::variant::{Assignment, Pipeline, Variant, ZSlicing};
 use lists::CpuAssignment;
 use passes::ComputePipelines;
 use post::PostChain;
@@ -141,6 +141,18 @@ impl<'g> Renderer<'g> {
     ) -> Result<Self, RenderError> {
         let (width, height) = (scene.params.width, scene.params.height);
         gpu.check_size(width, height)?;
+        // Every pipeline but scissor deferred loops over up to all the lights per pixel.
+        if let Some(limit) = crate::gpu::expect::max_lights_per_pixel(gpu)
+            && variant.pipeline != Pipeline::DeferredScissor
+            && scene.lights.len() > limit as usize
+        {
+            return Err(RenderError::Gpu(GpuError::TooLarge(format!(
+                "{} lights: adapter `{}` ends a shader's loops after {} iterations in all, so a light loop over more than {limit} lights would leave lights out without a word; use at most {limit} lights on this adapter, or scissor deferred",
+                scene.lights.len(),
+                gpu.adapter.name,
+                crate::gpu::expect::LLVMPIPE_LOOP_ITERATIONS
+            ))));
+        }
         let still_camera = scene.camera == scene.prev_camera;
         let plan = compose::plan(variant, still_camera);
         let skips = Skips {
