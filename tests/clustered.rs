@@ -172,7 +172,22 @@ fn clustered_output_equals_naive_output() {
         if scene.lights.iter().any(|l| l.is_spot()) {
             variants.extend(spot_variants());
         }
+        // The most lights that reach one pixel, for adapters that round a blended sum (see
+        // `stress::error_bound`).
+        let overlap = {
+            let mut r = Renderer::new(
+                &gpu,
+                &composer,
+                &naive_twin(&exact_variants()[0].variant),
+                &scene,
+            )
+            .unwrap();
+            r.render().unwrap();
+            r.stats().unwrap().max_useful_per_pixel as usize
+        };
         for v in variants {
+            // 1 LSB, unless the adapter declares a rounding of blended light sums.
+            let bound = clusterlab::stress::error_bound(&v.variant, &gpu, overlap);
             // Two frames, so previous-frame z-ranges are in use.
             let frame = render(&gpu, &v.variant, &scene, 2);
             let naive = render(&gpu, &naive_twin(&v.variant), &scene, 1);
@@ -184,10 +199,13 @@ fn clustered_output_equals_naive_output() {
                 scene.lights.len(),
                 scene.lights.iter().filter(|l| l.is_spot()).count()
             );
-            assert!(e.max_abs_8bit <= 1 && e.nan_pixels == 0, "{what}: {e:?}");
             assert!(
-                max_lsb(&frame, &naive) <= 1,
-                "{what}: {} LSB from naive",
+                e.max_abs_8bit <= bound && e.nan_pixels == 0,
+                "{what}: bound {bound}, {e:?}"
+            );
+            assert!(
+                max_lsb(&frame, &naive) <= bound,
+                "{what}: {} LSB from naive (bound {bound})",
                 max_lsb(&frame, &naive)
             );
         }

@@ -13,8 +13,12 @@ use crate::gpu::{GpuError, read_buffer};
 pub struct FrameStats {
     /// Light evaluations performed by the shading pass.
     pub light_evals: u64,
-    /// Those with the surface closer to the light than its radius.
+    /// Those with the surface closer to the light than its radius (and inside its cone).
     pub useful_light_evals: u64,
+    /// Most useful evaluations at one pixel: the most lights that light one surface point
+    /// (summed over the fragments shaded there).
+    #[serde(default)]
+    pub max_useful_per_pixel: u32,
     /// Light-cluster pairs left out by a per-cluster cap.
     pub dropped_lights: u64,
     /// Clusters that hold at least one visible sample.
@@ -56,16 +60,18 @@ impl Renderer<'_> {
     pub fn stats(&mut self) -> Result<FrameStats, RenderError> {
         let gpu = self.gpu;
         self.run_fitted(true)?;
-        let sum = |b: &wgpu::Buffer| -> Result<u64, GpuError> {
+        // Sum and maximum of a per-pixel counter.
+        let total = |b: &wgpu::Buffer| -> Result<(u64, u32), GpuError> {
             let bytes = read_buffer(gpu, b, 0, b.size())?;
-            Ok(bytemuck::cast_slice::<u8, u32>(&bytes)
-                .iter()
-                .map(|&v| v as u64)
-                .sum())
+            let counts: &[u32] = bytemuck::cast_slice(&bytes);
+            let sum = counts.iter().map(|&v| v as u64).sum();
+            Ok((sum, counts.iter().copied().max().unwrap_or(0)))
         };
+        let useful = total(&self.res.counters.useful)?;
         let mut stats = FrameStats {
-            light_evals: sum(&self.res.counters.evals)?,
-            useful_light_evals: sum(&self.res.counters.useful)?,
+            light_evals: total(&self.res.counters.evals)?.0,
+            useful_light_evals: useful.0,
+            max_useful_per_pixel: useful.1,
             gbuffer_bytes_per_pixel: if self.variant.pipeline.is_deferred() {
                 gbuffer::bytes_per_pixel(&self.variant)
             } else {
