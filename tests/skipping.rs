@@ -127,3 +127,24 @@ fn motion_blur_needs_a_moving_camera() {
     let (on, _) = both(&gpu, &v, &moving);
     assert!(!skipped(&on).contains(&"motion_blur"));
 }
+
+#[test]
+fn a_scene_without_spots_shades_without_the_cone() {
+    let gpu = gpu();
+    let cone = clusterlab::render::SPOT_CONE;
+    for name in ["naive_forward", "forward_plus", "clustered_deferred_ggx"] {
+        let v = load(name).variant;
+        let points = scene::generate("atrium", small("atrium", 64, 36, Some(64))).unwrap();
+        let (on, off) = both(&gpu, &v, &points);
+        assert!(skipped(&on).contains(&cone), "{name}: {:?}", on.skipped);
+        assert!(!skipped(&off).contains(&cone), "{name}: {:?}", off.skipped);
+        assert_same_image(&on, &off, name);
+        let spots = scene::generate("stage", small("stage", 64, 36, Some(64))).unwrap();
+        let (on, _) = both(&gpu, &v, &spots);
+        assert!(
+            !skipped(&on).contains(&cone),
+            "{name} with spots: {:?}",
+            on.skipped
+        );
+    }
+}

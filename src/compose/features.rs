@@ -23,6 +23,9 @@ pub fn feature_flags(v: &Variant) -> Vec<(&'static str, bool)> {
             matches!(v.shading.model, ShadingModel::BlinnPhong { .. }),
         ),
         ("ggx", v.shading.model == ShadingModel::Ggx),
+        // The spot cone in the shading: on for every variant; a renderer turns it off for a
+        // scene without spots (`render::Renderer::new`).
+        ("spot_lights", true),
         (
             "spot_cone_test",
             p.is_clustered() && clusters.spot_test == SpotTest::Cone,

@@ -113,12 +113,7 @@ impl Composer {
 
     /// Compose and validate one pass of a variant.
     pub fn compose(&self, variant: &Variant, pass: &Pass) -> Result<ComposedPass, ShaderError> {
-        self.compose_root(
-            pass.name(),
-            pass.root,
-            &feature_flags(variant),
-            &constants_module(variant),
-        )
+        self.compose_with(variant, pass, &[])
     }
 
     /// The instrumented twin of a pass: feature `stats` on, so shading passes count their
@@ -128,10 +123,21 @@ impl Composer {
         variant: &Variant,
         pass: &Pass,
     ) -> Result<ComposedPass, ShaderError> {
+        self.compose_with(variant, pass, &[("stats", true)])
+    }
+
+    /// A pass of a variant with some of its feature flags set otherwise: `stats` for the
+    /// instrumented twin, or what a scene does not need (`spot_lights` off without spots).
+    pub fn compose_with(
+        &self,
+        variant: &Variant,
+        pass: &Pass,
+        overrides: &[(&str, bool)],
+    ) -> Result<ComposedPass, ShaderError> {
         let mut features = feature_flags(variant);
         for (name, on) in &mut features {
-            if *name == "stats" {
-                *on = true;
+            if let Some(&(_, value)) = overrides.iter().find(|(n, _)| n == name) {
+                *on = value;
             }
         }
         self.compose_root(

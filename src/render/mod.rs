@@ -65,7 +65,8 @@ pub struct FrameOutput {
     pub wall_ms: f64,
     /// CPU light assignment time, for variants with `assignment: Cpu`.
     pub cpu_assign_ms: Option<f64>,
-    /// Passes of the variant this frame did not run (see `Variant::skip_unneeded`).
+    /// Passes of the variant this frame did not run, and `spot_cone` when its light loops
+    /// were composed without the cone (see `Variant::skip_unneeded`).
     pub skipped: Vec<String>,
 }
 
@@ -116,9 +117,15 @@ struct Skips {
     /// Neither lights nor camera move: after two frames (the second settles a depth range
     /// taken from the previous frame) the lists, boxes and range stay valid.
     static_scene: bool,
+    /// No light is a spot: the light loops are composed without the cone (reported as the
+    /// skipped part `spot_cone`).
+    no_spots: bool,
     /// Skipping is on at all.
     on: bool,
 }
+
+/// How a frame reports the spot cone it left out of its light loops.
+pub const SPOT_CONE: &str = "spot_cone";
 
 /// What running a frame returned.
 struct FrameRun {
@@ -158,24 +165,29 @@ impl<'g> Renderer<'g> {
         let skips = Skips {
             no_lights: variant.skip_unneeded && scene.lights.is_empty(),
             static_scene: variant.skip_unneeded && still_camera && !scene.lights_move,
+            no_spots: variant.skip_unneeded && !scene.lights.iter().any(|l| l.is_spot()),
             on: variant.skip_unneeded,
         };
+        // A scene without spots needs no cone in its light loops: on a software rasteriser,
+        // which runs both sides of a branch, the cone costs point lights about half again.
+        let frame = [("spot_lights", !skips.no_spots)];
+        let instrumented_frame = [frame[0], ("stats", true)];
         let mut composed: Composed = Vec::new();
         for p in &plan.passes {
             if composed.iter().any(|(q, _, _)| q.id == p.id) {
                 continue;
             }
             let instrumented = if p.id.is_shading() {
-                Some(composer.compose_instrumented(variant, p)?)
+                Some(composer.compose_with(variant, p, &instrumented_frame)?)
             } else {
                 None
             };
-            composed.push((*p, composer.compose(variant, p)?, instrumented));
+            composed.push((*p, composer.compose_with(variant, p, &frame)?, instrumented));
         }
         let support = plan
             .support
             .iter()
-            .map(|p| Ok((*p, composer.compose(variant, p)?)))
+            .map(|p| Ok((*p, composer.compose_with(variant, p, &frame)?)))
             .collect::<Result<Vec<_>, RenderError>>()?;
         let res = gpu.scoped("creating resources", || {
             FrameResources::new(gpu, variant, scene)
@@ -386,6 +398,9 @@ impl<'g> Renderer<'g> {
             self.assign_on_cpu()?
         };
         let mut skipped: Vec<String> = self.plan.never.iter().map(|p| p.name().into()).collect();
+        if self.skips.no_spots {
+            skipped.push(SPOT_CONE.into());
+        }
         if self.cpu_assignment.is_some() && cpu_ms.is_none() {
             skipped.push(assign.name().into());
         }
