@@ -175,7 +175,7 @@ pub fn run_case(gpu: &Gpu, composer: &Composer, case: &Case, name: &str, v: &Var
 
 /// Light-cluster pairs where the light clearly lights part of the cluster (see
 /// `clearly_touches`) but is not in the GPU's list for it: their count, and the first named
-/// with its cluster.
+/// with its cluster. Renders two frames of its own (see [`missing_lights_of`]).
 pub fn missing_lights(
     gpu: &Gpu,
     composer: &Composer,
@@ -183,11 +183,20 @@ pub fn missing_lights(
     scene: &Scene,
 ) -> Result<(u64, Option<String>), String> {
     let mut r = Renderer::new(gpu, composer, v, scene).map_err(|e| e.to_string())?;
-    // Twice: with the previous frame's depth range, the second frame's lists are built on
-    // the range the first left, which is the range read back after it.
     for _ in 0..2 {
         r.render().map_err(|e| e.to_string())?;
     }
+    missing_lights_of(&r, v, scene)
+}
+
+/// [`missing_lights`] in the lists of renderer `r`'s last frame. It must have rendered at
+/// least two frames: with the previous frame's depth range, the second frame's lists are
+/// built on the range the first left, which is the range read back after it.
+pub fn missing_lights_of(
+    r: &Renderer,
+    v: &Variant,
+    scene: &Scene,
+) -> Result<(u64, Option<String>), String> {
     let lists = r
         .cluster_lists()
         .map_err(|e| e.to_string())?

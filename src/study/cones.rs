@@ -66,7 +66,7 @@ fn measure(
         shading.push(f.timings.get("forward"));
     }
     let stats = r.stats().map_err(|e| e.to_string())?;
-    let (missed, _) = crate::stress::missing_lights(gpu, composer, v, scene)?;
+    let (missed, _) = crate::stress::missing_lights_of(&r, v, scene)?;
     Ok((stats, crate::run::median(shading), missed))
 }
 
