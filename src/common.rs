@@ -17,7 +17,15 @@ pub struct Vertex {
     pub albedo: [f32; 3],
     /// Perceptual roughness and metallic, each in [0, 1] (read by GGX shading only).
     pub material: [f32; 2],
+    /// Texture coordinates of the base colour texture (glTF's `TEXCOORD_0`).
+    pub uv: [f32; 2],
+    /// Layer of the scene's base colour texture array that multiplies `albedo`, or
+    /// [`NO_TEXTURE`].
+    pub texture: u32,
 }
+
+/// `Vertex::texture` of a vertex whose albedo is its colour alone.
+pub const NO_TEXTURE: u32 = u32::MAX;
 
 /// A point or spot light, 48 bytes. Mirrors `shaders/common/lights.wesl`.
 ///
@@ -71,13 +79,34 @@ impl Light {
         inner_degrees: f64,
         outer_degrees: f64,
     ) -> Light {
+        Light::spot_radians(
+            position,
+            radius,
+            color,
+            intensity,
+            direction,
+            inner_degrees.to_radians(),
+            outer_degrees.to_radians(),
+        )
+    }
+
+    /// [`Light::spot`] with its half-angles in radians (as glTF gives them).
+    pub fn spot_radians(
+        position: [f32; 3],
+        radius: f32,
+        color: [f32; 3],
+        intensity: f32,
+        direction: [f64; 3],
+        inner: f64,
+        outer: f64,
+    ) -> Light {
         let d = glam::DVec3::from(direction).normalize_or(glam::DVec3::NEG_Y);
-        let outer = outer_degrees.clamp(0.0, MAX_SPOT_ANGLE_DEGREES);
-        let inner = inner_degrees.clamp(0.0, outer);
+        let outer = outer.clamp(0.0, MAX_SPOT_ANGLE_DEGREES.to_radians());
+        let inner = inner.clamp(0.0, outer);
         Light {
             direction: d.as_vec3().to_array(),
-            cos_outer: outer.to_radians().cos() as f32,
-            cos_inner: inner.to_radians().cos() as f32,
+            cos_outer: outer.cos() as f32,
+            cos_inner: inner.cos() as f32,
             ..Light::point(position, radius, color, intensity)
         }
     }

@@ -38,8 +38,22 @@ enum Command {
     },
     /// Explain the variant schema: every field, its meaning, allowed values and default.
     Explain,
-    /// List the built-in scenes and their default parameters.
-    Scenes,
+    /// List the built-in scenes and their default parameters, or write one as glTF.
+    Scenes {
+        /// Write built-in scene NAME (meshes, materials, lights, camera and its motion) to
+        /// FILE as binary glTF (.glb); `--scene FILE` then loads it.
+        #[arg(long, num_args = 2, value_names = ["NAME", "FILE"])]
+        export: Option<Vec<String>>,
+        /// With --export: number of lights (default: the scene's).
+        #[arg(long, requires = "export")]
+        lights: Option<u32>,
+        /// With --export: seed of the scene generator.
+        #[arg(long, requires = "export")]
+        seed: Option<u64>,
+        /// With --export: fraction of the lights that are spots, in 0..=1.
+        #[arg(long, requires = "export", value_parser = parse_fraction)]
+        spots: Option<f32>,
+    },
     /// List every GPU adapter wgpu sees, what each offers clusterlab, and which one render,
     /// matrix, stress and study would use and why: the first thing to paste into a bug report.
     Adapters {
@@ -87,7 +101,8 @@ enum Command {
         /// Slicing and cones: image size, WIDTHxHEIGHT.
         #[arg(long, default_value = "640x360", value_parser = parse_size)]
         size: (u32, u32),
-        /// Slicing and cones: comma-separated built-in scenes (default: all).
+        /// Slicing and cones: comma-separated scenes, built-in names or glTF files (default:
+        /// every built-in scene).
         #[arg(long, value_delimiter = ',')]
         scenes: Vec<String>,
         /// Slicing and cones: lights in every scene (default: each scene's own).
@@ -156,7 +171,8 @@ struct MatrixArgs {
     /// Variant files, folders of them, or names in variants/ (default: variants/).
     #[arg(long, num_args = 1..)]
     variants: Vec<String>,
-    /// Comma-separated built-in scenes (default: all; see `clusterlab scenes`).
+    /// Comma-separated scenes: built-in names (see `clusterlab scenes`) or glTF files
+    /// (.gltf or .glb) (default: every built-in scene).
     #[arg(long, value_delimiter = ',')]
     scenes: Vec<String>,
     /// A swept parameter: lights=64,256,...  radius=1,2..4,...  grid=16x9x24,...
@@ -193,7 +209,7 @@ struct RenderArgs {
     /// A variant file, or the name of one in variants/.
     #[arg(long)]
     variant: String,
-    /// A built-in scene (see `clusterlab scenes`).
+    /// A built-in scene (see `clusterlab scenes`), or a glTF file (.gltf or .glb).
     #[arg(long)]
     scene: String,
     /// Number of lights (default: the scene's).
@@ -311,7 +327,13 @@ fn main() -> ExitCode {
             print!("{}", clusterlab::explain::explain());
             Ok(true)
         }
-        Command::Scenes => {
+        Command::Scenes {
+            export: Some(export),
+            lights,
+            seed,
+            spots,
+        } => export_scene(&export[0], Path::new(&export[1]), lights, seed, spots),
+        Command::Scenes { .. } => {
             scenes();
             Ok(true)
         }
@@ -459,6 +481,36 @@ fn scenes() {
     }
 }
 
+fn export_scene(
+    name: &str,
+    file: &Path,
+    lights: Option<u32>,
+    seed: Option<u64>,
+    spots: Option<f32>,
+) -> Result<bool, String> {
+    let info = clusterlab::scene::find_scene(name)
+        .ok_or_else(|| clusterlab::scene::SceneError::Unknown(name.to_string()).to_string())?;
+    let mut params = info.defaults;
+    params.lights = lights.unwrap_or(params.lights);
+    params.seed = seed.unwrap_or(params.seed);
+    params.spots = spots.unwrap_or(params.spots);
+    let scene = clusterlab::scene::generate(name, params).map_err(|e| e.to_string())?;
+    let bytes = clusterlab::scene::export::to_glb(&scene).map_err(|e| format!("{name}: {e}"))?;
+    if let Some(dir) = file.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir)
+            .map_err(|e| format!("{}: cannot create folder: {e}", dir.display()))?;
+    }
+    clusterlab::run::write_atomic(file, &bytes).map_err(|e| e.to_string())?;
+    println!(
+        "wrote {} ({} triangles, {} lights, {} bytes)",
+        file.display(),
+        scene.indices.len() / 3,
+        scene.lights.len(),
+        bytes.len()
+    );
+    Ok(true)
+}
+
 fn adapters(json: bool, backend: Option<&str>) -> Result<bool, String> {
     let survey = clusterlab::gpu::adapters::survey(backend);
     if json {
@@ -482,9 +534,7 @@ fn render(args: &RenderArgs) -> Result<bool, String> {
         }
         loaded.name = format!("{}+{}", loaded.name, debug_view_name(view));
     }
-    let info = clusterlab::scene::find_scene(&args.scene)
-        .ok_or_else(|| clusterlab::scene::SceneError::Unknown(args.scene.clone()).to_string())?;
-    let mut params = info.defaults;
+    let mut params = clusterlab::scene::defaults(&args.scene).map_err(|e| e.to_string())?;
     if let Some((w, h)) = args.size {
         (params.width, params.height) = (w, h);
     }
@@ -534,6 +584,12 @@ fn render(args: &RenderArgs) -> Result<bool, String> {
             r.adapter.backend,
             r.adapter.driver
         );
+        if let Some(file) = &r.scene_file {
+            println!("  scene file: {} (sha256 {})", file.path, file.sha256);
+        }
+        for note in &r.scene_notes {
+            println!("  note: {note}");
+        }
         println!("  timing: {}", r.timing_source);
         // The result columns, as the matrix table and CSV have them.
         let m = r.measured();

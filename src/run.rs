@@ -21,6 +21,12 @@ use crate::variant::LoadedVariant;
 pub struct RenderReport {
     pub variant: String,
     pub scene: String,
+    /// The file of a file scene and its SHA-256 (absent for a built-in scene).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub scene_file: Option<crate::scene::SceneFile>,
+    /// What the scene's loader left out or chose.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub scene_notes: Vec<String>,
     pub adapter: AdapterSummary,
     pub size: [u32; 2],
     pub lights: u32,
@@ -162,7 +168,7 @@ pub fn run_scene(
     let images = match out {
         Some(dir) => write_images(
             dir,
-            &format!("{}@{}", variant.name, scene.name),
+            &safe_file_name(&format!("{}@{}", variant.name, scene.name)),
             &frame,
             &reference,
         )?,
@@ -177,6 +183,8 @@ pub fn run_scene(
     let report = RenderReport {
         variant: variant.name.clone(),
         scene: scene.name.clone(),
+        scene_file: scene.file.clone(),
+        scene_notes: scene.notes.clone(),
         adapter: gpu.adapter.clone(),
         size: [params.width, params.height],
         lights: scene.lights.len() as u32,
@@ -203,6 +211,20 @@ pub fn run_scene(
         frame,
         reference,
     })
+}
+
+/// `text` as a file name: characters other than letters, digits and `_-.@=` become `_`
+/// (a file scene's name is a path).
+pub fn safe_file_name(text: &str) -> String {
+    text.chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || "_-.@=".contains(c) {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect()
 }
 
 fn round3(x: f64) -> f64 {

@@ -7,6 +7,19 @@ use strum::IntoEnumIterator;
 
 use crate::variant::*;
 
+/// The feature flags of `v` with some set otherwise: `stats` for the instrumented twin of a
+/// pass, or what a scene needs (`spot_lights` off without spots, `base_color_texture` on
+/// with textures).
+pub fn features_with(v: &Variant, overrides: &[(&str, bool)]) -> Vec<(&'static str, bool)> {
+    let mut features = feature_flags(v);
+    for (name, on) in &mut features {
+        if let Some(&(_, value)) = overrides.iter().find(|(n, _)| n == name) {
+            *on = value;
+        }
+    }
+    features
+}
+
 /// Every feature flag the shaders may test, with its value for `v`. All flags are always
 /// set (true or false): the composer treats an unset flag as an error.
 pub fn feature_flags(v: &Variant) -> Vec<(&'static str, bool)> {
@@ -26,6 +39,9 @@ pub fn feature_flags(v: &Variant) -> Vec<(&'static str, bool)> {
         // The spot cone in the shading: on for every variant; a renderer turns it off for a
         // scene without spots (`render::Renderer::new`).
         ("spot_lights", true),
+        // The base colour texture: off for every variant; a renderer turns it on for a scene
+        // that has textures (a file scene).
+        ("base_color_texture", false),
         (
             "spot_cone_test",
             p.is_clustered() && clusters.spot_test == SpotTest::Cone,

@@ -11,7 +11,7 @@ mod passes;
 mod resolver;
 
 pub use diagnostics::SourceLocation;
-pub use features::{constants_module, feature_flags};
+pub use features::{constants_module, feature_flags, features_with};
 pub use passes::{
     ClusterPass, FramePlan, Pass, PassId, PassKind, PostPass, RasterPass, ScreenPass, passes, plan,
 };
@@ -134,12 +134,7 @@ impl Composer {
         pass: &Pass,
         overrides: &[(&str, bool)],
     ) -> Result<ComposedPass, ShaderError> {
-        let mut features = feature_flags(variant);
-        for (name, on) in &mut features {
-            if let Some(&(_, value)) = overrides.iter().find(|(n, _)| n == name) {
-                *on = value;
-            }
-        }
+        let features = features_with(variant, overrides);
         self.compose_root(
             pass.name(),
             pass.root,

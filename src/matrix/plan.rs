@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 
-use crate::scene::{SceneParams, find_scene};
+use crate::scene::SceneParams;
 use crate::variant::{self, LoadedVariant, Pipeline, Variant};
 
 /// One swept parameter and its values.
@@ -208,6 +208,9 @@ pub struct CellSpec {
     pub variant: String,
     pub variant_path: PathBuf,
     pub scene: String,
+    /// SHA-256 of a file scene (its file, buffers and images): two files are two scenes.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub scene_sha256: Option<String>,
     pub params: ParamsRecord,
     /// Swept values by parameter.
     pub sweep: BTreeMap<String, String>,
@@ -226,8 +229,12 @@ impl CellSpec {
     pub fn group(&self) -> String {
         let p = &self.params;
         format!(
-            "{} {}x{} {} lights r{}..{} seed {} t{} spots {}",
+            "{}{} {}x{} {} lights r{}..{} seed {} t{} spots {}",
             self.scene,
+            self.scene_sha256
+                .as_deref()
+                .map(|h| format!(" sha256:{}", &h[..h.len().min(12)]))
+                .unwrap_or_default(),
             p.width,
             p.height,
             p.lights,
@@ -246,16 +253,7 @@ impl CellSpec {
 
     /// The id as a file name.
     pub fn file_stem(&self) -> String {
-        self.id
-            .chars()
-            .map(|c| {
-                if c.is_ascii_alphanumeric() || "_-.@=".contains(c) {
-                    c
-                } else {
-                    '_'
-                }
-            })
-            .collect()
+        crate::run::safe_file_name(&self.id)
     }
 }
 
@@ -273,20 +271,15 @@ pub fn expand(studies: &[Study]) -> Result<Vec<PlannedCell>, String> {
     let mut cells: Vec<PlannedCell> = Vec::new();
     for study in studies {
         for scene in &study.scenes {
-            let info = find_scene(scene).ok_or_else(|| {
-                let names: Vec<&str> = crate::scene::SCENES.iter().map(|s| s.name).collect();
-                format!(
-                    "there is no scene `{scene}`; the scenes are {}",
-                    names.join(", ")
-                )
-            })?;
-            let mut base = info.defaults;
+            let mut base = crate::scene::defaults(scene).map_err(|e| e.to_string())?;
+            let file = crate::scene::file_of(scene).map_err(|e| e.to_string())?;
             if let Some((w, h)) = study.size {
                 (base.width, base.height) = (w, h);
             }
             for entry in &study.variants {
                 for point in sweep_points(&study.sweeps) {
-                    let cell = make_cell(&study.name, entry, scene, base, &point);
+                    let mut cell = make_cell(&study.name, entry, scene, base, &point);
+                    cell.spec.scene_sha256 = file.as_ref().map(|f| f.sha256.clone());
                     if !cells.iter().any(|c| c.spec.id == cell.spec.id) {
                         cells.push(cell);
                     }
@@ -406,6 +399,7 @@ fn make_cell(
             variant: entry.name.clone(),
             variant_path: entry.path.clone(),
             scene: scene.to_string(),
+            scene_sha256: None,
             params: params.into(),
             sweep,
             grid,
@@ -480,6 +474,7 @@ fn add_baselines(cells: &mut Vec<PlannedCell>) {
                 variant: name.clone(),
                 variant_path: path.clone(),
                 scene: spec.scene.clone(),
+                scene_sha256: spec.scene_sha256.clone(),
                 params: spec.params,
                 sweep,
                 grid: None,
@@ -611,7 +606,10 @@ mod tests {
         let mut s = study(&["forward_plus"], vec![]);
         s.scenes = vec!["moon".into()];
         let e = expand(&[s]).unwrap_err();
-        assert!(e.contains("no scene `moon`") && e.contains("atrium"), "{e}");
+        assert!(
+            e.contains("unknown scene `moon`") && e.contains("atrium"),
+            "{e}"
+        );
     }
 
     #[test]

@@ -48,8 +48,9 @@ impl ReferenceCache {
         let v = &variant.variant;
         // Everything the raster truth, the shading and the post chain depend on.
         let key = format!(
-            "{}|{:?}|{:?}|{:?}|{:?}|{}",
+            "{}|{:?}|{:?}|{:?}|{:?}|{:?}|{}",
             scene.name,
+            scene.file.as_ref().map(|f| &f.sha256),
             scene.params,
             ShadingParams::of(v),
             PostParams::of(v),

@@ -170,8 +170,11 @@ impl<'g> Renderer<'g> {
         };
         // A scene without spots needs no cone in its light loops: on a software rasteriser,
         // which runs both sides of a branch, the cone costs point lights about half again.
-        let frame = [("spot_lights", !skips.no_spots)];
-        let instrumented_frame = [frame[0], ("stats", true)];
+        let frame = [
+            ("spot_lights", !skips.no_spots),
+            ("base_color_texture", scene.textures.is_some()),
+        ];
+        let instrumented_frame = [frame[0], frame[1], ("stats", true)];
         let mut composed: Composed = Vec::new();
         for p in &plan.passes {
             if composed.iter().any(|(q, _, _)| q.id == p.id) {

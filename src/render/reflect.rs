@@ -51,25 +51,30 @@ pub fn layout_entries(pass: &ComposedPass) -> Result<GroupEntries, RenderError> 
                 has_dynamic_offset: false,
                 min_binding_size: None,
             },
+            (TypeInner::Sampler { comparison: false }, AddressSpace::Handle) => {
+                wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering)
+            }
             (
                 TypeInner::Image {
                     dim,
-                    arrayed: false,
+                    arrayed,
                     class,
                 },
                 AddressSpace::Handle,
             ) => {
-                let view_dimension = match dim {
-                    ImageDimension::D2 => wgpu::TextureViewDimension::D2,
+                let view_dimension = match (dim, arrayed) {
+                    (ImageDimension::D2, false) => wgpu::TextureViewDimension::D2,
+                    (ImageDimension::D2, true) => wgpu::TextureViewDimension::D2Array,
                     _ => return Err(unsupported("a texture other than 2D")),
                 };
                 match *class {
-                    // Every texture is read with `textureLoad`: unfilterable.
+                    // The one arrayed texture, the base colour textures, is filtered; every
+                    // other texture is read with `textureLoad`: unfilterable.
                     ImageClass::Sampled { kind, multi } => wgpu::BindingType::Texture {
                         sample_type: match kind {
-                            ScalarKind::Float => {
-                                wgpu::TextureSampleType::Float { filterable: false }
-                            }
+                            ScalarKind::Float => wgpu::TextureSampleType::Float {
+                                filterable: *arrayed,
+                            },
                             ScalarKind::Uint => wgpu::TextureSampleType::Uint,
                             ScalarKind::Sint => wgpu::TextureSampleType::Sint,
                             _ => return Err(unsupported("a texture of booleans")),
@@ -91,7 +96,7 @@ pub fn layout_entries(pass: &ComposedPass) -> Result<GroupEntries, RenderError> 
                     ImageClass::External => return Err(unsupported("an external texture")),
                 }
             }
-            _ => return Err(unsupported("not a buffer or a 2D texture")),
+            _ => return Err(unsupported("not a buffer, a sampler or a 2D texture")),
         };
         groups
             .entry(slot.group)

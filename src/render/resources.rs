@@ -70,6 +70,8 @@ pub struct SceneBuffers {
     pub lights: wgpu::Buffer,
     pub view: wgpu::Buffer,
     pub light_count: u32,
+    /// The base colour texture array and its sampler (scenes with textures).
+    pub base_color: Option<(wgpu::TextureView, wgpu::Sampler)>,
 }
 
 impl SceneBuffers {
@@ -113,12 +115,28 @@ impl SceneBuffers {
                 wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             ),
             light_count: scene.lights.len() as u32,
+            base_color: scene.textures.as_deref().map(|t| upload_textures(gpu, t)),
+        }
+    }
+
+    /// What sits at `@group(0) @binding(binding)` of a raster pass: the view, the lights, the
+    /// base colour textures and their sampler (`common/material.wesl`).
+    pub fn frame_binding(&self, binding: u32) -> Option<wgpu::BindingResource<'_>> {
+        match binding {
+            0 => Some(self.view.as_entire_binding()),
+            1 => Some(self.lights.as_entire_binding()),
+            2 => Some(wgpu::BindingResource::TextureView(
+                &self.base_color.as_ref()?.0,
+            )),
+            3 => Some(wgpu::BindingResource::Sampler(&self.base_color.as_ref()?.1)),
+            _ => None,
         }
     }
 
     pub fn vertex_layout() -> wgpu::VertexBufferLayout<'static> {
-        const ATTRIBUTES: [wgpu::VertexAttribute; 4] = wgpu::vertex_attr_array![
-            0 => Float32x3, 1 => Float32x3, 2 => Float32x3, 3 => Float32x2
+        const ATTRIBUTES: [wgpu::VertexAttribute; 6] = wgpu::vertex_attr_array![
+            0 => Float32x3, 1 => Float32x3, 2 => Float32x3, 3 => Float32x2, 4 => Float32x2,
+            5 => Uint32
         ];
         wgpu::VertexBufferLayout {
             array_stride: std::mem::size_of::<Vertex>() as u64,
@@ -126,6 +144,63 @@ impl SceneBuffers {
             attributes: &ATTRIBUTES,
         }
     }
+}
+
+/// The texture array on the GPU (sRGB, every mip level) and a trilinear repeating sampler.
+fn upload_textures(
+    gpu: &Gpu,
+    t: &crate::scene::TextureArray,
+) -> (wgpu::TextureView, wgpu::Sampler) {
+    let texture = gpu.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some("base colour textures"),
+        size: wgpu::Extent3d {
+            width: t.size,
+            height: t.size,
+            depth_or_array_layers: t.layers,
+        },
+        mip_level_count: t.mip_count(),
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: wgpu::TextureFormat::Rgba8UnormSrgb,
+        usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+        view_formats: &[],
+    });
+    for (level, bytes) in t.levels.iter().enumerate() {
+        let side = (t.size >> level).max(1);
+        gpu.queue.write_texture(
+            wgpu::TexelCopyTextureInfo {
+                texture: &texture,
+                mip_level: level as u32,
+                origin: wgpu::Origin3d::ZERO,
+                aspect: wgpu::TextureAspect::All,
+            },
+            bytes,
+            wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(4 * side),
+                rows_per_image: Some(side),
+            },
+            wgpu::Extent3d {
+                width: side,
+                height: side,
+                depth_or_array_layers: t.layers,
+            },
+        );
+    }
+    let view = texture.create_view(&wgpu::TextureViewDescriptor {
+        dimension: Some(wgpu::TextureViewDimension::D2Array),
+        ..Default::default()
+    });
+    let sampler = gpu.device.create_sampler(&wgpu::SamplerDescriptor {
+        label: Some("base colour"),
+        address_mode_u: wgpu::AddressMode::Repeat,
+        address_mode_v: wgpu::AddressMode::Repeat,
+        mag_filter: wgpu::FilterMode::Linear,
+        min_filter: wgpu::FilterMode::Linear,
+        mipmap_filter: wgpu::MipmapFilterMode::Linear,
+        ..Default::default()
+    });
+    (view, sampler)
 }
 
 /// Targets that hold f32 data exactly on every adapter: the f32 bits in rgba32uint
@@ -310,8 +385,7 @@ impl FrameResources {
             wgpu::BindingResource::TextureView(&t.view)
         }
         match (group, binding) {
-            (0, 0) => Some(self.scene.view.as_entire_binding()),
-            (0, 1) => Some(self.scene.lights.as_entire_binding()),
+            (0, b) => self.scene.frame_binding(b),
             (1, b) => self
                 .clusters
                 .as_ref()?

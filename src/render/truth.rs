@@ -27,17 +27,19 @@ pub fn raster_truth(
 ) -> Result<RasterTruth, RenderError> {
     let (w, h) = (scene.params.width, scene.params.height);
     gpu.check_size(w, h)?;
+    let features =
+        crate::compose::features_with(variant, &[("base_color_texture", scene.textures.is_some())]);
     let pass = composer.compose_root(
         "truth",
         "passes::truth",
-        &crate::compose::feature_flags(variant),
+        &features,
         &crate::compose::constants_module(variant),
     )?;
     let prepass = if variant.depth_prepass {
         Some(composer.compose_root(
             "truth depth pre-pass",
             "passes::depth_prepass",
-            &crate::compose::feature_flags(variant),
+            &features,
             &crate::compose::constants_module(variant),
         )?)
     } else {
@@ -46,9 +48,8 @@ pub fn raster_truth(
     let depth = DepthSetup::of(variant);
     let textures = gpu.scoped("raster truth", || -> Result<_, RenderError> {
         let buffers = SceneBuffers::upload(gpu, scene, depth.mapping);
-        let frame = |group: u32, binding: u32| match (group, binding) {
-            (0, 0) => Some(buffers.view.as_entire_binding()),
-            (0, 1) => Some(buffers.lights.as_entire_binding()),
+        let frame = |group: u32, binding: u32| match group {
+            0 => buffers.frame_binding(binding),
             _ => None,
         };
         let layout = PassLayout::of(gpu, &pass)?;

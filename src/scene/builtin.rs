@@ -189,6 +189,15 @@ fn make_spots(
     }
 }
 
+/// `p.lights` seeded lights in the box `lo..hi` with `power` in all, a fraction `p.spots` of
+/// them spots aimed down (as the atrium's): the lights of a file scene that has none.
+pub(super) fn seeded_lights(p: &SceneParams, lo: DVec3, hi: DVec3, power: f32) -> Vec<Light> {
+    let mut rng = Pcg64Mcg::seed_from_u64(p.seed);
+    let mut lights = random_lights(&mut rng, p, lo, hi, power);
+    make_spots(&mut lights, p, DVec3::NEG_Y, 0.8, (20.0, 60.0));
+    lights
+}
+
 /// A saturated colour of hue `h` in [0, 1), mixed a little towards white.
 fn hue_to_rgb(h: f32) -> [f32; 3] {
     let channel = |offset: f32| {
@@ -206,24 +215,17 @@ fn camera_pair(
     t: f64,
 ) -> (Camera, Camera) {
     // At the default time (1 s) the camera is at `eye`; it moves at `velocity` (scene units
-    // per second), so the previous frame's camera is `velocity * FRAME_DT` behind it.
-    let at = |time: f64| {
-        let offset = velocity * (time - 1.0);
-        Camera {
-            eye: eye + offset,
-            target: target + offset,
-            up: DVec3::Y,
-            fov_y: 60f64.to_radians(),
-            near: 0.1,
-            far: 0.0,
-        }
-    };
-    let (mut now, mut prev) = (at(t), at(t - FRAME_DT));
+    // per second), so the previous frame's camera is `velocity * FRAME_DT` behind it. Every
+    // number is single precision, as a glTF file holds it (`scenes --export`).
+    let rotation = Camera::look_rotation(eye, target, DVec3::Y).as_quat();
+    let fov_y = 60f32.to_radians();
+    let far = Scene::far_plane_for(&mesh.vertices, eye + velocity * (t - 1.0)) as f32;
     // One projection for both frames: motion vectors compare positions, not depths.
-    let far = Scene::far_plane_for(&mesh.vertices, now.eye);
-    now.far = far;
-    prev.far = far;
-    (now, prev)
+    let at = |time: f64| {
+        let eye = (eye + velocity * (time - 1.0)).as_vec3();
+        Camera::from_pose(eye, rotation, fov_y, 0.1, far)
+    };
+    (at(t), at(t - FRAME_DT))
 }
 
 fn finish(
@@ -243,6 +245,9 @@ fn finish(
         prev_camera: cams.1,
         // Built-in lights orbit their base positions with time.
         lights_move: true,
+        textures: None,
+        file: None,
+        notes: Vec::new(),
     }
 }
 

@@ -20,6 +20,8 @@ impl MeshBuilder {
             normal: n.normalize().as_vec3().to_array(),
             albedo,
             material: self.material,
+            uv: [0.0; 2],
+            texture: crate::common::NO_TEXTURE,
         }
     }
 

@@ -3,10 +3,16 @@
 //! parameters.
 
 mod builtin;
+pub mod export;
+pub mod file;
 mod mesh;
+mod textures;
 
 pub use builtin::{SCENES, SceneInfo, find_scene};
 pub use mesh::MeshBuilder;
+pub use textures::{MAX_TEXTURE_SIZE, TextureArray};
+
+use std::sync::Arc;
 
 use glam::{DMat4, DVec3};
 
@@ -28,6 +34,36 @@ pub struct Camera {
 }
 
 impl Camera {
+    /// The camera at `eye` turned by `rotation` (glTF's convention: it looks down its local
+    /// -Z with +Y up). Built-in scenes and glTF files both make their cameras here, from
+    /// single-precision values, so a scene exported to glTF and loaded back has the very
+    /// same camera.
+    pub fn from_pose(
+        eye: glam::Vec3,
+        rotation: glam::Quat,
+        fov_y: f32,
+        near: f32,
+        far: f32,
+    ) -> Camera {
+        let eye = eye.as_dvec3();
+        let rotation = rotation.as_dquat().normalize();
+        Camera {
+            eye,
+            target: eye + rotation * DVec3::NEG_Z,
+            up: rotation * DVec3::Y,
+            fov_y: fov_y as f64,
+            near: near as f64,
+            far: far as f64,
+        }
+    }
+
+    /// The rotation of a camera at `eye` looking at `target` with `up` roughly up (the
+    /// inverse of `from_pose`'s).
+    pub fn look_rotation(eye: DVec3, target: DVec3, up: DVec3) -> glam::DQuat {
+        let world_from_view = DMat4::look_at_rh(eye, target, up).inverse();
+        glam::DQuat::from_mat4(&world_from_view).normalize()
+    }
+
     pub fn view(&self) -> DMat4 {
         DMat4::look_at_rh(self.eye, self.target, self.up)
     }
@@ -74,6 +110,22 @@ pub struct Scene {
     /// Whether the lights move from frame to frame (their lists must then be rebuilt every
     /// frame); the geometry never moves.
     pub lights_move: bool,
+    /// The base colour textures the vertices' `texture` layers index (file scenes).
+    pub textures: Option<Arc<TextureArray>>,
+    /// The file the scene was loaded from; `None` for a built-in scene.
+    pub file: Option<SceneFile>,
+    /// What the loader left out or chose, one line each (printed by `render`).
+    pub notes: Vec<String>,
+}
+
+/// A file scene's identity: two files are two scenes, whatever their paths.
+#[derive(Clone, Debug, PartialEq, Eq, Hash, serde::Serialize)]
+pub struct SceneFile {
+    /// The path as given.
+    pub path: String,
+    /// SHA-256 of the file and of every buffer and image it references, in that order
+    /// (lowercase hex).
+    pub sha256: String,
 }
 
 impl Scene {
@@ -95,21 +147,51 @@ impl Scene {
 #[derive(Debug, PartialEq, thiserror::Error)]
 pub enum SceneError {
     #[error(
-        "unknown scene `{0}`; the built-in scenes are: {names} (see `clusterlab scenes`)",
+        "unknown scene `{0}`; the built-in scenes are: {names} (see `clusterlab scenes`), or give a glTF file (a path ending in .gltf or .glb)",
         names = scene_names()
     )]
     Unknown(String),
     #[error("{0}")]
     BadParam(String),
+    /// A glTF file that cannot be used, and why.
+    #[error("{path}: {message}")]
+    File { path: String, message: String },
 }
 
 fn scene_names() -> String {
     SCENES.iter().map(|s| s.name).collect::<Vec<_>>().join(", ")
 }
 
-/// Generate built-in scene `name` with `params`.
+/// The default parameters of scene `name`: a built-in scene's, or a glTF file's (read on
+/// first use).
+pub fn defaults(name: &str) -> Result<SceneParams, SceneError> {
+    if file::is_file(name) {
+        return Ok(file::defaults(&*file::load(name)?));
+    }
+    find_scene(name)
+        .map(|info| info.defaults)
+        .ok_or_else(|| SceneError::Unknown(name.to_string()))
+}
+
+/// The file behind scene `name` (None for a built-in scene).
+pub fn file_of(name: &str) -> Result<Option<SceneFile>, SceneError> {
+    if file::is_file(name) {
+        return Ok(Some(file::load(name)?.file.clone()));
+    }
+    Ok(None)
+}
+
+/// Make scene `name` with `params`: a built-in scene, or a `.gltf` or `.glb` file.
 pub fn generate(name: &str, params: SceneParams) -> Result<Scene, SceneError> {
+    check_params(&params)?;
+    if file::is_file(name) {
+        return Ok(file::instantiate(&*file::load(name)?, params));
+    }
     let info = find_scene(name).ok_or_else(|| SceneError::Unknown(name.to_string()))?;
+    Ok((info.generate)(params))
+}
+
+fn check_params(params: &SceneParams) -> Result<(), SceneError> {
     if params.width == 0 || params.height == 0 {
         return Err(SceneError::BadParam(format!(
             "size {}x{}: width and height must be at least 1",
@@ -134,5 +216,5 @@ pub fn generate(name: &str, params: SceneParams) -> Result<Scene, SceneError> {
             "light radius range {lo}..{hi}: both ends must be positive and min <= max"
         )));
     }
-    Ok((info.generate)(params))
+    Ok(())
 }

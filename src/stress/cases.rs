@@ -223,6 +223,9 @@ fn scene(
         camera: cam,
         prev_camera: cam,
         lights_move: false,
+        textures: None,
+        file: None,
+        notes: Vec::new(),
     }
 }
 
@@ -619,6 +622,8 @@ pub fn all() -> Vec<Case> {
             normal: [0.0; 3],
             albedo: RED,
             material: [0.5, 0.0],
+            uv: [0.0; 2],
+            texture: crate::common::NO_TEXTURE,
         };
         m.vertices.extend([
             zero([0.0, 0.5, 2.0]),

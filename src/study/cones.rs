@@ -9,7 +9,7 @@ use super::{StudyError, Table};
 use crate::compose::Composer;
 use crate::gpu::Gpu;
 use crate::render::Renderer;
-use crate::scene::{Scene, SceneError, SceneParams, find_scene};
+use crate::scene::{Scene, SceneParams};
 use crate::variant::{Clusters, Pipeline, SpotTest, Variant, ZSlicing};
 
 /// The spot fractions every scene runs at.
@@ -82,10 +82,8 @@ pub fn run(
 ) -> Result<Vec<ConeRow>, StudyError> {
     let mut rows = Vec::new();
     for &name in scenes {
-        let defaults = find_scene(name)
-            .ok_or_else(|| SceneError::Unknown(name.to_string()))
-            .map_err(|e| StudyError::Usage(e.to_string()))?
-            .defaults;
+        let defaults =
+            crate::scene::defaults(name).map_err(|e| StudyError::Usage(e.to_string()))?;
         let lights = lights.unwrap_or(defaults.lights);
         if lights == 0 {
             continue;

@@ -164,6 +164,9 @@ pub fn planes_scene(columns: u32, rows: u32) -> (Scene, Vec<f64>) {
         camera,
         prev_camera: camera,
         lights_move: false,
+        textures: None,
+        file: None,
+        notes: Vec::new(),
     };
     (scene, depths)
 }

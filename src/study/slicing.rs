@@ -9,7 +9,7 @@ use crate::compose::Composer;
 use crate::gpu::Gpu;
 use crate::plot::Plot;
 use crate::render::Renderer;
-use crate::scene::{Scene, SceneError, SceneParams, find_scene};
+use crate::scene::{Scene, SceneParams};
 use crate::variant::{Clusters, Pipeline, Variant, ZSlicing};
 
 /// Grids the study runs: coarse, the default, the default with enough slices for Olsson's
@@ -160,10 +160,8 @@ pub fn run(
     let scenes: Vec<Scene> = scenes
         .iter()
         .map(|&name| {
-            let defaults = find_scene(name)
-                .ok_or_else(|| SceneError::Unknown(name.to_string()))
-                .map_err(|e| StudyError::Usage(e.to_string()))?
-                .defaults;
+            let defaults =
+                crate::scene::defaults(name).map_err(|e| StudyError::Usage(e.to_string()))?;
             let params = SceneParams {
                 width: size.0,
                 height: size.1,
