@@ -148,7 +148,7 @@ impl Gpu {
             timestamps: features.contains(wgpu::Features::TIMESTAMP_QUERY)
                 && adapters::timestamps_are_per_pass(info.device_type),
             hdr_format,
-            limits,
+            limits: with_buffer_cap(limits),
             uncaptured,
             lost,
             overran: AtomicBool::new(false),
@@ -188,6 +188,52 @@ impl Gpu {
         } else {
             Err(GpuError::Captured(format!("{what}: {}", errors.join("; "))))
         }
+    }
+
+    /// Check that a scene's buffers and textures fit the adapter's limits (a file scene may
+    /// be any size).
+    pub fn check_scene(&self, scene: &crate::scene::Scene) -> Result<(), GpuError> {
+        let l = &self.limits;
+        let name = &scene.name;
+        let adapter = &self.adapter.name;
+        let buffers = [
+            (
+                "vertices",
+                scene.vertices.len(),
+                std::mem::size_of::<crate::common::Vertex>(),
+                l.max_buffer_size,
+            ),
+            ("indices", scene.indices.len(), 4, l.max_buffer_size),
+            (
+                "lights",
+                scene.lights.len(),
+                std::mem::size_of::<crate::common::Light>(),
+                l.max_buffer_size.min(l.max_storage_buffer_binding_size),
+            ),
+        ];
+        for (what, count, size, max) in buffers {
+            let bytes = count as u64 * size as u64;
+            if bytes > max {
+                return Err(GpuError::TooLarge(format!(
+                    "scene `{name}`: its {count} {what} take {bytes} bytes, more than the {max} bytes adapter `{adapter}` allows in one buffer; use a smaller scene (at most {} {what}) or an adapter with larger buffers",
+                    max / size as u64
+                )));
+            }
+        }
+        if let Some(t) = &scene.textures
+            && (t.size > l.max_texture_dimension_2d || t.layers > l.max_texture_array_layers)
+        {
+            return Err(GpuError::TooLarge(format!(
+                "scene `{name}`: its {} base colour textures of {}x{} exceed adapter `{adapter}` (at most {} layers of {}x{})",
+                t.layers,
+                t.size,
+                t.size,
+                l.max_texture_array_layers,
+                l.max_texture_dimension_2d,
+                l.max_texture_dimension_2d
+            )));
+        }
+        Ok(())
     }
 
     /// Check that a `width` x `height` frame fits the adapter's limits.
@@ -311,4 +357,17 @@ fn driver_string(info: &wgpu::AdapterInfo) -> String {
         .filter(|s| !s.is_empty())
         .collect::<Vec<_>>()
         .join(" ")
+}
+
+/// The adapter's limits, with the largest buffer lowered to `CLUSTERLAB_MAX_BUFFER_SIZE`
+/// bytes when that is set: to see what a scene needs of an adapter with smaller buffers
+/// (and to test the error a too-large mesh gets without writing gigabytes).
+fn with_buffer_cap(mut limits: wgpu::Limits) -> wgpu::Limits {
+    if let Some(cap) = std::env::var("CLUSTERLAB_MAX_BUFFER_SIZE")
+        .ok()
+        .and_then(|v| v.trim().parse::<u64>().ok())
+    {
+        limits.max_buffer_size = limits.max_buffer_size.min(cap);
+    }
+    limits
 }

@@ -148,6 +148,7 @@ impl<'g> Renderer<'g> {
     ) -> Result<Self, RenderError> {
         let (width, height) = (scene.params.width, scene.params.height);
         gpu.check_size(width, height)?;
+        gpu.check_scene(scene)?;
         // Every pipeline but scissor deferred loops over up to all the lights per pixel.
         if let Some(limit) = crate::gpu::expect::max_lights_per_pixel(gpu)
             && variant.pipeline != Pipeline::DeferredScissor

@@ -27,6 +27,7 @@ pub fn raster_truth(
 ) -> Result<RasterTruth, RenderError> {
     let (w, h) = (scene.params.width, scene.params.height);
     gpu.check_size(w, h)?;
+    gpu.check_scene(scene)?;
     let features =
         crate::compose::features_with(variant, &[("base_color_texture", scene.textures.is_some())]);
     let pass = composer.compose_root(

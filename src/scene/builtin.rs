@@ -176,14 +176,17 @@ fn make_spots(
         let outer = rng.random_range(outer_degrees.0..=outer_degrees.1);
         let inner = outer * rng.random_range(0.5..0.9);
         if is_spot {
-            *light = Light::spot(
+            // Half-angles in single-precision radians, as a glTF file holds them, so that
+            // `scenes --export` writes the very same cones.
+            let radians = |degrees: f64| (degrees.to_radians() as f32) as f64;
+            *light = Light::spot_radians(
                 light.position,
                 light.radius,
                 light.color,
                 1.0,
                 direction.to_array(),
-                inner,
-                outer,
+                radians(inner),
+                radians(outer),
             );
         }
     }

@@ -134,10 +134,10 @@ pub fn to_glb(scene: &Scene) -> Result<Vec<u8>, String> {
 
 /// The GLB container: header, JSON chunk, binary chunk, each padded to 4 bytes.
 fn glb(mut json: Vec<u8>, mut bin: Vec<u8>) -> Result<Vec<u8>, String> {
-    while json.len() % 4 != 0 {
+    while !json.len().is_multiple_of(4) {
         json.push(b' ');
     }
-    while bin.len() % 4 != 0 {
+    while !bin.len().is_multiple_of(4) {
         bin.push(0);
     }
     let total = 12 + 8 + json.len() + 8 + bin.len();
@@ -168,7 +168,7 @@ struct Writer {
 
 impl Writer {
     fn view(&mut self, bytes: &[u8], target: Option<u32>) -> usize {
-        while self.bin.len() % 4 != 0 {
+        while !self.bin.len().is_multiple_of(4) {
             self.bin.push(0);
         }
         let mut v = json!({ "buffer": 0, "byteOffset": self.bin.len(), "byteLength": bytes.len() });
@@ -300,25 +300,20 @@ fn angle_for_cosine(cosine: f32) -> f32 {
         .unwrap_or(start)
 }
 
-/// A rotation taking -Z to `axis` whose axis, as the loader computes it, is `axis`.
+/// A rotation taking -Z to `axis` whose axis, as the loader computes it, is `axis`. The
+/// loader normalises the quaternion, so any multiple of it is the same rotation: scaled
+/// copies round differently to single precision, and one of them lands on `axis` exactly.
 fn rotation_for_axis(axis: [f32; 3]) -> Quat {
     let target = Vec3::from(axis);
-    let start = DQuat::from_rotation_arc(DVec3::NEG_Z, target.as_dvec3().normalize()).as_quat();
+    let exact = DQuat::from_rotation_arc(DVec3::NEG_Z, target.as_dvec3().normalize());
     let axis_of = |q: Quat| {
         let d = q.as_dquat().normalize() * DVec3::NEG_Z;
         d.normalize_or(DVec3::NEG_Y).as_vec3()
     };
-    for x in neighbours(start.x) {
-        for y in neighbours(start.y) {
-            for w in neighbours(start.w) {
-                let q = Quat::from_xyzw(x, y, start.z, w);
-                if axis_of(q) == target {
-                    return q;
-                }
-            }
-        }
-    }
-    start
+    (0..4096)
+        .map(|k| (exact * (1.0 - k as f64 / 8192.0)).as_quat())
+        .find(|&q| axis_of(q) == target)
+        .unwrap_or(exact.as_quat())
 }
 
 /// `x` and the single-precision values up to 2 steps either side of it, nearest first.

@@ -22,15 +22,15 @@ use crate::common::{NO_TEXTURE, Vertex};
 const GEOMETRY_EXTENSIONS: [(&str, &str); 3] = [
     (
         "KHR_draco_mesh_compression",
-        "Draco-compressed meshes: decompress them first, e.g. with glTF-Transform (`gltf-transform copy` after `npm install --global @gltf-transform/cli` reads Draco and writes plain accessors), or export again from Blender with compression off",
+        "its meshes are Draco-compressed: write them uncompressed, e.g. open the file in Blender and export it again with compression off",
     ),
     (
         "KHR_mesh_quantization",
-        "quantized vertex attributes: write float attributes instead, e.g. `gltf-transform dequantize IN OUT`, or export again without quantization",
+        "its vertex attributes are quantized integers: write float attributes, e.g. `gltf-transform dequantize IN OUT` (glTF-Transform) or export again without quantization",
     ),
     (
         "EXT_meshopt_compression",
-        "meshoptimizer-compressed buffers: decompress them first, e.g. with `gltf-transform copy IN OUT` (glTF-Transform reads meshopt and writes plain buffers), or `gltfpack -noq` without `-c`",
+        "its buffers are meshoptimizer-compressed: write them uncompressed, e.g. export again without meshopt compression",
     ),
 ];
 
@@ -105,11 +105,13 @@ pub fn is_file(name: &str) -> bool {
     lower.ends_with(".gltf") || lower.ends_with(".glb")
 }
 
+/// A file's size and modification time: when either changes, it is read again.
 type Stamp = (u64, Option<std::time::SystemTime>);
+type Cache = Mutex<HashMap<PathBuf, (Stamp, Arc<FileScene>)>>;
 
 /// The file at `path`, read on first use (again when its size or modification time change).
 pub fn load(path: &str) -> Result<Arc<FileScene>, SceneError> {
-    static CACHE: OnceLock<Mutex<HashMap<PathBuf, (Stamp, Arc<FileScene>)>>> = OnceLock::new();
+    static CACHE: OnceLock<Cache> = OnceLock::new();
     let fail = |message: String| SceneError::File {
         path: path.to_string(),
         message,
@@ -148,11 +150,12 @@ fn read_file(path: &str) -> Result<FileScene, String> {
     for ext in parsed.extensions_used().chain(parsed.extensions_required()) {
         if let Some((name, what)) = GEOMETRY_EXTENSIONS.iter().find(|(n, _)| *n == ext) {
             return Err(format!(
-                "uses extension {name}, which clusterlab cannot read ({what})"
+                "uses extension {name}, which clusterlab cannot read: {what}"
             ));
         }
     }
     let gltf::Gltf { document, blob } = parsed;
+    check_position_indices(document.as_json())?;
     let gltf = Parsed {
         document: gltf::Document::from_json(document.into_json())
             .map_err(|e| format!("not a valid glTF 2.0 file: {}", reader_error(&e)))?,
@@ -267,6 +270,26 @@ fn read_file(path: &str) -> Result<FileScene, String> {
         bounds,
         notes,
     })
+}
+
+/// The gltf crate's validation reads each POSITION accessor without checking its index (it
+/// panics on a bad one): check those indices first.
+fn check_position_indices(root: &gltf::json::Root) -> Result<(), String> {
+    let count = root.accessors.len();
+    for (m, mesh) in root.meshes.iter().enumerate() {
+        for (p, primitive) in mesh.primitives.iter().enumerate() {
+            let position = gltf::json::validation::Checked::Valid(gltf::Semantic::Positions);
+            if let Some(index) = primitive.attributes.get(&position)
+                && index.value() >= count
+            {
+                return Err(format!(
+                    "not a valid glTF 2.0 file: `meshes[{m}].primitives[{p}].attributes.POSITION` is accessor {}, and the file has {count} accessors",
+                    index.value()
+                ));
+            }
+        }
+    }
+    Ok(())
 }
 
 /// A validated document and the binary chunk of a .glb.

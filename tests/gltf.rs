@@ -1,0 +1,514 @@
+//! glTF scenes: a built-in scene exported and loaded back is the same scene, bit for bit, and
+//! renders the same image and counters on every variant; textures are sampled; the matrix
+//! runs a file beside a built-in scene; bad files get clear errors (snapshotted).
+//!
+//! Every file here is written by the test itself.
+
+mod common;
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use base64::Engine;
+use clusterlab::compose::Composer;
+use clusterlab::run::{CellOptions, run_cell};
+use clusterlab::scene::{self, SCENES, Scene, SceneParams, export::to_glb};
+use clusterlab::variant::{DebugView, GBufferChannel};
+use common::{gpu, load, small};
+use serde_json::json;
+
+/// A fresh folder for one test's files.
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("clusterlab-gltf-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("scratch folder");
+    dir
+}
+
+fn export(name: &str, params: SceneParams, path: &Path) -> Scene {
+    let scene = scene::generate(name, params).expect("built-in scene");
+    std::fs::write(path, to_glb(&scene).expect("export")).expect("write .glb");
+    scene
+}
+
+/// The exported copy with the parameters the built-in scene had (its own lights).
+fn load_back(path: &Path, like: &Scene) -> Scene {
+    let name = path.to_str().expect("utf-8 path");
+    let mut params = scene::defaults(name).expect("load");
+    params.width = like.params.width;
+    params.height = like.params.height;
+    if !like.lights.is_empty() {
+        assert_eq!(
+            params.lights as usize,
+            like.lights.len(),
+            "the file's lights"
+        );
+    }
+    // A file without lights gets seeded ones: none, when asked for none.
+    params.lights = like.lights.len() as u32;
+    scene::generate(name, params).expect("load")
+}
+
+#[test]
+fn every_built_in_scene_comes_back_from_gltf_bit_for_bit() {
+    let dir = scratch("round-trip");
+    for info in SCENES {
+        // Each scene as it is, and with half its lights turned into spots (cones and
+        // rotations to carry).
+        for spots in [info.defaults.spots, 0.5] {
+            let params = SceneParams {
+                lights: info.defaults.lights.min(256),
+                spots,
+                ..info.defaults
+            };
+            let path = dir.join(format!("{}-{spots}.glb", info.name));
+            let built = export(info.name, params, &path);
+            let loaded = load_back(&path, &built);
+            let what = format!("{} with spot fraction {spots}", info.name);
+            assert_eq!(loaded.vertices, built.vertices, "{what}: vertices");
+            assert_eq!(loaded.indices, built.indices, "{what}: indices");
+            assert_eq!(loaded.lights.len(), built.lights.len(), "{what}: lights");
+            if let Some(i) = (0..built.lights.len()).find(|&i| loaded.lights[i] != built.lights[i])
+            {
+                panic!(
+                    "{what}: light {i} of {} differs:\n  built  {:?}\n  loaded {:?}",
+                    built.lights.len(),
+                    built.lights[i],
+                    loaded.lights[i]
+                );
+            }
+            assert_eq!(loaded.camera, built.camera, "{what}: camera");
+            assert_eq!(
+                loaded.prev_camera, built.prev_camera,
+                "{what}: previous camera"
+            );
+            let file = loaded.file.expect("a file scene knows its file");
+            assert_eq!(file.sha256.len(), 64, "{what}: {}", file.sha256);
+            assert!(loaded.notes.is_empty(), "{what}: {:?}", loaded.notes);
+        }
+    }
+}
+
+#[test]
+fn two_files_are_two_scenes_whatever_their_path() {
+    let dir = scratch("identity");
+    let path = dir.join("scene.glb");
+    let name = path.to_str().unwrap();
+    let params = SceneParams {
+        lights: 8,
+        ..scene::find_scene("one_light").unwrap().defaults
+    };
+    export("one_light", params, &path);
+    let first = scene::file_of(name).unwrap().unwrap();
+    // The same path, another file (another seed moves the lights).
+    std::thread::sleep(std::time::Duration::from_millis(20));
+    export("one_light", SceneParams { seed: 2, ..params }, &path);
+    let second = scene::file_of(name).unwrap().unwrap();
+    assert_eq!(first.path, second.path);
+    assert_ne!(first.sha256, second.sha256);
+    // The same file under two names is one file.
+    std::fs::copy(&path, dir.join("copy.glb")).unwrap();
+    let copy = scene::file_of(dir.join("copy.glb").to_str().unwrap())
+        .unwrap()
+        .unwrap();
+    assert_eq!(copy.sha256, second.sha256);
+}
+
+#[test]
+fn every_variant_renders_the_exported_atrium_as_the_built_in_one() {
+    let gpu = gpu();
+    let composer = Composer::default();
+    let dir = scratch("variants");
+    let params = small("atrium", 128, 72, Some(128));
+    let path = dir.join("atrium.glb");
+    let built = export("atrium", params, &path);
+    let file = path.to_str().unwrap();
+    let loaded_params = SceneParams {
+        lights: built.lights.len() as u32,
+        ..scene::defaults(file).unwrap()
+    };
+    let loaded_params = SceneParams {
+        width: 128,
+        height: 72,
+        ..loaded_params
+    };
+    let files = clusterlab::variant::find_files(Path::new("variants")).expect("variants/");
+    let mut failures = Vec::new();
+    for f in files {
+        let v = clusterlab::variant::load(&f).unwrap_or_else(|e| panic!("{e}"));
+        let options = CellOptions {
+            warmup: 0,
+            ..Default::default()
+        };
+        let a = run_cell(&gpu, &composer, &v, "atrium", params, options);
+        let b = run_cell(&gpu, &composer, &v, file, loaded_params, options);
+        let (a, b) = match (a, b) {
+            (Ok(a), Ok(b)) => (a, b),
+            (a, b) => {
+                failures.push(format!(
+                    "{}: built-in {:?}, file {:?}",
+                    v.name,
+                    a.err().map(|e| e.to_string()),
+                    b.err().map(|e| e.to_string())
+                ));
+                continue;
+            }
+        };
+        let worst = a
+            .frame
+            .ldr
+            .iter()
+            .zip(&b.frame.ldr)
+            .flat_map(|(p, q)| (0..3).map(move |c| p[c].abs_diff(q[c])))
+            .max()
+            .unwrap_or(0);
+        if worst > 1 {
+            failures.push(format!("{}: images differ by up to {worst} LSB", v.name));
+        }
+        if a.report.stats != b.report.stats {
+            failures.push(format!(
+                "{}: counters differ:\n  built-in {:?}\n  file     {:?}",
+                v.name, a.report.stats, b.report.stats
+            ));
+        }
+        assert_eq!(
+            b.report.scene_file.as_ref().map(|f| f.path.as_str()),
+            Some(file)
+        );
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+/// A 4x4 checkerboard PNG, black and white squares of 2x2 texels.
+fn checker_png() -> Vec<u8> {
+    use image::ImageEncoder;
+    let pixels: Vec<u8> = (0..16)
+        .flat_map(|i| {
+            let (x, y) = (i % 4, i / 4);
+            let v = if (x / 2 + y / 2) % 2 == 0 { 255 } else { 0 };
+            [v, v, v, 255]
+        })
+        .collect();
+    let mut png = Vec::new();
+    image::codecs::png::PngEncoder::new(&mut png)
+        .write_image(&pixels, 4, 4, image::ExtendedColorType::Rgba8)
+        .unwrap();
+    png
+}
+
+/// A quad on the ground (20 x 20, UVs 0..2 so the checker repeats), a light above it and a
+/// camera looking down at it, as a .gltf with its data in data URIs; `textured` gives the
+/// quad's material the checker texture.
+fn quad_gltf(textured: bool) -> serde_json::Value {
+    let positions: [f32; 12] = [
+        -10.0, 0.0, -10.0, -10.0, 0.0, 10.0, 10.0, 0.0, 10.0, 10.0, 0.0, -10.0,
+    ];
+    let normals: [f32; 12] = [0.0, 1.0, 0.0, 0.0, 1.0, 0.0, 0.0, 1.0, 0.0, 0.0, 1.0, 0.0];
+    let uvs: [f32; 8] = [0.0, 0.0, 0.0, 2.0, 2.0, 2.0, 2.0, 0.0];
+    let indices: [u32; 6] = [0, 1, 2, 0, 2, 3];
+    let mut bin: Vec<u8> = Vec::new();
+    bin.extend(bytemuck::cast_slice(&positions));
+    bin.extend(bytemuck::cast_slice(&normals));
+    bin.extend(bytemuck::cast_slice(&uvs));
+    bin.extend(bytemuck::cast_slice(&indices));
+    let b64 = |bytes: &[u8]| base64::engine::general_purpose::STANDARD.encode(bytes);
+    let mut material =
+        json!({ "pbrMetallicRoughness": { "baseColorFactor": [0.9, 0.8, 0.7, 1.0] } });
+    if textured {
+        material["pbrMetallicRoughness"]["baseColorTexture"] = json!({ "index": 0 });
+    }
+    // The camera 12 above the quad, looking straight down (a -90 degree turn about x).
+    let half = std::f32::consts::FRAC_1_SQRT_2;
+    json!({
+        "asset": { "version": "2.0" },
+        "extensionsUsed": ["KHR_lights_punctual"],
+        "extensions": { "KHR_lights_punctual": { "lights": [
+            { "type": "point", "color": [1.0, 1.0, 1.0], "intensity": 60.0, "range": 30.0 }
+        ] } },
+        "scene": 0,
+        "scenes": [{ "nodes": [0, 1, 2] }],
+        "nodes": [
+            { "mesh": 0 },
+            { "camera": 0, "translation": [0.0, 12.0, 0.0], "rotation": [-half, 0.0, 0.0, half] },
+            { "translation": [0.0, 4.0, 0.0], "extensions": { "KHR_lights_punctual": { "light": 0 } } }
+        ],
+        "cameras": [{ "type": "perspective", "perspective": { "yfov": 1.0, "znear": 0.5, "zfar": 40.0 } }],
+        "meshes": [{ "primitives": [{
+            "attributes": { "POSITION": 0, "NORMAL": 1, "TEXCOORD_0": 2 },
+            "indices": 3,
+            "material": 0
+        }] }],
+        "materials": [material],
+        "textures": [{ "source": 0 }],
+        "images": [{ "uri": format!("data:image/png;base64,{}", b64(&checker_png())) }],
+        "buffers": [{ "byteLength": bin.len(), "uri": format!("data:application/octet-stream;base64,{}", b64(&bin)) }],
+        "bufferViews": [
+            { "buffer": 0, "byteOffset": 0, "byteLength": 48 },
+            { "buffer": 0, "byteOffset": 48, "byteLength": 48 },
+            { "buffer": 0, "byteOffset": 96, "byteLength": 32 },
+            { "buffer": 0, "byteOffset": 128, "byteLength": 24 }
+        ],
+        "accessors": [
+            { "bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3",
+              "min": [-10.0, 0.0, -10.0], "max": [10.0, 0.0, 10.0] },
+            { "bufferView": 1, "componentType": 5126, "count": 4, "type": "VEC3" },
+            { "bufferView": 2, "componentType": 5126, "count": 4, "type": "VEC2" },
+            { "bufferView": 3, "componentType": 5125, "count": 6, "type": "SCALAR" }
+        ]
+    })
+}
+
+/// The spread of luminance over the middle of an image (max - min, 8-bit).
+fn spread(ldr: &[[u8; 4]], width: u32, height: u32) -> u8 {
+    let (w, h) = (width as usize, height as usize);
+    let lum = |p: &[u8; 4]| ((p[0] as u32 + p[1] as u32 + p[2] as u32) / 3) as u8;
+    let middle = (h / 4..3 * h / 4).flat_map(|y| (w / 4..3 * w / 4).map(move |x| y * w + x));
+    let values: Vec<u8> = middle.map(|i| lum(&ldr[i])).collect();
+    values.iter().max().unwrap() - values.iter().min().unwrap()
+}
+
+#[test]
+fn base_colour_textures_are_sampled_in_forward_and_deferred_passes_and_in_the_reference() {
+    let gpu = gpu();
+    let composer = Composer::default();
+    let dir = scratch("textures");
+    let mut spreads = Vec::new();
+    for textured in [true, false] {
+        let path = dir.join(format!("quad-{textured}.gltf"));
+        std::fs::write(&path, serde_json::to_vec(&quad_gltf(textured)).unwrap()).unwrap();
+        let file = path.to_str().unwrap();
+        let params = SceneParams {
+            width: 96,
+            height: 96,
+            ..scene::defaults(file).unwrap()
+        };
+        assert_eq!(params.lights, 1, "the file's own light");
+        for name in ["forward_plus", "clustered_deferred_ggx", "naive_forward"] {
+            let v = load(name);
+            let c = run_cell(
+                &gpu,
+                &composer,
+                &v,
+                file,
+                params,
+                CellOptions {
+                    warmup: 0,
+                    ..Default::default()
+                },
+            )
+            .unwrap_or_else(|e| panic!("{name}: {e}"));
+            // The reference is shaded from the same rasterised and sampled albedo.
+            assert!(
+                c.report.error.max_abs_8bit <= 1,
+                "{name}: {:?}",
+                c.report.error
+            );
+        }
+        // The albedo itself, as the G-buffer holds it: a checkerboard, or one colour.
+        let mut v = load("clustered_deferred_ggx");
+        v.variant.debug_view = DebugView::GBuffer {
+            channel: GBufferChannel::Albedo,
+        };
+        let c = run_cell(
+            &gpu,
+            &composer,
+            &v,
+            file,
+            params,
+            CellOptions {
+                warmup: 0,
+                stats: false,
+                ..Default::default()
+            },
+        )
+        .unwrap();
+        spreads.push(spread(&c.frame.ldr, 96, 96));
+    }
+    assert!(
+        spreads[0] > 100,
+        "the checkerboard's squares: spread {}",
+        spreads[0]
+    );
+    assert!(
+        spreads[1] < 10,
+        "no texture, one colour: spread {}",
+        spreads[1]
+    );
+}
+
+#[test]
+fn the_matrix_runs_a_file_beside_a_built_in_scene() {
+    let dir = scratch("matrix");
+    let params = small("one_light", 64, 36, None);
+    export("one_light", params, &dir.join("one_light.glb"));
+    let out = dir.join("results");
+    let status = Command::new(env!("CARGO_BIN_EXE_clusterlab"))
+        .args([
+            "matrix",
+            "--variants",
+            "forward_plus",
+            "--size",
+            "64x36",
+            "--frames",
+            "1",
+            "--warmup",
+            "0",
+        ])
+        .arg("--scenes")
+        .arg(format!("one_light,{}", dir.join("one_light.glb").display()))
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .expect("run clusterlab");
+    assert!(
+        status.status.success(),
+        "{}",
+        String::from_utf8_lossy(&status.stderr)
+    );
+    let results: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("results.json")).unwrap()).unwrap();
+    let cells = results["cells"].as_array().expect("cells");
+    let of = |file: bool| {
+        cells
+            .iter()
+            .find(|c| c["variant"] == "forward_plus" && c["scene_sha256"].is_string() == file)
+            .unwrap_or_else(|| {
+                panic!(
+                    "a forward_plus cell on the {} scene",
+                    if file { "file" } else { "built-in" }
+                )
+            })
+    };
+    let (built, file) = (of(false), of(true));
+    assert!(
+        built["failure"].is_null() && file["failure"].is_null(),
+        "{built} {file}"
+    );
+    assert!(file["scene"].as_str().unwrap().ends_with("one_light.glb"));
+    // The file's own light, so the same frame as the built-in scene: the same error.
+    assert_eq!(built["error"], file["error"]);
+}
+
+/// A one-triangle .gltf with its buffer in a data URI, changed by `edit`.
+fn triangle(edit: impl FnOnce(&mut serde_json::Value)) -> Vec<u8> {
+    let positions: [f32; 9] = [0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0];
+    let data = base64::engine::general_purpose::STANDARD.encode(bytemuck::cast_slice(&positions));
+    let mut gltf = json!({
+        "asset": { "version": "2.0" },
+        "scene": 0,
+        "scenes": [{ "nodes": [0] }],
+        "nodes": [{ "mesh": 0 }],
+        "meshes": [{ "primitives": [{ "attributes": { "POSITION": 0 } }] }],
+        "buffers": [{ "byteLength": 36, "uri": format!("data:application/octet-stream;base64,{data}") }],
+        "bufferViews": [{ "buffer": 0, "byteLength": 36 }],
+        "accessors": [{ "bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
+                        "min": [0.0, 0.0, 0.0], "max": [1.0, 1.0, 0.0] }]
+    });
+    edit(&mut gltf);
+    serde_json::to_vec_pretty(&gltf).unwrap()
+}
+
+fn with_extension(name: &'static str) -> impl FnOnce(&mut serde_json::Value) {
+    move |g| {
+        g["extensionsUsed"] = json!([name]);
+        g["extensionsRequired"] = json!([name]);
+    }
+}
+
+#[test]
+fn bad_files_exit_1_with_a_clear_message() {
+    let dir = scratch("errors");
+    let spheres = SceneParams {
+        lights: 4,
+        ..scene::find_scene("spheres").unwrap().defaults
+    };
+    export("spheres", spheres, &dir.join("spheres.glb"));
+    let whole = std::fs::read(dir.join("spheres.glb")).unwrap();
+    let files: Vec<(&str, Vec<u8>)> = vec![
+        ("truncated.glb", whole[..whole.len() / 2].to_vec()),
+        (
+            "not_json.gltf",
+            b"{ \"asset\": { \"version\": \"2.0\" }, this is not JSON".to_vec(),
+        ),
+        (
+            "invalid.gltf",
+            triangle(|g| g["meshes"][0]["primitives"][0]["attributes"]["POSITION"] = json!(7)),
+        ),
+        (
+            "bad_view.gltf",
+            triangle(|g| g["accessors"][0]["bufferView"] = json!(5)),
+        ),
+        (
+            "outside_buffer.gltf",
+            triangle(|g| g["accessors"][0]["count"] = json!(30)),
+        ),
+        (
+            "missing_buffer.gltf",
+            triangle(|g| g["buffers"][0]["uri"] = json!("geometry.bin")),
+        ),
+        (
+            "draco.gltf",
+            triangle(with_extension("KHR_draco_mesh_compression")),
+        ),
+        (
+            "quantized.gltf",
+            triangle(with_extension("KHR_mesh_quantization")),
+        ),
+        (
+            "meshopt.gltf",
+            triangle(with_extension("EXT_meshopt_compression")),
+        ),
+        (
+            "points.gltf",
+            triangle(|g| g["meshes"][0]["primitives"][0]["mode"] = json!(0)),
+        ),
+        ("no_meshes.gltf", triangle(|g| g["nodes"][0] = json!({}))),
+    ];
+    for (name, bytes) in &files {
+        std::fs::write(dir.join(name), bytes).unwrap();
+    }
+    let variant = std::fs::canonicalize("variants/forward_plus.ron").unwrap();
+    let run = |scene: &str, envs: &[(&str, &str)]| {
+        let out = Command::new(env!("CARGO_BIN_EXE_clusterlab"))
+            .current_dir(&dir)
+            .envs(envs.iter().copied())
+            .args([
+                "render",
+                "--size",
+                "32x18",
+                "--no-stats",
+                "--scene",
+                scene,
+                "--out",
+                "images",
+            ])
+            .arg("--variant")
+            .arg(&variant)
+            .output()
+            .expect("run clusterlab");
+        assert_eq!(out.status.code(), Some(1), "{scene}: exit status");
+        let text = String::from_utf8_lossy(&out.stderr).into_owned();
+        // The adapter's name is the one part that depends on the machine.
+        match text.split_once("adapter `") {
+            Some((head, tail)) => format!(
+                "{head}adapter `ADAPTER`{}",
+                tail.split_once('`').map_or("", |t| t.1)
+            ),
+            None => text,
+        }
+    };
+    let mut settings = insta::Settings::clone_current();
+    settings.set_snapshot_path("../snapshots/errors");
+    settings.set_prepend_module_to_snapshot(false);
+    settings.bind(|| {
+        insta::assert_snapshot!("gltf_missing.glb", run("missing.glb", &[]));
+        for (name, _) in &files {
+            insta::assert_snapshot!(format!("gltf_{name}"), run(name, &[]));
+        }
+        // A mesh over the adapter's buffer limit, with the limit lowered to 64 KiB.
+        insta::assert_snapshot!(
+            "gltf_too_large.glb",
+            run("spheres.glb", &[("CLUSTERLAB_MAX_BUFFER_SIZE", "65536")])
+        );
+    });
+}
