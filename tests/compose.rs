@@ -143,3 +143,38 @@ fn switched_off_features_leave_no_trace() {
         );
     }
 }
+
+/// Every pass of every variant also composes and validates for a scene with textures (and
+/// for one without spots), the shaders a file scene's frames use; with textures the raster
+/// passes bind the texture array and its sampler, without them they bind neither.
+#[test]
+fn every_pass_composes_for_scenes_with_textures() {
+    let composer = Composer::default();
+    let files = variant::find_files(Path::new("variants")).expect("variants/");
+    for file in files {
+        let v = variant::load(&file).unwrap_or_else(|e| panic!("{e}"));
+        for pass in passes(&v.variant) {
+            for spots in [true, false] {
+                let overrides = [("base_color_texture", true), ("spot_lights", spots)];
+                let composed = composer
+                    .compose_with(&v.variant, &pass, &overrides)
+                    .unwrap_or_else(|e| panic!("{} {}: {e}", v.name, pass.name()));
+                let plain = composer.compose(&v.variant, &pass).unwrap();
+                let samples = composed.wgsl.contains("textureSample(");
+                assert_eq!(
+                    samples,
+                    ["forward", "gbuffer"].contains(&pass.name()),
+                    "{} {}",
+                    v.name,
+                    pass.name()
+                );
+                assert!(
+                    !plain.wgsl.contains("base_color_textures"),
+                    "{} {}",
+                    v.name,
+                    pass.name()
+                );
+            }
+        }
+    }
+}

@@ -192,7 +192,14 @@ fn read_file(path: &str) -> Result<FileScene, String> {
         }
         if let Some(light) = node.light() {
             match file_light(&light, &world, &chain) {
-                Some(l) => lights.push(l),
+                Some(l) if finite_light(&l) => lights.push(l),
+                Some(_) => {
+                    return Err(format!(
+                        "light {} at node {} has a position, direction, colour or range that is not a finite number",
+                        light.index(),
+                        node.index()
+                    ));
+                }
                 None => unsupported_lights += 1,
             }
         }
@@ -442,6 +449,15 @@ fn file_light(
             outer_cone_angle as f64,
         )),
     }
+}
+
+fn finite_light(l: &Light) -> bool {
+    l.position
+        .iter()
+        .chain(&l.color)
+        .chain(&l.direction)
+        .chain([&l.radius, &l.cos_inner, &l.cos_outer])
+        .all(|x| x.is_finite())
 }
 
 fn node_track(gltf: &Parsed, node: &gltf::Node, buffers: &[Vec<u8>]) -> NodeTrack {
@@ -744,6 +760,9 @@ fn read_primitive(
             notes,
             "normal maps are not sampled: the vertex normals are used".into(),
         );
+    }
+    if material.occlusion_texture().is_some() {
+        note_once(notes, "occlusion textures are not sampled".into());
     }
     if material.alpha_mode() != gltf::material::AlphaMode::Opaque {
         note_once(notes, "alpha modes MASK and BLEND are drawn opaque".into());

@@ -46,7 +46,13 @@ impl Camera {
         far: f32,
     ) -> Camera {
         let eye = eye.as_dvec3();
-        let rotation = rotation.as_dquat().normalize();
+        // A zero quaternion (a broken file) looks down -Z rather than making NaNs.
+        let rotation = rotation.as_dquat();
+        let rotation = if rotation.length() > 1e-12 {
+            rotation.normalize()
+        } else {
+            glam::DQuat::IDENTITY
+        };
         Camera {
             eye,
             target: eye + rotation * DVec3::NEG_Z,
