@@ -46,6 +46,12 @@ const POWER_PER_VOLUME_OVER_RADIUS: f64 = 180.0 * 2.0 / (32.0 * 12.0 * 14.0);
 
 /// Deeper node hierarchies are taken for cycles (which glTF forbids).
 const MAX_NODE_DEPTH: usize = 256;
+/// More node visits than this: nodes shared between parents, multiplying the work.
+const MAX_NODE_VISITS: usize = 1 << 20;
+/// Most vertices a file scene may have (7.5 GB of vertex data), checked before reading
+/// each primitive: a small file that instances a large mesh many times must not exhaust
+/// memory.
+const MAX_VERTICES: usize = 1 << 27;
 
 /// What a glTF file holds, whatever the parameters it is rendered with.
 #[derive(Debug)]
@@ -179,7 +185,14 @@ fn read_file(path: &str) -> Result<FileScene, String> {
         scene.nodes().map(|n| (n.clone(), vec![n])).collect();
     stack.reverse();
     let mut unsupported_lights = 0;
+    let mut visits = 0usize;
     while let Some((node, chain)) = stack.pop() {
+        visits += 1;
+        if visits > MAX_NODE_VISITS {
+            return Err(format!(
+                "the node hierarchy reaches more than {MAX_NODE_VISITS} nodes: a node is the child of several parents (glTF forbids it)"
+            ));
+        }
         if chain.len() > MAX_NODE_DEPTH {
             return Err(format!(
                 "node {} is more than {MAX_NODE_DEPTH} levels deep: the node hierarchy has a cycle",
@@ -699,6 +712,16 @@ fn read_primitive(
         .get(&gltf::Semantic::Positions)
         .ok_or("it has no POSITION attribute")?;
     check_float_vec3(&positions, "POSITION")?;
+    if vertices.len()
+        + positions
+            .count()
+            .max(primitive.indices().map_or(0, |i| i.count()))
+        > MAX_VERTICES
+    {
+        return Err(format!(
+            "the scene would have more than {MAX_VERTICES} vertices (instanced meshes count once per node): more than clusterlab loads"
+        ));
+    }
     let reader = primitive.reader(|b| buffers.get(b.index()).map(Vec::as_slice));
     let unreadable = |what: &str| format!("its {what} accessor lies outside its buffer");
     let points: Vec<[f32; 3]> = reader
