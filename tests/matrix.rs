@@ -185,7 +185,7 @@ fn bad_arguments_are_named() {
     );
     let (code, text) = matrix(&["matrix", "--scenes", "moon", "--out", "/nonexistent/x"]);
     assert_eq!(code, 1);
-    assert!(text.contains("no scene `moon`"), "{text}");
+    assert!(text.contains("unknown scene `moon`"), "{text}");
     let (code, text) = matrix(&["merge", "/nonexistent/results"]);
     assert_eq!(code, 1);
     assert!(
