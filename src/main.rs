@@ -479,6 +479,9 @@ fn scenes() {
             d.time
         );
     }
+    println!(
+        "\nAny glTF 2.0 file is a scene too: --scene FILE.gltf or FILE.glb (its meshes, materials,\nlights and first camera; see README). `clusterlab scenes --export NAME FILE.glb` writes a\nbuilt-in scene as glTF."
+    );
 }
 
 fn export_scene(
