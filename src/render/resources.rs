@@ -156,7 +156,9 @@ fn upload_textures(
         size: wgpu::Extent3d {
             width: t.size,
             height: t.size,
-            depth_or_array_layers: t.layers,
+            // wgpu's OpenGL backend makes a one-layer texture a plain 2D texture, which an
+            // array view cannot sample (it reads black): give it a second, unused layer.
+            depth_or_array_layers: t.layers.max(2),
         },
         mip_level_count: t.mip_count(),
         sample_count: 1,
