@@ -179,16 +179,10 @@ fn every_variant_renders_the_exported_atrium_as_the_built_in_one() {
     assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
 
-/// A 4x4 checkerboard PNG, black and white squares of 2x2 texels.
-fn checker_png() -> Vec<u8> {
+/// A 4x4 RGBA PNG whose texel (x, y) is `texel(x, y)`.
+fn png(texel: impl Fn(u32, u32) -> [u8; 4]) -> Vec<u8> {
     use image::ImageEncoder;
-    let pixels: Vec<u8> = (0..16)
-        .flat_map(|i| {
-            let (x, y) = (i % 4, i / 4);
-            let v = if (x / 2 + y / 2) % 2 == 0 { 255 } else { 0 };
-            [v, v, v, 255]
-        })
-        .collect();
+    let pixels: Vec<u8> = (0..16).flat_map(|i| texel(i % 4, i / 4)).collect();
     let mut png = Vec::new();
     image::codecs::png::PngEncoder::new(&mut png)
         .write_image(&pixels, 4, 4, image::ExtendedColorType::Rgba8)
@@ -196,28 +190,37 @@ fn checker_png() -> Vec<u8> {
     png
 }
 
-/// A quad on the ground (20 x 20, UVs 0..2 so the checker repeats), a light above it and a
-/// camera looking down at it, as a .gltf with its data in data URIs; `textured` gives the
-/// quad's material the checker texture.
-fn quad_gltf(textured: bool) -> serde_json::Value {
-    let positions: [f32; 12] = [
-        -10.0, 0.0, -10.0, -10.0, 0.0, 10.0, 10.0, 0.0, 10.0, 10.0, 0.0, -10.0,
+/// Ground 20 x 20 in two halves (x < 0 and x > 0), each its own primitive and material, a
+/// light above and a camera looking straight down (image right is +x). With `textured`,
+/// the left half's material samples a black-and-white checkerboard (UVs 0..2, so it
+/// repeats) and the right half's a solid blue texture: two layers of the texture array.
+fn ground_gltf(textured: bool) -> serde_json::Value {
+    let positions: [f32; 18] = [
+        -10.0, 0.0, -10.0, -10.0, 0.0, 10.0, 0.0, 0.0, 10.0, 0.0, 0.0, -10.0, 10.0, 0.0, 10.0,
+        10.0, 0.0, -10.0,
     ];
-    let normals: [f32; 12] = [0.0, 1.0, 0.0, 0.0, 1.0, 0.0, 0.0, 1.0, 0.0, 0.0, 1.0, 0.0];
-    let uvs: [f32; 8] = [0.0, 0.0, 0.0, 2.0, 2.0, 2.0, 2.0, 0.0];
-    let indices: [u32; 6] = [0, 1, 2, 0, 2, 3];
+    let normals: [f32; 18] = [0.0, 1.0, 0.0].repeat(6).try_into().unwrap();
+    let uvs: [f32; 12] = [0.0, 0.0, 0.0, 2.0, 1.0, 2.0, 1.0, 0.0, 2.0, 2.0, 2.0, 0.0];
+    let indices: [u32; 12] = [0, 1, 2, 0, 2, 3, 3, 2, 4, 3, 4, 5];
     let mut bin: Vec<u8> = Vec::new();
     bin.extend(bytemuck::cast_slice(&positions));
     bin.extend(bytemuck::cast_slice(&normals));
     bin.extend(bytemuck::cast_slice(&uvs));
     bin.extend(bytemuck::cast_slice(&indices));
     let b64 = |bytes: &[u8]| base64::engine::general_purpose::STANDARD.encode(bytes);
-    let mut material =
-        json!({ "pbrMetallicRoughness": { "baseColorFactor": [0.9, 0.8, 0.7, 1.0] } });
-    if textured {
-        material["pbrMetallicRoughness"]["baseColorTexture"] = json!({ "index": 0 });
-    }
-    // The camera 12 above the quad, looking straight down (a -90 degree turn about x).
+    let material = |texture: usize| {
+        let mut m = json!({ "pbrMetallicRoughness": { "baseColorFactor": [0.9, 0.8, 0.7, 1.0] } });
+        if textured {
+            m["pbrMetallicRoughness"]["baseColorTexture"] = json!({ "index": texture });
+        }
+        m
+    };
+    let checker = png(|x, y| {
+        let v = if (x / 2 + y / 2) % 2 == 0 { 255 } else { 0 };
+        [v, v, v, 255]
+    });
+    let blue = png(|_, _| [20, 40, 255, 255]);
+    // The camera 12 above the ground, looking straight down (a -90 degree turn about x).
     let half = std::f32::consts::FRAC_1_SQRT_2;
     json!({
         "asset": { "version": "2.0" },
@@ -233,38 +236,53 @@ fn quad_gltf(textured: bool) -> serde_json::Value {
             { "translation": [0.0, 4.0, 0.0], "extensions": { "KHR_lights_punctual": { "light": 0 } } }
         ],
         "cameras": [{ "type": "perspective", "perspective": { "yfov": 1.0, "znear": 0.5, "zfar": 40.0 } }],
-        "meshes": [{ "primitives": [{
-            "attributes": { "POSITION": 0, "NORMAL": 1, "TEXCOORD_0": 2 },
-            "indices": 3,
-            "material": 0
-        }] }],
-        "materials": [material],
-        "textures": [{ "source": 0 }],
-        "images": [{ "uri": format!("data:image/png;base64,{}", b64(&checker_png())) }],
+        "meshes": [{ "primitives": [
+            { "attributes": { "POSITION": 0, "NORMAL": 1, "TEXCOORD_0": 2 }, "indices": 3, "material": 0 },
+            { "attributes": { "POSITION": 0, "NORMAL": 1, "TEXCOORD_0": 2 }, "indices": 4, "material": 1 }
+        ] }],
+        "materials": [material(0), material(1)],
+        "textures": [{ "source": 0 }, { "source": 1 }],
+        "images": [
+            { "uri": format!("data:image/png;base64,{}", b64(&checker)) },
+            { "uri": format!("data:image/png;base64,{}", b64(&blue)) }
+        ],
         "buffers": [{ "byteLength": bin.len(), "uri": format!("data:application/octet-stream;base64,{}", b64(&bin)) }],
         "bufferViews": [
-            { "buffer": 0, "byteOffset": 0, "byteLength": 48 },
-            { "buffer": 0, "byteOffset": 48, "byteLength": 48 },
-            { "buffer": 0, "byteOffset": 96, "byteLength": 32 },
-            { "buffer": 0, "byteOffset": 128, "byteLength": 24 }
+            { "buffer": 0, "byteOffset": 0, "byteLength": 72 },
+            { "buffer": 0, "byteOffset": 72, "byteLength": 72 },
+            { "buffer": 0, "byteOffset": 144, "byteLength": 48 },
+            { "buffer": 0, "byteOffset": 192, "byteLength": 48 }
         ],
         "accessors": [
-            { "bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3",
+            { "bufferView": 0, "componentType": 5126, "count": 6, "type": "VEC3",
               "min": [-10.0, 0.0, -10.0], "max": [10.0, 0.0, 10.0] },
-            { "bufferView": 1, "componentType": 5126, "count": 4, "type": "VEC3" },
-            { "bufferView": 2, "componentType": 5126, "count": 4, "type": "VEC2" },
-            { "bufferView": 3, "componentType": 5125, "count": 6, "type": "SCALAR" }
+            { "bufferView": 1, "componentType": 5126, "count": 6, "type": "VEC3" },
+            { "bufferView": 2, "componentType": 5126, "count": 6, "type": "VEC2" },
+            { "bufferView": 3, "componentType": 5125, "count": 6, "type": "SCALAR" },
+            { "bufferView": 3, "byteOffset": 24, "componentType": 5125, "count": 6, "type": "SCALAR" }
         ]
     })
 }
 
-/// The spread of luminance over the middle of an image (max - min, 8-bit).
-fn spread(ldr: &[[u8; 4]], width: u32, height: u32) -> u8 {
+/// Over the middle rows of the columns `x0..x1` of an image: the spread of luminance (max -
+/// min, 8-bit) and the mean of blue minus red.
+fn region(ldr: &[[u8; 4]], width: u32, height: u32, x0: u32, x1: u32) -> (u8, f64) {
     let (w, h) = (width as usize, height as usize);
-    let lum = |p: &[u8; 4]| ((p[0] as u32 + p[1] as u32 + p[2] as u32) / 3) as u8;
-    let middle = (h / 4..3 * h / 4).flat_map(|y| (w / 4..3 * w / 4).map(move |x| y * w + x));
-    let values: Vec<u8> = middle.map(|i| lum(&ldr[i])).collect();
-    values.iter().max().unwrap() - values.iter().min().unwrap()
+    let pixels: Vec<[u8; 4]> = (h / 4..3 * h / 4)
+        .flat_map(|y| (x0 as usize..x1 as usize).map(move |x| y * w + x))
+        .map(|i| ldr[i])
+        .collect();
+    let lum: Vec<u32> = pixels
+        .iter()
+        .map(|p| (p[0] as u32 + p[1] as u32 + p[2] as u32) / 3)
+        .collect();
+    let spread = (lum.iter().max().unwrap() - lum.iter().min().unwrap()) as u8;
+    let blue = pixels
+        .iter()
+        .map(|p| p[2] as f64 - p[0] as f64)
+        .sum::<f64>()
+        / pixels.len() as f64;
+    (spread, blue)
 }
 
 #[test]
@@ -272,10 +290,10 @@ fn base_colour_textures_are_sampled_in_forward_and_deferred_passes_and_in_the_re
     let gpu = gpu();
     let composer = Composer::default();
     let dir = scratch("textures");
-    let mut spreads = Vec::new();
+    let mut albedo = Vec::new();
     for textured in [true, false] {
-        let path = dir.join(format!("quad-{textured}.gltf"));
-        std::fs::write(&path, serde_json::to_vec(&quad_gltf(textured)).unwrap()).unwrap();
+        let path = dir.join(format!("ground-{textured}.gltf"));
+        std::fs::write(&path, serde_json::to_vec(&ground_gltf(textured)).unwrap()).unwrap();
         let file = path.to_str().unwrap();
         let params = SceneParams {
             width: 96,
@@ -283,20 +301,19 @@ fn base_colour_textures_are_sampled_in_forward_and_deferred_passes_and_in_the_re
             ..scene::defaults(file).unwrap()
         };
         assert_eq!(params.lights, 1, "the file's own light");
+        let loaded = scene::generate(file, params).unwrap();
+        assert_eq!(
+            loaded.textures.as_ref().map(|t| t.layers),
+            textured.then_some(2)
+        );
+        let options = CellOptions {
+            warmup: 0,
+            ..Default::default()
+        };
         for name in ["forward_plus", "clustered_deferred_ggx", "naive_forward"] {
             let v = load(name);
-            let c = run_cell(
-                &gpu,
-                &composer,
-                &v,
-                file,
-                params,
-                CellOptions {
-                    warmup: 0,
-                    ..Default::default()
-                },
-            )
-            .unwrap_or_else(|e| panic!("{name}: {e}"));
+            let c = run_cell(&gpu, &composer, &v, file, params, options)
+                .unwrap_or_else(|e| panic!("{name}: {e}"));
             // The reference is shaded from the same rasterised and sampled albedo.
             assert!(
                 c.report.error.max_abs_8bit <= 1,
@@ -304,7 +321,7 @@ fn base_colour_textures_are_sampled_in_forward_and_deferred_passes_and_in_the_re
                 c.report.error
             );
         }
-        // The albedo itself, as the G-buffer holds it: a checkerboard, or one colour.
+        // The albedo itself, as the G-buffer holds it, left half and right half.
         let mut v = load("clustered_deferred_ggx");
         v.variant.debug_view = DebugView::GBuffer {
             channel: GBufferChannel::Albedo,
@@ -316,24 +333,31 @@ fn base_colour_textures_are_sampled_in_forward_and_deferred_passes_and_in_the_re
             file,
             params,
             CellOptions {
-                warmup: 0,
                 stats: false,
-                ..Default::default()
+                ..options
             },
         )
         .unwrap();
-        spreads.push(spread(&c.frame.ldr, 96, 96));
+        albedo.push([
+            region(&c.frame.ldr, 96, 96, 24, 44),
+            region(&c.frame.ldr, 96, 96, 52, 72),
+        ]);
     }
+    let [[checker, blue], [plain_left, plain_right]] = [albedo[0], albedo[1]];
     assert!(
-        spreads[0] > 100,
-        "the checkerboard's squares: spread {}",
-        spreads[0]
+        checker.0 > 100,
+        "layer 0, the checkerboard's squares: {checker:?}"
     );
     assert!(
-        spreads[1] < 10,
-        "no texture, one colour: spread {}",
-        spreads[1]
+        blue.0 < 10 && blue.1 > 100.0,
+        "layer 1, solid blue: {blue:?}"
     );
+    for plain in [plain_left, plain_right] {
+        assert!(
+            plain.0 < 10 && plain.1 < 0.0,
+            "no texture, the factor alone: {plain:?}"
+        );
+    }
 }
 
 #[test]
