@@ -95,8 +95,8 @@ enum Command {
         /// Folder for NAME.csv, NAME.json, NAME.md and the plot.
         #[arg(long, default_value = "out/study")]
         out: PathBuf,
-        /// Codecs: uniform unit vectors to sample.
-        #[arg(long, default_value_t = 1 << 20)]
+        /// Codecs: uniform unit vectors to sample (1 to 67108864).
+        #[arg(long, default_value_t = 1 << 20, value_parser = parse_samples)]
         samples: usize,
         /// Slicing and cones: image size, WIDTHxHEIGHT.
         #[arg(long, default_value = "640x360", value_parser = parse_size)]
@@ -108,8 +108,8 @@ enum Command {
         /// Slicing and cones: lights in every scene (default: each scene's own).
         #[arg(long)]
         lights: Option<u32>,
-        /// Slicing and cones: timed frames per run (the median is reported).
-        #[arg(long, default_value_t = 3)]
+        /// Slicing and cones: timed frames per run, at least 1 (the median is reported).
+        #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..))]
         frames: u32,
         #[command(flatten)]
         gpu: GpuArgs,
@@ -182,8 +182,8 @@ struct MatrixArgs {
     /// Image size of every cell, WIDTHxHEIGHT (default: each scene's).
     #[arg(long, value_parser = parse_size)]
     size: Option<(u32, u32)>,
-    /// Timed frames per cell; pass times are medians over them.
-    #[arg(long, default_value_t = 3)]
+    /// Timed frames per cell (at least 1); pass times are medians over them.
+    #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..))]
     frames: u32,
     /// Untimed frames first (software rasterisers compile on first use).
     #[arg(long, default_value_t = 1)]
@@ -224,14 +224,14 @@ struct RenderArgs {
     /// Light radius range MIN,MAX in world units (default: the scene's).
     #[arg(long, value_parser = parse_range)]
     radius: Option<(f32, f32)>,
-    /// Time of the frame in seconds (lights and camera move with it).
-    #[arg(long)]
+    /// Time of the frame in seconds, 0..=3600 (lights and camera move with it).
+    #[arg(long, value_parser = parse_time)]
     time: Option<f64>,
     /// Fraction of the lights that are spots, in 0..=1 (default: the scene's).
     #[arg(long, value_parser = parse_fraction)]
     spots: Option<f32>,
-    /// Frames to render; times are the median per pass.
-    #[arg(long, default_value_t = 1)]
+    /// Frames to render (at least 1); times are the median per pass.
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..))]
     frames: u32,
     /// Untimed frames before them (software rasterisers compile on first use).
     #[arg(long, default_value_t = 1)]
@@ -266,13 +266,52 @@ fn parse_size(s: &str) -> Result<(u32, u32), String> {
     let (w, h) = s
         .split_once(['x', 'X'])
         .ok_or_else(|| format!("`{s}` is not WIDTHxHEIGHT, e.g. 640x360"))?;
-    let n = |v: &str| {
-        v.trim()
-            .parse::<u32>()
-            .map_err(|_| format!("`{v}` in `{s}` is not a whole number"))
-    };
+    let n = |v: &str| parse_whole(v.trim(), s, u32::MAX as u64).map(|n| n as u32);
     Ok((n(w)?, n(h)?))
 }
+
+/// A whole number `v` (part of the argument `arg`) of at most `max`: an error says whether
+/// it is not a whole number or too large.
+fn parse_whole(v: &str, arg: &str, max: u64) -> Result<u64, String> {
+    let in_arg = if v == arg {
+        String::new()
+    } else {
+        format!(" in `{arg}`")
+    };
+    if !v.is_empty() && v.bytes().all(|b| b.is_ascii_digit()) {
+        return v
+            .parse::<u64>()
+            .ok()
+            .filter(|&n| n <= max)
+            .ok_or_else(|| format!("`{v}`{in_arg} is too large: at most {max}"));
+    }
+    Err(format!("`{v}`{in_arg} is not a whole number"))
+}
+
+/// Seconds into the scene's animation: a finite time in 0..=3600.
+fn parse_time(s: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(t) if t.is_finite() && (0.0..=MAX_TIME_S).contains(&t) => Ok(t),
+        Ok(_) => Err(format!(
+            "`{s}` is not a usable time: give seconds in 0..={MAX_TIME_S} (the scenes' cameras and lights move with it)"
+        )),
+        Err(_) => Err(format!("`{s}` is not a number of seconds, e.g. 1.5")),
+    }
+}
+
+/// `--samples` of the codec study: a whole number in 1..=MAX_SAMPLES.
+fn parse_samples(s: &str) -> Result<usize, String> {
+    let n = parse_whole(s.trim(), s, MAX_SAMPLES as u64)?;
+    if n == 0 {
+        return Err("0 samples: give at least 1".into());
+    }
+    Ok(n as usize)
+}
+
+/// Most unit vectors the codec study samples (about 1.6 GB of buffers on the GPU and as
+/// much on the CPU at this count).
+const MAX_SAMPLES: usize = 1 << 26;
+use clusterlab::scene::MAX_TIME_S;
 
 /// Debug views by their command-line names.
 const DEBUG_VIEWS: [(&str, DebugView); 8] = {
@@ -309,10 +348,12 @@ fn parse_range(s: &str) -> Result<(f32, f32), String> {
     let (a, b) = s
         .split_once(',')
         .ok_or_else(|| format!("`{s}` is not MIN,MAX, e.g. 1.0,3.0"))?;
-    let n = |v: &str| {
-        v.trim()
-            .parse::<f32>()
-            .map_err(|_| format!("`{v}` in `{s}` is not a number"))
+    let n = |v: &str| match v.trim().parse::<f32>() {
+        Ok(x) if x.is_finite() => Ok(x),
+        Ok(_) => Err(format!(
+            "`{v}` in `{s}` is not a finite number (radii are world units, e.g. 1.0,3.0)"
+        )),
+        Err(_) => Err(format!("`{v}` in `{s}` is not a number")),
     };
     Ok((n(a)?, n(b)?))
 }

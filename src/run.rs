@@ -45,7 +45,9 @@ pub struct RenderReport {
     pub wall_ms: f64,
     /// Wall-clock milliseconds of the CPU f64 reference.
     pub reference_ms: f64,
-    pub error: ErrorMetrics,
+    /// Error against the reference; `None` (not applicable) for a debug view, which shows
+    /// no shaded scene to compare.
+    pub error: Option<ErrorMetrics>,
     /// Exact counters from an instrumented run of the frame (absent with `stats: false`).
     pub stats: Option<FrameStats>,
     /// CPU milliseconds spent in the frame outside the GPU (light assignment on the CPU).
@@ -164,7 +166,8 @@ pub fn run_scene(
             (Arc::new(r), ms)
         }
     };
-    let error = metrics::compare(&frame, &reference);
+    let error = (variant.variant.debug_view == crate::variant::DebugView::Off)
+        .then(|| metrics::compare(&frame, &reference));
     let images = match out {
         Some(dir) => write_images(
             dir,

@@ -316,7 +316,7 @@ fn base_colour_textures_are_sampled_in_forward_and_deferred_passes_and_in_the_re
                 .unwrap_or_else(|e| panic!("{name}: {e}"));
             // The reference is shaded from the same rasterised and sampled albedo.
             assert!(
-                c.report.error.max_abs_8bit <= 1,
+                c.report.error.as_ref().unwrap().max_abs_8bit <= 1,
                 "{name}: {:?}",
                 c.report.error
             );

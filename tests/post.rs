@@ -139,7 +139,7 @@ fn the_whole_chain_is_close_to_the_reference() {
     for name in POST_VARIANTS {
         let v = load(name);
         let c = cell(&gpu, &v, "atrium", small("atrium", 160, 90, Some(128)));
-        let e = &c.report.error;
+        let e = c.report.error.as_ref().expect("a shaded image");
         let pixels = 160 * 90;
         eprintln!(
             "{name}: max 8-bit {}, {} pixels over 1 LSB, PSNR {:?}",

@@ -59,7 +59,7 @@ impl RenderReport {
             gpu_ms_spread: &self.gpu_ms_spread,
             speedup_vs_naive: None,
             pareto: false,
-            error: Some(&self.error),
+            error: self.error.as_ref(),
             stats: self.stats.as_ref(),
             skipped_passes: &self.skipped_passes,
             vs_baseline: None,

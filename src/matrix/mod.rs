@@ -380,7 +380,7 @@ fn run_one(
         frames: r.frames,
         wall_ms: Some(r.wall_ms),
         reference_ms: Some(r.reference_ms),
-        error: Some(r.error),
+        error: r.error,
         stats: r.stats,
         images: files,
         speedup_vs_naive: None,

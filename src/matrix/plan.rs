@@ -38,14 +38,18 @@ pub fn parse_sweep(s: &str) -> Result<Sweep, String> {
         "lights" => items
             .iter()
             .map(|v| {
-                let n: u32 = v.parse().map_err(|_| bad(v, "a whole number"))?;
-                if n > crate::scene::MAX_LIGHTS {
+                if v.is_empty() || !v.bytes().all(|b| b.is_ascii_digit()) {
+                    return Err(bad(v, "a whole number"));
+                }
+                // A whole number too large even for u64 is still too many lights.
+                let n = v.parse::<u64>().unwrap_or(u64::MAX);
+                if n > crate::scene::MAX_LIGHTS as u64 {
                     return Err(format!(
                         "`{v}` in `{s}`: at most {} lights",
                         crate::scene::MAX_LIGHTS
                     ));
                 }
-                Ok(n)
+                Ok(n as u32)
             })
             .collect::<Result<_, _>>()
             .map(Sweep::Lights),

@@ -48,6 +48,9 @@ pub enum RenderError {
     /// A pass's module binds something clusterlab cannot fill.
     #[error("{0}")]
     Reflection(String),
+    /// A variant value that only the scene can check (a depth against its camera).
+    #[error("field `{field}` {message}")]
+    VariantForScene { field: String, message: String },
 }
 
 /// What one frame produced.
@@ -124,6 +127,27 @@ struct Skips {
     on: bool,
 }
 
+/// Variant values whose valid range depends on the scene's camera.
+fn check_for_scene(variant: &Variant, scene: &Scene) -> Result<(), RenderError> {
+    if variant.pipeline.is_clustered()
+        && let crate::common::ZSlicing::NearSliceThenExponential { near_slice_end } =
+            variant.clusters().slicing
+    {
+        let (near, far) = (scene.camera.near, scene.camera.far);
+        let end = near_slice_end as f64;
+        if !(end > near && end < far) {
+            return Err(RenderError::VariantForScene {
+                field: "clusters.slicing.near_slice_end".into(),
+                message: format!(
+                    "is {near_slice_end}; on scene `{}` it must lie between the camera's near and far planes, {} < value < {}",
+                    scene.name, near as f32, far as f32
+                ),
+            });
+        }
+    }
+    Ok(())
+}
+
 /// How a frame reports the spot cone it left out of its light loops.
 pub const SPOT_CONE: &str = "spot_cone";
 
@@ -149,6 +173,7 @@ impl<'g> Renderer<'g> {
         let (width, height) = (scene.params.width, scene.params.height);
         gpu.check_size(width, height)?;
         gpu.check_scene(scene)?;
+        check_for_scene(variant, scene)?;
         // Every pipeline but scissor deferred loops over up to all the lights per pixel.
         if let Some(limit) = crate::gpu::expect::max_lights_per_pixel(gpu)
             && variant.pipeline != Pipeline::DeferredScissor

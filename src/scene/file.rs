@@ -397,6 +397,12 @@ fn read_uri(base: &Path, uri: &str, what: &str, hash: &mut Sha256) -> Result<Vec
     let decoded = urlencoding::decode(uri)
         .map_err(|_| format!("{what}: `{uri}` is not valid UTF-8 once decoded"))?;
     let file = base.join(&*decoded);
+    if file.exists() && !file.is_file() {
+        return Err(format!(
+            "{what} refers to `{uri}`, which is not a regular file at {} (a folder, device or pipe)",
+            file.display()
+        ));
+    }
     let bytes = std::fs::read(&file).map_err(|e| {
         format!(
             "{what} refers to `{uri}`, which cannot be read at {}: {e} (a .gltf file's buffers and images must sit where it says; a .glb holds them inside)",

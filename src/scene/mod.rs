@@ -100,6 +100,8 @@ pub struct SceneParams {
 pub const FRAME_DT: f64 = 1.0 / 30.0;
 /// Most lights a scene may have.
 pub const MAX_LIGHTS: u32 = 1 << 20;
+/// Latest time of a frame, seconds: the built-in cameras have long left their scenes by then.
+pub const MAX_TIME_S: f64 = 3600.0;
 
 /// A generated scene, ready to upload.
 #[derive(Clone, Debug)]
@@ -217,9 +219,20 @@ fn check_params(params: &SceneParams) -> Result<(), SceneError> {
         )));
     }
     let (lo, hi) = params.radius_range;
-    if !(lo.is_finite() && hi.is_finite() && lo > 0.0 && lo <= hi) {
+    if !(lo.is_finite() && hi.is_finite()) {
+        return Err(SceneError::BadParam(format!(
+            "light radius range {lo}..{hi}: both ends must be finite numbers"
+        )));
+    }
+    if !(lo > 0.0 && lo <= hi) {
         return Err(SceneError::BadParam(format!(
             "light radius range {lo}..{hi}: both ends must be positive and min <= max"
+        )));
+    }
+    if !(params.time.is_finite() && (0.0..=MAX_TIME_S).contains(&params.time)) {
+        return Err(SceneError::BadParam(format!(
+            "time {}: it must be seconds in 0..={MAX_TIME_S}",
+            params.time
         )));
     }
     Ok(())

@@ -8,6 +8,9 @@ pub use schema::*;
 
 use std::path::{Path, PathBuf};
 
+/// Largest variant file read: 64 KiB, thirty times the largest shipped one.
+pub const MAX_VARIANT_BYTES: u64 = 64 * 1024;
+
 /// Why a variant file could not be used.
 #[derive(Debug, thiserror::Error)]
 pub enum VariantError {
@@ -16,6 +19,9 @@ pub enum VariantError {
         path: PathBuf,
         error: std::io::Error,
     },
+    /// Not something to read as a variant: a device, pipe or folder, or too large.
+    #[error("{}: {why}", path.display())]
+    NotAVariantFile { path: PathBuf, why: String },
     /// The text is not a well-formed variant (RON syntax, unknown field or variant, wrong type).
     #[error("{}:{line}:{column}: {message}\n{snippet}", path.display())]
     Syntax {
@@ -66,10 +72,33 @@ pub struct LoadedVariant {
 
 /// Read, parse and check one variant file.
 pub fn load(path: &Path) -> Result<LoadedVariant, VariantError> {
-    let text = std::fs::read_to_string(path).map_err(|error| VariantError::Io {
+    let io = |error| VariantError::Io {
         path: path.to_path_buf(),
         error,
-    })?;
+    };
+    let refuse = |why: String| VariantError::NotAVariantFile {
+        path: path.to_path_buf(),
+        why,
+    };
+    let meta = std::fs::metadata(path).map_err(io)?;
+    if !meta.is_file() {
+        return Err(refuse(
+            "not a regular file (a folder, device or pipe); a variant is a .ron file".into(),
+        ));
+    }
+    if meta.len() > MAX_VARIANT_BYTES {
+        return Err(refuse(format!(
+            "{} bytes, over the {MAX_VARIANT_BYTES} bytes a variant file may have (the shipped ones are under 2 KiB)",
+            meta.len()
+        )));
+    }
+    // Read at most the limit, in case the file grew since.
+    let mut text = String::new();
+    std::io::Read::read_to_string(
+        &mut std::io::Read::take(std::fs::File::open(path).map_err(io)?, MAX_VARIANT_BYTES),
+        &mut text,
+    )
+    .map_err(io)?;
     let variant = parse(path, &text)?;
     let name = path
         .file_stem()

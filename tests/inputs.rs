@@ -1,0 +1,179 @@
+//! Bad input on the command line: each case exits with an error that names the bad value,
+//! where it came from and what would be valid (snapshotted in `snapshots/errors/input_*`),
+//! and no case gives a wrong answer with exit 0.
+
+use std::path::PathBuf;
+use std::process::Command;
+
+/// A fresh folder for this test's files.
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("clusterlab-inputs-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("scratch folder");
+    dir
+}
+
+/// Run clusterlab in `dir` with `args`: its exit code and what it printed.
+fn run(dir: &PathBuf, args: &[&str]) -> (Option<i32>, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_clusterlab"))
+        .current_dir(dir)
+        .args(args)
+        .output()
+        .expect("run clusterlab");
+    let mut text = String::from_utf8_lossy(&out.stdout).into_owned();
+    text.push_str(&String::from_utf8_lossy(&out.stderr));
+    (out.status.code(), text)
+}
+
+#[test]
+fn bad_values_are_refused_with_what_would_be_valid() {
+    let dir = scratch("values");
+    let variant = std::fs::canonicalize("variants/forward_plus.ron").unwrap();
+    let variant = variant.to_str().unwrap();
+    // A variant file of 100 KB (a long description), and one whose near slice ends past
+    // the one_light scene's far plane.
+    let big = format!(
+        "(description: \"{}\", pipeline: NaiveForward)",
+        "x".repeat(100_000)
+    );
+    std::fs::write(dir.join("big.ron"), big).unwrap();
+    std::fs::write(
+        dir.join("far_near_slice.ron"),
+        "(description: \"a near slice that ends past the far plane\", \
+         pipeline: ClusteredForward, depth_prepass: true, \
+         clusters: (slicing: NearSliceThenExponential(near_slice_end: 1e6)))",
+    )
+    .unwrap();
+    let render = |extra: &[&str]| {
+        let mut args = vec!["render", "--scene", "one_light", "--variant", variant];
+        if !extra.contains(&"--size") {
+            args.extend(["--size", "32x18"]);
+        }
+        args.extend_from_slice(extra);
+        args.iter().map(|s| s.to_string()).collect::<Vec<_>>()
+    };
+    let cases: Vec<(&str, Vec<String>, i32)> = vec![
+        ("size_too_large", render(&["--size", "99999999999x18"]), 2),
+        ("radius_infinite", render(&["--radius", "inf,inf"]), 2),
+        ("time_nan", render(&["--time", "nan"]), 2),
+        ("time_absurd", render(&["--time", "1e10"]), 2),
+        ("frames_zero", render(&["--frames", "0"]), 2),
+        (
+            "matrix_frames_zero",
+            vec!["matrix".into(), "--frames".into(), "0".into()],
+            2,
+        ),
+        (
+            "sweep_lights_too_many",
+            vec![
+                "matrix".into(),
+                "--sweep".into(),
+                "lights=99999999999999999999999".into(),
+            ],
+            2,
+        ),
+        (
+            "samples_too_many",
+            vec![
+                "study".into(),
+                "codecs".into(),
+                "--samples".into(),
+                "10000000000".into(),
+            ],
+            2,
+        ),
+        (
+            "validate_device",
+            vec!["validate".into(), "/dev/zero".into()],
+            1,
+        ),
+        (
+            "variant_device",
+            vec![
+                "render".into(),
+                "--scene".into(),
+                "one_light".into(),
+                "--variant".into(),
+                "/dev/zero".into(),
+            ],
+            1,
+        ),
+        (
+            "variant_too_large",
+            vec!["validate".into(), "big.ron".into()],
+            1,
+        ),
+        (
+            "near_slice_past_far",
+            vec![
+                "render".into(),
+                "--scene".into(),
+                "one_light".into(),
+                "--size".into(),
+                "32x18".into(),
+                "--variant".into(),
+                "far_near_slice.ron".into(),
+            ],
+            1,
+        ),
+    ];
+    let mut settings = insta::Settings::clone_current();
+    settings.set_snapshot_path("../snapshots/errors");
+    settings.set_prepend_module_to_snapshot(false);
+    settings.bind(|| {
+        for (name, args, code) in &cases {
+            let args: Vec<&str> = args.iter().map(String::as_str).collect();
+            let (got, text) = run(&dir, &args);
+            assert_eq!(got, Some(*code), "{name}: {text}");
+            insta::assert_snapshot!(format!("input_{name}"), text.replace(variant, "VARIANT"));
+        }
+    });
+}
+
+#[test]
+fn a_debug_view_reports_no_error_figure() {
+    let dir = scratch("debug");
+    let variant = std::fs::canonicalize("variants/forward_plus.ron").unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_clusterlab"))
+        .current_dir(&dir)
+        .args([
+            "render",
+            "--scene",
+            "one_light",
+            "--size",
+            "32x18",
+            "--json",
+            "--debug-view",
+            "lights-per-cluster",
+        ])
+        .arg("--variant")
+        .arg(&variant)
+        .output()
+        .expect("run clusterlab");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let report: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert!(report["error"].is_null(), "{}", report["error"]);
+    // And the summary shows no error columns for it.
+    let out = Command::new(env!("CARGO_BIN_EXE_clusterlab"))
+        .current_dir(&dir)
+        .args([
+            "render",
+            "--scene",
+            "one_light",
+            "--size",
+            "32x18",
+            "--debug-view",
+            "lights-per-cluster",
+        ])
+        .arg("--variant")
+        .arg(&variant)
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success());
+    assert!(!text.contains("PSNR") && !text.contains("max8"), "{text}");
+}
