@@ -128,6 +128,10 @@ enum Command {
         /// Merge folders from different adapters, or whose variant files differ.
         #[arg(long)]
         allow_mixed: bool,
+        /// Folders that hold the same cell are refused; keep the copy from the `first` or
+        /// the `last` folder that has it instead.
+        #[arg(long, value_enum)]
+        prefer: Option<clusterlab::matrix::Prefer>,
     },
 }
 
@@ -386,7 +390,8 @@ fn main() -> ExitCode {
             out,
             json,
             allow_mixed,
-        } => merge(&dirs, &out, json, allow_mixed),
+            prefer,
+        } => merge(&dirs, &out, json, allow_mixed, prefer),
         Command::Stress { filter, json, gpu } => stress(filter.as_deref(), json, &gpu),
         Command::Study {
             name,
@@ -745,6 +750,19 @@ fn matrix(args: &MatrixArgs) -> Result<bool, String> {
         gpu.adapter.driver,
         args.out.display()
     );
+    if let Some(old) = &baseline
+        && let Some(other) = old.provenance.iter().find(|p| p.adapter != gpu.adapter)
+    {
+        eprintln!(
+            "warning: the baseline ran on {} ({}, {}), this run on {} ({}, {}): its time ratios compare different adapters",
+            other.adapter.name,
+            other.adapter.backend,
+            other.adapter.driver,
+            gpu.adapter.name,
+            gpu.adapter.backend,
+            gpu.adapter.driver
+        );
+    }
     let options = MatrixOptions {
         warmup: args.warmup,
         frames: args.frames.max(1),
@@ -766,8 +784,14 @@ fn matrix(args: &MatrixArgs) -> Result<bool, String> {
     Ok(results.failed() == 0)
 }
 
-fn merge(dirs: &[PathBuf], out: &Path, json: bool, allow_mixed: bool) -> Result<bool, String> {
-    let results = clusterlab::matrix::merge(dirs, out, allow_mixed)?;
+fn merge(
+    dirs: &[PathBuf],
+    out: &Path,
+    json: bool,
+    allow_mixed: bool,
+    prefer: Option<clusterlab::matrix::Prefer>,
+) -> Result<bool, String> {
+    let results = clusterlab::matrix::merge(dirs, out, allow_mixed, prefer)?;
     clusterlab::matrix::write_report(out, &results)?;
     report(&results, json, out)?;
     Ok(results.failed() == 0)

@@ -177,3 +177,74 @@ fn a_debug_view_reports_no_error_figure() {
     assert!(out.status.success());
     assert!(!text.contains("PSNR") && !text.contains("max8"), "{text}");
 }
+
+#[test]
+fn identities_are_unique_and_merges_refuse_what_they_would_lose() {
+    let dir = scratch("identities");
+    let text = std::fs::read_to_string("variants/naive_forward.ron").unwrap();
+    for folder in ["a", "b"] {
+        std::fs::create_dir_all(dir.join(folder)).unwrap();
+        std::fs::write(dir.join(folder).join("dup.ron"), &text).unwrap();
+    }
+    let tiny = [
+        "--scenes",
+        "one_light",
+        "--size",
+        "16x9",
+        "--frames",
+        "1",
+        "--warmup",
+        "0",
+    ];
+    let matrix = |variants: &[&str], out: &str| {
+        let mut args = vec!["matrix", "--variants"];
+        args.extend_from_slice(variants);
+        args.extend_from_slice(&tiny);
+        args.extend(["--out", out]);
+        run(&dir, &args)
+    };
+    let mut settings = insta::Settings::clone_current();
+    settings.set_snapshot_path("../snapshots/errors");
+    settings.set_prepend_module_to_snapshot(false);
+    settings.bind(|| {
+        // Two files named alike in two folders: refused, naming both.
+        let (code, text) = matrix(&["a/dup.ron", "b/dup.ron"], "dup");
+        assert_eq!(code, Some(1), "{text}");
+        insta::assert_snapshot!("input_same_named_variants", text);
+        // The same file twice is one variant.
+        let (code, text) = matrix(&["a/dup.ron", "a/../a/dup.ron"], "one");
+        assert_eq!(code, Some(0), "{text}");
+
+        let (code, text) = matrix(&["a/dup.ron"], "first");
+        assert_eq!(code, Some(0), "{text}");
+        let (code, text) = matrix(&["a/dup.ron"], "second");
+        assert_eq!(code, Some(0), "{text}");
+        let (code, text) = run(&dir, &["merge", "first", "first/", "--out", "merged"]);
+        assert_eq!(code, Some(1), "{text}");
+        insta::assert_snapshot!("input_merge_with_itself", text);
+        let (code, text) = run(&dir, &["merge", "first", "second", "--out", "merged"]);
+        assert_eq!(code, Some(1), "{text}");
+        insta::assert_snapshot!("input_merge_overlapping", text);
+    });
+    // Told which copy to keep, the merge keeps that one.
+    let wall = |folder: &str| {
+        let r: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(dir.join(folder).join("results.json")).unwrap())
+                .unwrap();
+        assert_eq!(r["cells"].as_array().unwrap().len(), 1, "{folder}");
+        r["cells"][0]["wall_ms"].clone()
+    };
+    // (Two runs' wall times to the microsecond tell their cells apart.)
+    assert_ne!(wall("first"), wall("second"));
+    for (prefer, from) in [("first", "first"), ("last", "second")] {
+        let out = format!("merged-{prefer}");
+        let (code, text) = run(
+            &dir,
+            &[
+                "merge", "first", "second", "--prefer", prefer, "--out", &out,
+            ],
+        );
+        assert_eq!(code, Some(0), "{text}");
+        assert_eq!(wall(&out), wall(from), "--prefer {prefer}");
+    }
+}

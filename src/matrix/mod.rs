@@ -445,7 +445,27 @@ pub fn derive(cells: &mut [CellRecord], baseline: Option<&Results>) {
 /// one's), images copied into `out`, provenance of every run kept. Folders from different
 /// adapters, or whose runs read different variant files under one name, are refused unless
 /// `allow_mixed`: their times (and perhaps images) are not comparable.
-pub fn merge(dirs: &[PathBuf], out: &Path, allow_mixed: bool) -> Result<Results, String> {
+pub fn merge(
+    dirs: &[PathBuf],
+    out: &Path,
+    allow_mixed: bool,
+    prefer: Option<Prefer>,
+) -> Result<Results, String> {
+    for (i, a) in dirs.iter().enumerate() {
+        for b in &dirs[i + 1..] {
+            let same = match (std::fs::canonicalize(a), std::fs::canonicalize(b)) {
+                (Ok(x), Ok(y)) => x == y,
+                _ => a == b,
+            };
+            if same {
+                return Err(format!(
+                    "{} and {} are the same folder: merging a run with itself would count its cells twice",
+                    a.display(),
+                    b.display()
+                ));
+            }
+        }
+    }
     let loaded: Vec<(&PathBuf, Results)> = dirs
         .iter()
         .map(|d| Results::load(d).map(|r| (d, r)))
@@ -453,6 +473,14 @@ pub fn merge(dirs: &[PathBuf], out: &Path, allow_mixed: bool) -> Result<Results,
     if !allow_mixed {
         check_comparable(&loaded)?;
     }
+    if prefer.is_none() {
+        check_disjoint(&loaded)?;
+    }
+    // With --prefer first, the first folder's copy of a cell wins: merge in reverse.
+    let loaded: Vec<(&PathBuf, Results)> = match prefer {
+        Some(Prefer::First) => loaded.into_iter().rev().collect(),
+        _ => loaded,
+    };
     let mut merged = Results {
         provenance: Vec::new(),
         cells: Vec::new(),
@@ -480,6 +508,33 @@ pub fn merge(dirs: &[PathBuf], out: &Path, allow_mixed: bool) -> Result<Results,
     }
     derive(&mut merged.cells, None);
     Ok(merged)
+}
+
+/// Which copy of a cell `merge` keeps when folders overlap.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum Prefer {
+    /// The copy from the folder named first.
+    First,
+    /// The copy from the folder named last.
+    Last,
+}
+
+/// Refuse folders that hold the same cell: shards of one study do not overlap.
+fn check_disjoint(loaded: &[(&PathBuf, Results)]) -> Result<(), String> {
+    let mut seen: std::collections::HashMap<&str, &PathBuf> = std::collections::HashMap::new();
+    for (dir, r) in loaded {
+        for cell in &r.cells {
+            if let Some(first) = seen.insert(&cell.spec.id, dir) {
+                return Err(format!(
+                    "cell `{}` is in both {} and {}: shards of one study do not overlap; pass --prefer first or --prefer last to keep one copy",
+                    cell.spec.id,
+                    first.display(),
+                    dir.display()
+                ));
+            }
+        }
+    }
+    Ok(())
 }
 
 /// Refuse folders whose runs used different adapters, or different files for one variant.

@@ -274,6 +274,7 @@ pub struct PlannedCell {
 pub fn expand(studies: &[Study]) -> Result<Vec<PlannedCell>, String> {
     let mut cells: Vec<PlannedCell> = Vec::new();
     for study in studies {
+        check_distinct_names(&study.variants)?;
         for scene in &study.scenes {
             let mut base = crate::scene::defaults(scene).map_err(|e| e.to_string())?;
             let file = crate::scene::file_of(scene).map_err(|e| e.to_string())?;
@@ -293,6 +294,31 @@ pub fn expand(studies: &[Study]) -> Result<Vec<PlannedCell>, String> {
     }
     add_baselines(&mut cells);
     Ok(cells)
+}
+
+/// A cell's id starts with its variant's file stem: two different files with one stem
+/// would share ids, and one would silently replace the other.
+fn check_distinct_names(variants: &[VariantEntry]) -> Result<(), String> {
+    for (i, a) in variants.iter().enumerate() {
+        for b in &variants[i + 1..] {
+            let same_file = match (
+                std::fs::canonicalize(&a.path),
+                std::fs::canonicalize(&b.path),
+            ) {
+                (Ok(x), Ok(y)) => x == y,
+                _ => a.path == b.path,
+            };
+            if a.name == b.name && !same_file {
+                return Err(format!(
+                    "two variant files are both named `{}`: {} and {}; cells are named after the file, so rename one",
+                    a.name,
+                    a.path.display(),
+                    b.path.display()
+                ));
+            }
+        }
+    }
+    Ok(())
 }
 
 /// One value per sweep.
