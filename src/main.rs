@@ -740,8 +740,8 @@ fn matrix(args: &MatrixArgs) -> Result<bool, String> {
         cells = matrix::shard(cells, shard);
     }
     let mut gpu = args.gpu.open()?;
-    std::fs::create_dir_all(&args.out)
-        .map_err(|e| format!("{}: cannot create folder: {e}", args.out.display()))?;
+    // The run writes into a staging folder and swaps it in whole when it is done.
+    let folder = matrix::RunFolder::acquire(&args.out)?;
     eprintln!(
         "{} cells on {} ({}, {}); writing to {}",
         cells.len(),
@@ -766,7 +766,7 @@ fn matrix(args: &MatrixArgs) -> Result<bool, String> {
     let options = MatrixOptions {
         warmup: args.warmup,
         frames: args.frames.max(1),
-        out: args.out.clone(),
+        out: folder.staging.clone(),
         progress: true,
         shard: args.shard,
         command: std::env::args().collect(),
@@ -778,7 +778,8 @@ fn matrix(args: &MatrixArgs) -> Result<bool, String> {
     if let Some(old) = &baseline {
         matrix::derive(&mut results.cells, Some(old));
     }
-    matrix::write_report(&args.out, &results)?;
+    matrix::write_report(&folder.staging, &results)?;
+    folder.commit()?;
     report(&results, args.json, &args.out)?;
     eprintln!("finished in {:.0} s", start.elapsed().as_secs_f64());
     Ok(results.failed() == 0)
@@ -791,8 +792,10 @@ fn merge(
     allow_mixed: bool,
     prefer: Option<clusterlab::matrix::Prefer>,
 ) -> Result<bool, String> {
-    let results = clusterlab::matrix::merge(dirs, out, allow_mixed, prefer)?;
-    clusterlab::matrix::write_report(out, &results)?;
+    let folder = clusterlab::matrix::RunFolder::acquire(out)?;
+    let results = clusterlab::matrix::merge(dirs, &folder.staging, allow_mixed, prefer)?;
+    clusterlab::matrix::write_report(&folder.staging, &results)?;
+    folder.commit()?;
     report(&results, json, out)?;
     Ok(results.failed() == 0)
 }

@@ -3,12 +3,14 @@
 //! naive forward, the time-error Pareto front, and a report (JSON, CSV, HTML, terminal).
 
 mod columns;
+mod folder;
 mod html;
 mod plan;
 mod plots;
 mod report;
 
 pub use columns::{COLUMNS, Cell, Column, Measured, Shown, count};
+pub use folder::RunFolder;
 pub use plan::{
     CellSpec, ParamsRecord, PlannedCell, Study, Sweep, VariantEntry, expand, find_variants,
     parse_shard, parse_sweep, shard,
