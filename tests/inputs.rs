@@ -248,3 +248,49 @@ fn identities_are_unique_and_merges_refuse_what_they_would_lose() {
         assert_eq!(wall(&out), wall(from), "--prefer {prefer}");
     }
 }
+
+#[test]
+fn a_baseline_from_another_adapter_is_said_to_be_one() {
+    let dir = scratch("baseline");
+    let tiny = [
+        "matrix",
+        "--variants",
+        "naive_forward",
+        "--scenes",
+        "one_light",
+        "--size",
+        "16x9",
+        "--frames",
+        "1",
+        "--warmup",
+        "0",
+    ];
+    let variants = std::fs::canonicalize("variants").unwrap();
+    let with = |extra: &[&str]| {
+        let mut args: Vec<String> = tiny.iter().map(|s| s.to_string()).collect();
+        args[2] = variants.join("naive_forward.ron").display().to_string();
+        args.extend(extra.iter().map(|s| s.to_string()));
+        args
+    };
+    let args = with(&["--out", "base"]);
+    let (code, text) = run(&dir, &args.iter().map(String::as_str).collect::<Vec<_>>());
+    assert_eq!(code, Some(0), "{text}");
+    // The same adapter: no warning.
+    let args = with(&["--out", "again", "--baseline", "base"]);
+    let (code, text) = run(&dir, &args.iter().map(String::as_str).collect::<Vec<_>>());
+    assert_eq!(code, Some(0), "{text}");
+    assert!(!text.contains("warning"), "{text}");
+    // The baseline's adapter renamed, as if it ran elsewhere: the run says so.
+    let path = dir.join("base").join("results.json");
+    let mut r: serde_json::Value = serde_json::from_slice(&std::fs::read(&path).unwrap()).unwrap();
+    r["provenance"][0]["adapter"]["name"] = "Another GPU".into();
+    std::fs::write(&path, serde_json::to_vec(&r).unwrap()).unwrap();
+    let args = with(&["--out", "again", "--baseline", "base"]);
+    let (code, text) = run(&dir, &args.iter().map(String::as_str).collect::<Vec<_>>());
+    assert_eq!(code, Some(0), "{text}");
+    assert!(
+        text.contains("warning: the baseline ran on Another GPU")
+            && text.contains("different adapters"),
+        "{text}"
+    );
+}
