@@ -104,6 +104,19 @@ fn bad_values_are_refused_with_what_would_be_valid() {
             1,
         ),
         (
+            "out_not_a_folder_of_its_own",
+            vec![
+                "matrix".into(),
+                "--variants".into(),
+                variant.into(),
+                "--scenes".into(),
+                "one_light".into(),
+                "--out".into(),
+                ".".into(),
+            ],
+            1,
+        ),
+        (
             "near_slice_past_far",
             vec![
                 "render".into(),

@@ -17,6 +17,7 @@ pub struct RunFolder {
     /// Where the run writes meanwhile.
     pub staging: PathBuf,
     lock: PathBuf,
+    /// The staging folder is in place, or kept because it could not be put there.
     committed: bool,
 }
 
@@ -40,11 +41,13 @@ impl RunFolder {
     /// Lock `target` for this process and make an empty staging folder beside it. Refused,
     /// naming the other process, while another live process holds the lock.
     pub fn acquire(target: &Path) -> Result<RunFolder, String> {
-        let target = if target.as_os_str().is_empty() {
-            PathBuf::from(".")
-        } else {
-            target.to_path_buf()
-        };
+        let target = target.to_path_buf();
+        if target.file_name().is_none() {
+            return Err(format!(
+                "--out `{}` does not name a folder of its own (a run replaces its folder whole): give one, e.g. out/matrix",
+                target.display()
+            ));
+        }
         if let Some(parent) = target.parent().filter(|p| !p.as_os_str().is_empty()) {
             std::fs::create_dir_all(parent)
                 .map_err(|e| format!("{}: cannot create folder: {e}", parent.display()))?;
@@ -145,21 +148,25 @@ impl RunFolder {
     pub fn commit(mut self) -> Result<(), String> {
         let old = sibling(&self.target, &format!(".old-{}", std::process::id()));
         let had_old = self.target.exists();
-        if had_old {
-            std::fs::rename(&self.target, &old).map_err(|e| {
-                format!(
-                    "{}: cannot move the previous run aside: {e}",
-                    self.target.display()
-                )
-            })?;
+        // Where a rename fails, the finished run stays in its staging folder rather than
+        // being lost, and the message says where.
+        if had_old && let Err(e) = std::fs::rename(&self.target, &old) {
+            self.committed = true;
+            return Err(format!(
+                "{}: cannot move the previous run aside: {e}; the finished run is in {}",
+                self.target.display(),
+                self.staging.display()
+            ));
         }
         if let Err(e) = std::fs::rename(&self.staging, &self.target) {
             if had_old {
                 let _ = std::fs::rename(&old, &self.target);
             }
+            self.committed = true;
             return Err(format!(
-                "{}: cannot move the finished run in place: {e}",
-                self.target.display()
+                "{}: cannot move the finished run in place: {e}; it is in {}",
+                self.target.display(),
+                self.staging.display()
             ));
         }
         if had_old {
