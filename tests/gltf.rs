@@ -536,3 +536,42 @@ fn bad_files_exit_1_with_a_clear_message() {
         );
     });
 }
+
+#[test]
+fn nested_node_transforms_apply_parent_first_and_mirrors_keep_their_facing() {
+    let dir = scratch("nodes");
+    // A parent mirrored in x and moved to x = 5, its child moved up by 2 holding the triangle
+    // (0,0,0), (1,0,0), (0,1,0), which faces +z and has no normals (so it is drawn flat).
+    let path = dir.join("nested.gltf");
+    std::fs::write(
+        &path,
+        triangle(|g| {
+            g["scenes"][0]["nodes"] = json!([0]);
+            g["nodes"] = json!([
+                { "children": [1], "translation": [5.0, 0.0, 0.0], "scale": [-1.0, 1.0, 1.0] },
+                { "mesh": 0, "translation": [0.0, 2.0, 0.0] }
+            ]);
+        }),
+    )
+    .unwrap();
+    let name = path.to_str().unwrap();
+    let s = scene::generate(name, scene::defaults(name).unwrap()).unwrap();
+    let positions: Vec<[f32; 3]> = s
+        .indices
+        .iter()
+        .map(|&i| s.vertices[i as usize].position)
+        .collect();
+    // World corners (5,2,0), (4,2,0), (5,3,0), wound the other way round under the mirror.
+    assert_eq!(
+        positions,
+        [[5.0, 2.0, 0.0], [5.0, 3.0, 0.0], [4.0, 2.0, 0.0]]
+    );
+    for v in &s.vertices {
+        assert_eq!(v.normal, [0.0, 0.0, 1.0], "still facing +z");
+    }
+    assert!(
+        s.notes.iter().any(|n| n.contains("drawn flat")),
+        "{:?}",
+        s.notes
+    );
+}

@@ -239,18 +239,10 @@ impl Writer {
                 end += 1;
             }
             let run = &tris[start..end];
-            let lo = run
+            let (lo, hi) = run
                 .iter()
                 .flat_map(|t| t.iter())
-                .min()
-                .copied()
-                .unwrap_or(0);
-            let hi = run
-                .iter()
-                .flat_map(|t| t.iter())
-                .max()
-                .copied()
-                .unwrap_or(0);
+                .fold((u32::MAX, 0), |(lo, hi), &i| (lo.min(i), hi.max(i)));
             let verts = &v[lo as usize..=hi as usize];
             let positions: Vec<f32> = verts.iter().flat_map(|v| v.position).collect();
             let normals: Vec<f32> = verts.iter().flat_map(|v| v.normal).collect();

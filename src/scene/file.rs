@@ -177,16 +177,19 @@ fn read_file(path: &str) -> Result<FileScene, String> {
         .ok_or("no scene in the file: it has no `scenes`, so nothing to draw")?;
     let mut notes = Vec::new();
 
-    // Walk the nodes depth first, keeping each node's path from the root.
+    // Walk the nodes depth first, keeping each node's path from the root and its parent's
+    // world transform.
     let mut meshes: Vec<(gltf::Mesh, DAffine3)> = Vec::new();
     let mut lights = Vec::new();
     let mut camera = None;
-    let mut stack: Vec<(gltf::Node, Vec<gltf::Node>)> =
-        scene.nodes().map(|n| (n.clone(), vec![n])).collect();
+    let mut stack: Vec<(gltf::Node, Vec<gltf::Node>, DAffine3)> = scene
+        .nodes()
+        .map(|n| (n.clone(), vec![n], DAffine3::IDENTITY))
+        .collect();
     stack.reverse();
     let mut unsupported_lights = 0;
     let mut visits = 0usize;
-    while let Some((node, chain)) = stack.pop() {
+    while let Some((node, chain, parent)) = stack.pop() {
         visits += 1;
         if visits > MAX_NODE_VISITS {
             return Err(format!(
@@ -199,7 +202,7 @@ fn read_file(path: &str) -> Result<FileScene, String> {
                 node.index()
             ));
         }
-        let world = world_transform(&chain);
+        let world = parent * local_transform(&node);
         if let Some(mesh) = node.mesh() {
             meshes.push((mesh, world));
         }
@@ -237,7 +240,7 @@ fn read_file(path: &str) -> Result<FileScene, String> {
         for child in node.children().collect::<Vec<_>>().into_iter().rev() {
             let mut c = chain.clone();
             c.push(child.clone());
-            stack.push((child, c));
+            stack.push((child, c, world));
         }
     }
     if unsupported_lights > 0 {
@@ -413,16 +416,14 @@ fn read_uri(base: &Path, uri: &str, what: &str, hash: &mut Sha256) -> Result<Vec
     Ok(bytes)
 }
 
-/// The world transform at the end of a chain of nodes, from their static transforms.
-fn world_transform(chain: &[gltf::Node]) -> DAffine3 {
-    chain.iter().fold(DAffine3::IDENTITY, |acc, n| {
-        let (t, r, s) = n.transform().decomposed();
-        acc * DAffine3::from_scale_rotation_translation(
-            Vec3::from(s).as_dvec3(),
-            Quat::from_array(r).as_dquat(),
-            Vec3::from(t).as_dvec3(),
-        )
-    })
+/// A node's own static transform.
+fn local_transform(node: &gltf::Node) -> DAffine3 {
+    let (t, r, s) = node.transform().decomposed();
+    DAffine3::from_scale_rotation_translation(
+        Vec3::from(s).as_dvec3(),
+        Quat::from_array(r).as_dquat(),
+        Vec3::from(t).as_dvec3(),
+    )
 }
 
 /// A `KHR_lights_punctual` point or spot light at a node (None for a directional light).
