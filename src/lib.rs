@@ -11,6 +11,7 @@ pub mod cpu;
 pub mod explain;
 pub mod gpu;
 pub mod matrix;
+pub mod measure;
 pub mod metrics;
 pub mod plot;
 pub mod reference;

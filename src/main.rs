@@ -7,6 +7,7 @@ use std::time::Instant;
 
 use clap::{Parser, Subcommand};
 use clusterlab::compose::{Composer, passes};
+use clusterlab::measure::{Budget, Frames};
 use clusterlab::variant::{self, DebugView};
 
 #[derive(Parser)]
@@ -186,12 +187,25 @@ struct MatrixArgs {
     /// Image size of every cell, WIDTHxHEIGHT (default: each scene's).
     #[arg(long, value_parser = parse_size)]
     size: Option<(u32, u32)>,
-    /// Timed frames per cell (at least 1); pass times are medians over them.
-    #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..))]
-    frames: u32,
-    /// Untimed frames first (software rasterisers compile on first use).
-    #[arg(long, default_value_t = 1)]
+    /// Exactly N timed frames per cell (at least 1) after --warmup untimed ones, instead
+    /// of frames by budget; pass times are medians over the timed frames.
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+    frames: Option<u32>,
+    /// With --frames: untimed frames first (software rasterisers compile on first use).
+    #[arg(long, default_value_t = 1, requires = "frames")]
     warmup: u32,
+    /// Frames by budget: a cell stops once 3 or more frames lie within +-PERCENT of their
+    /// median (or its budget is spent).
+    #[arg(long, default_value_t = Budget::DEFAULT.precision * 100.0, value_parser = parse_percent, conflicts_with = "frames")]
+    precision: f64,
+    /// Frames by budget: milliseconds of frames (the warm-up included) one cell may spend;
+    /// a first frame longer than this is timed once when its first use is within the
+    /// precision of it.
+    #[arg(long, default_value_t = Budget::DEFAULT.budget_ms, value_parser = parse_budget_ms, conflicts_with = "frames")]
+    budget_ms: f64,
+    /// Frames by budget: most timed frames per cell.
+    #[arg(long, default_value_t = Budget::DEFAULT.max_frames, value_parser = clap::value_parser!(u32).range(1..=1000), conflicts_with = "frames")]
+    max_frames: u32,
     /// Folder for results.json, results.csv, images/, plots/ and index.html.
     #[arg(long, default_value = "out/matrix")]
     out: PathBuf,
@@ -255,6 +269,26 @@ struct RenderArgs {
     /// Print one JSON object instead of a summary.
     #[arg(long)]
     json: bool,
+}
+
+/// A percentage in (0, 100].
+fn parse_percent(s: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(p) if p > 0.0 && p <= 100.0 => Ok(p),
+        _ => Err(format!(
+            "`{s}` is not a percentage; give a number in (0, 100], e.g. 3"
+        )),
+    }
+}
+
+/// Milliseconds of a cell's budget: a number in [1, 3600000].
+fn parse_budget_ms(s: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(ms) if (1.0..=3_600_000.0).contains(&ms) => Ok(ms),
+        _ => Err(format!(
+            "`{s}` is not a budget; give milliseconds in [1, 3600000], e.g. 500"
+        )),
+    }
 }
 
 /// A fraction in 0..=1.
@@ -607,11 +641,11 @@ fn render(args: &RenderArgs) -> Result<bool, String> {
         &args.scene,
         params,
         clusterlab::run::CellOptions {
-            warmup: args.warmup,
-            frames: args.frames,
+            frames: Frames::exact(args.warmup, args.frames),
             stats: !args.no_stats,
             out: Some(&args.out),
             references: None,
+            debug_view: None,
         },
     )
     .map_err(|e| format!("variant `{}` on scene `{}`: {e}", loaded.name, args.scene))?;
@@ -763,9 +797,16 @@ fn matrix(args: &MatrixArgs) -> Result<bool, String> {
             gpu.adapter.driver
         );
     }
+    let frames = match args.frames {
+        Some(timed) => Frames::exact(args.warmup, timed),
+        None => Frames::Budget(Budget {
+            precision: args.precision / 100.0,
+            budget_ms: args.budget_ms,
+            max_frames: args.max_frames,
+        }),
+    };
     let options = MatrixOptions {
-        warmup: args.warmup,
-        frames: args.frames.max(1),
+        frames,
         out: folder.staging.clone(),
         progress: true,
         shard: args.shard,
@@ -812,6 +853,9 @@ fn report(results: &clusterlab::matrix::Results, json: bool, out: &Path) -> Resu
     } else {
         print!("{table}");
         println!("report: {}", out.join("index.html").display());
+    }
+    for cost in results.provenance.iter().filter_map(|p| p.cost.as_ref()) {
+        eprintln!("run: {}", cost.line());
     }
     Ok(())
 }

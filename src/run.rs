@@ -3,6 +3,7 @@
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
+use std::time::Instant;
 
 use serde::Serialize;
 use serde_json::{Map, Value};
@@ -10,6 +11,7 @@ use serde_json::{Map, Value};
 use crate::compose::Composer;
 use crate::cpu::frame::ReferenceFrame;
 use crate::gpu::{AdapterSummary, Gpu, Timings};
+use crate::measure::{FrameCount, Frames};
 use crate::metrics::{self, ErrorMetrics};
 use crate::reference::{ReferenceCache, reference_frame};
 use crate::render::{FrameOutput, FrameStats, RenderError, Renderer};
@@ -39,6 +41,8 @@ pub struct RenderReport {
     /// adapters without timestamp queries and on software adapters (see `gpu`).
     pub timing_source: &'static str,
     pub frames: u32,
+    /// Untimed frames first, and whether the one timed frame was also a first draw.
+    pub frame_count: FrameCount,
     /// Format of the HDR colour target (rgba32float, or rgba16float where not renderable).
     pub hdr_format: String,
     /// Wall-clock milliseconds of one frame, submission to completion (median).
@@ -57,6 +61,23 @@ pub struct RenderReport {
     pub skipped_passes: Vec<String>,
     /// Files written, when an output folder was given.
     pub images: Vec<PathBuf>,
+    /// Where the cell's wall-clock time went.
+    pub cost_ms: CellCost,
+}
+
+/// Wall-clock milliseconds of each part of a cell: what a run spends, and where.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, serde::Deserialize)]
+pub struct CellCost {
+    /// Composing, compiling (or finding compiled) and allocating: the renderer's set-up.
+    pub setup: f64,
+    /// Every frame rendered for timing, untimed ones included, with their read-backs.
+    pub frames: f64,
+    /// The instrumented frame and its counters.
+    pub counters: f64,
+    /// The CPU reference and its raster truth (0 when an earlier cell computed it).
+    pub reference: f64,
+    /// Error metrics, images and debug views.
+    pub images: f64,
 }
 
 /// Why a cell could not run.
@@ -81,31 +102,34 @@ pub struct CellResult {
     pub report: RenderReport,
     pub frame: FrameOutput,
     pub reference: Arc<ReferenceFrame>,
+    /// The debug view asked for in `CellOptions::debug_view`, 8-bit RGBA.
+    pub debug: Option<Vec<[u8; 4]>>,
 }
 
 /// How to run a cell.
 #[derive(Clone, Copy, Debug)]
 pub struct CellOptions<'a> {
-    /// Untimed frames first: software rasterisers compile shader variants on first use.
-    pub warmup: u32,
-    /// Timed frames; pass times are medians over them.
-    pub frames: u32,
+    /// Untimed and timed frames (an exact count, or by budget); pass times are medians
+    /// over the timed ones.
+    pub frames: Frames,
     /// Also run an instrumented frame for the exact counters.
     pub stats: bool,
     /// Folder for the image and its heat map.
     pub out: Option<&'a Path>,
     /// Share reference frames between cells that would compute the same one.
     pub references: Option<&'a ReferenceCache>,
+    /// Also draw this debug view of the last timed frame (`CellResult::debug`).
+    pub debug_view: Option<crate::variant::DebugView>,
 }
 
 impl Default for CellOptions<'_> {
     fn default() -> Self {
         Self {
-            warmup: 1,
-            frames: 1,
+            frames: Frames::exact(1, 1),
             stats: true,
             out: None,
             references: None,
+            debug_view: None,
         }
     }
 }
@@ -134,31 +158,32 @@ pub fn run_scene(
     scene: &Scene,
     options: CellOptions<'_>,
 ) -> Result<CellResult, RunError> {
-    let CellOptions { frames, out, .. } = options;
+    let out = options.out;
     let params = scene.params;
     gpu.check_size(params.width, params.height)?;
+    let mut cost = CellCost::default();
+    let mut clock = Instant::now();
+    let mut lap = || {
+        let ms = clock.elapsed().as_secs_f64() * 1e3;
+        clock = Instant::now();
+        round3(ms)
+    };
     let mut renderer = Renderer::new(gpu, composer, &variant.variant, scene)?;
-    for _ in 0..options.warmup {
-        renderer.render()?;
-    }
-    let mut runs = Vec::new();
-    for _ in 0..frames.max(1) {
-        runs.push(renderer.render()?);
-    }
+    cost.setup = lap();
+    let (mut runs, frame_count) = timed_frames(&mut renderer, options.frames)?;
+    cost.frames = lap();
+    let debug = match options.debug_view {
+        Some(view) => Some(renderer.debug_image(composer, view)?),
+        None => None,
+    };
     let wall_ms = median(runs.iter().map(|f| f.wall_ms).collect());
     let timings = median_timings(&runs);
     let gpu_ms_spread = spread(&runs, &timings);
     let frame = runs.pop().expect("at least one frame");
-    let stats = if options.stats {
-        Some(renderer.stats()?)
-    } else {
-        None
-    };
     let mut cpu_ms = Map::new();
     if let Some(ms) = frame.cpu_assign_ms {
         cpu_ms.insert("light_assign".into(), round3(ms).into());
     }
-
     let (reference, reference_ms) = match options.references {
         Some(cache) => cache.get_or_compute(gpu, composer, variant, scene)?,
         None => {
@@ -166,8 +191,20 @@ pub fn run_scene(
             (Arc::new(r), ms)
         }
     };
-    let error = (variant.variant.debug_view == crate::variant::DebugView::Off)
-        .then(|| metrics::compare(&frame, &reference));
+    cost.reference = lap();
+    // The error metrics (FLIP most of them, about 90 ms at 640x360) need only the CPU: they
+    // run on a thread of their own beside the instrumented frame, which hides about 40% of
+    // them on a 2-core machine whose software GPU uses both cores (measured: 6.1 s of
+    // counters and metrics became 5.2 s over 24 cells).
+    let shaded = variant.variant.debug_view == crate::variant::DebugView::Off;
+    let (stats, error) = std::thread::scope(|s| {
+        let compare = s.spawn(|| shaded.then(|| metrics::compare(&frame, &reference)));
+        let stats = options.stats.then(|| renderer.stats()).transpose();
+        let error = compare.join().expect("error metrics do not panic");
+        (stats, error)
+    });
+    let stats = stats?;
+    cost.counters = lap();
     let images = match out {
         Some(dir) => write_images(
             dir,
@@ -177,6 +214,7 @@ pub fn run_scene(
         )?,
         None => Vec::new(),
     };
+    cost.images = lap();
 
     let mut gpu_ms = Map::new();
     gpu_ms.insert("total".into(), round3(timings.total_ms()).into());
@@ -199,7 +237,8 @@ pub fn run_scene(
         } else {
             "wall clock"
         },
-        frames: frames.max(1),
+        frames: frame_count.timed,
+        frame_count,
         hdr_format: format!("{:?}", gpu.hdr_format).to_lowercase(),
         wall_ms: round3(wall_ms),
         reference_ms: round3(reference_ms),
@@ -208,12 +247,55 @@ pub fn run_scene(
         cpu_ms,
         skipped_passes: frame.skipped.clone(),
         images,
+        cost_ms: cost,
     };
     Ok(CellResult {
         report,
         frame,
         reference,
+        debug,
     })
+}
+
+/// Render the frames `policy` asks for; returns the timed ones.
+fn timed_frames(
+    renderer: &mut Renderer<'_>,
+    policy: Frames,
+) -> Result<(Vec<FrameOutput>, FrameCount), RenderError> {
+    let mut count = FrameCount::default();
+    let mut runs: Vec<FrameOutput> = Vec::new();
+    match policy {
+        Frames::Exact { warmup, timed } => {
+            for _ in 0..warmup {
+                renderer.render()?;
+            }
+            count.warmup = warmup;
+            for _ in 0..timed.max(1) {
+                runs.push(renderer.render()?);
+            }
+        }
+        Frames::Budget(budget) => {
+            let cold = renderer.cold();
+            let first = renderer.render()?;
+            let mut warmup_ms = 0.0;
+            if budget.keep_first(first.timings.total_ms(), cold) {
+                count.cold_start = cold;
+                runs.push(first);
+            } else {
+                count.warmup = 1;
+                warmup_ms = first.timings.total_ms();
+            }
+            loop {
+                let times: Vec<f64> = runs.iter().map(|f| f.timings.total_ms()).collect();
+                if budget.enough(&times, warmup_ms) {
+                    break;
+                }
+                runs.push(renderer.render()?);
+            }
+        }
+    }
+    count.timed = runs.len() as u32;
+    Ok((runs, count))
 }
 
 /// `text` as a file name: characters other than letters, digits and `_-.@=` become `_`
@@ -234,10 +316,15 @@ fn round3(x: f64) -> f64 {
     (x * 1000.0).round() / 1000.0
 }
 
-/// The median of `v` (the upper one of an even count; 0 for none).
+/// The median of `v` (the mean of the middle two of an even count; 0 for none).
 pub fn median(mut v: Vec<f64>) -> f64 {
     v.sort_by(f64::total_cmp);
-    v.get(v.len() / 2).copied().unwrap_or(0.0)
+    let n = v.len();
+    match n {
+        0 => 0.0,
+        _ if n % 2 == 1 => v[n / 2],
+        _ => (v[n / 2 - 1] + v[n / 2]) / 2.0,
+    }
 }
 
 /// [min, max] of each pass of `medians` (and of the total) over the frames.

@@ -63,7 +63,12 @@ pub fn run_kernel_for(
         &crate::compose::constants_module(variant),
     )?;
     let outputs = gpu.scoped(root, || {
-        let module = crate::render::shader_module(gpu, &pass);
+        let module = gpu
+            .device
+            .create_shader_module(wgpu::ShaderModuleDescriptor {
+                label: Some(root),
+                source: wgpu::ShaderSource::Wgsl(pass.wgsl.as_str().into()),
+            });
         let pipeline = gpu
             .device
             .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {

@@ -40,8 +40,7 @@ fn a_cell_that_breaks_the_device_fails_alone_and_later_cells_get_a_new_one() {
     BREAK.set(broken.clone()).expect("set once");
     let out = std::env::temp_dir().join(format!("clusterlab-device-{}", std::process::id()));
     let options = MatrixOptions {
-        warmup: 0,
-        frames: 1,
+        frames: clusterlab::measure::Frames::exact(0, 1),
         out: out.clone(),
         progress: false,
         shard: None,

@@ -19,6 +19,11 @@ fn scratch(name: &str) -> PathBuf {
 /// A matrix of every variant on one_light at `size` into `out` (about 40 cells: long
 /// enough to interrupt, short enough for a test).
 fn start(dir: &Path, size: &str, out: &str) -> Child {
+    start_timing(dir, size, out, "1")
+}
+
+/// A run with `frames` timed frames per cell (more: a longer run to interrupt).
+fn start_timing(dir: &Path, size: &str, out: &str, frames: &str) -> Child {
     let variants = std::fs::canonicalize("variants").unwrap();
     Command::new(env!("CARGO_BIN_EXE_clusterlab"))
         .current_dir(dir)
@@ -29,7 +34,7 @@ fn start(dir: &Path, size: &str, out: &str) -> Child {
             "--size",
             size,
             "--frames",
-            "1",
+            frames,
             "--warmup",
             "0",
         ])
@@ -97,7 +102,8 @@ fn interrupted_runs_leave_the_previous_run_whole() {
     // A bigger run into the same folder, stopped part way: by SIGINT and SIGKILL, early
     // (planning, first cells) and late (most cells written).
     for (signal, after_ms) in [("INT", 300), ("KILL", 300), ("INT", 2500), ("KILL", 2500)] {
-        let mut child = start(&dir, "24x14", "out");
+        // Long enough (about 40 frames a cell) that the late signals land mid-run.
+        let mut child = start_timing(&dir, "24x14", "out", "40");
         std::thread::sleep(Duration::from_millis(after_ms));
         let finished = child.try_wait().unwrap().is_some();
         Command::new("kill")

@@ -137,7 +137,7 @@ fn every_variant_renders_the_exported_atrium_as_the_built_in_one() {
     for f in files {
         let v = clusterlab::variant::load(&f).unwrap_or_else(|e| panic!("{e}"));
         let options = CellOptions {
-            warmup: 0,
+            frames: clusterlab::measure::Frames::exact(0, 1),
             ..Default::default()
         };
         let a = run_cell(&gpu, &composer, &v, "atrium", params, options);
@@ -307,7 +307,7 @@ fn base_colour_textures_are_sampled_in_forward_and_deferred_passes_and_in_the_re
             textured.then_some(2)
         );
         let options = CellOptions {
-            warmup: 0,
+            frames: clusterlab::measure::Frames::exact(0, 1),
             ..Default::default()
         };
         for name in ["forward_plus", "clustered_deferred_ggx", "naive_forward"] {

@@ -131,7 +131,7 @@ fn every_variant_matches_its_reviewed_image() {
             "atrium",
             params,
             CellOptions {
-                warmup: 0,
+                frames: clusterlab::measure::Frames::exact(0, 1),
                 stats: false,
                 ..Default::default()
             },

@@ -92,7 +92,7 @@ fn a_broken_variant_fails_its_cells_and_the_rest_run_and_report() {
         assert!(c.speedup_vs_naive.is_some(), "{}", c.spec.id);
         let e = c.error.as_ref().unwrap();
         assert!(e.max_abs_8bit <= 1, "{}: {e:?}", c.spec.id);
-        assert_eq!(c.frames, 2);
+        assert_eq!((c.frames, c.warmup_frames, c.cold_start), (2, 0, false));
         for image in [&c.images.image, &c.images.heat].into_iter().flatten() {
             assert!(out.join(image).is_file(), "{image}");
         }
@@ -192,4 +192,79 @@ fn bad_arguments_are_named() {
         text.contains("/nonexistent/results: no such results file"),
         "{text}"
     );
+}
+
+#[test]
+fn frames_by_budget_are_the_default_and_every_cell_says_how_many_it_took() {
+    let dir = scratch("budget");
+    let v = dir.join("variants");
+    std::fs::create_dir_all(&v).unwrap();
+    std::fs::copy("variants/forward_plus.ron", v.join("forward_plus.ron")).unwrap();
+    let out = dir.join("out");
+    // A budget no frame spends: cells stop on precision (3 frames at least) or the cap.
+    let (code, text) = matrix(&[
+        "matrix",
+        "--variants",
+        v.to_str().unwrap(),
+        "--scenes",
+        "one_light",
+        "--size",
+        "48x27",
+        "--sweep",
+        "lights=1,3",
+        "--budget-ms",
+        "3600000",
+        "--max-frames",
+        "6",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{text}");
+    assert!(
+        text.contains("run: ") && text.contains("pipelines compiled"),
+        "{text}"
+    );
+    let r = Results::load(&out).expect("results.json");
+    assert_eq!(r.cells.len(), 4, "{:?}", ids(&r));
+    for c in &r.cells {
+        assert!(
+            (3..=6).contains(&c.frames),
+            "{}: {} frames",
+            c.spec.id,
+            c.frames
+        );
+        let cost = c.cost_ms.expect("a cell that ran has its cost");
+        assert!(cost.frames > 0.0 && cost.setup > 0.0, "{cost:?}");
+    }
+    // Frames far shorter than the budget: each cell's first frame is a warm-up.
+    for c in &r.cells {
+        assert_eq!((c.warmup_frames, c.cold_start), (1, false), "{}", c.spec.id);
+    }
+    let p = &r.provenance[0];
+    assert!(p.frames.starts_with("by budget"), "{}", p.frames);
+    let cost = p.cost.as_ref().expect("the run's cost");
+    assert!(
+        cost.pipelines.created > 0 && cost.pipelines.reused > 0,
+        "{cost:?}"
+    );
+    assert_eq!(
+        cost.timed_frames,
+        r.cells.iter().map(|c| c.frames).sum::<u32>()
+    );
+    let csv = std::fs::read_to_string(out.join("results.csv")).unwrap();
+    assert!(csv.lines().next().unwrap().contains("frames"), "{csv}");
+
+    // --warmup belongs to exact counts; a precision must be a percentage.
+    for bad in [
+        &["--warmup", "1"][..],
+        &["--precision", "0"],
+        &["--budget-ms", "0"],
+    ] {
+        let mut args = vec!["matrix", "--scenes", "one_light", "--out"];
+        args.push(out.to_str().unwrap());
+        args.extend_from_slice(bad);
+        let (code, text) = matrix(&args);
+        assert_eq!(code, 2, "{bad:?}: {text}");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
 }

@@ -94,6 +94,9 @@ pub fn feature_flags(v: &Variant) -> Vec<(&'static str, bool)> {
         ("outlines", toon.is_some_and(|t| t.outlines.is_some())),
         // On only in instrumented compositions (`Composer::compose_instrumented`).
         ("stats", false),
+        // On only in the counting twin of naive forward (`render::stats`): a clustered
+        // frame that counts every light as evaluated, as naive forward evaluates them.
+        ("count_every_light", false),
         (
             "debug_cluster_index",
             v.debug_view == DebugView::ClusterIndex,

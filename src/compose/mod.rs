@@ -17,14 +17,16 @@ pub use passes::{
 };
 pub use resolver::ShaderResolver;
 
+use std::collections::HashMap;
 use std::path::{Path, PathBuf};
+use std::sync::{Arc, Mutex};
 
 use wesl::{Feature, ModulePath, Wesl};
 
 use crate::variant::Variant;
 
 /// A composed and validated pass.
-#[derive(Debug)]
+#[derive(Clone, Debug)]
 pub struct ComposedPass {
     pub name: String,
     /// The WGSL fed to naga and wgpu.
@@ -84,6 +86,9 @@ pub const CAPABILITIES: naga::valid::Capabilities = naga::valid::Capabilities::E
 pub struct Composer {
     shader_root: PathBuf,
     display_base: PathBuf,
+    /// Passes composed so far, by name, root, features and constants: a matrix composes
+    /// the same pass for many cells, and composing and validating it once is enough.
+    composed: Arc<Mutex<HashMap<String, ComposedPass>>>,
 }
 
 impl Default for Composer {
@@ -104,6 +109,7 @@ impl Composer {
         Self {
             shader_root: cwd.join(shader_root),
             display_base: cwd,
+            composed: Default::default(),
         }
     }
 
@@ -154,6 +160,23 @@ impl Composer {
     /// Compose root module `root` (a path like `passes::forward`) with these feature flags
     /// and constants module text. Every flag a shader tests must be in `features`.
     pub fn compose_root(
+        &self,
+        name: &str,
+        root: &str,
+        features: &[(&str, bool)],
+        constants: &str,
+    ) -> Result<ComposedPass, ShaderError> {
+        let key = format!("{name}\0{root}\0{features:?}\0{constants}");
+        let cache = || self.composed.lock().unwrap_or_else(|p| p.into_inner());
+        if let Some(hit) = cache().get(&key) {
+            return Ok(hit.clone());
+        }
+        let pass = self.compose_uncached(name, root, features, constants)?;
+        cache().insert(key, pass.clone());
+        Ok(pass)
+    }
+
+    fn compose_uncached(
         &self,
         name: &str,
         root: &str,

@@ -3,10 +3,12 @@
 //! timing, read-back, and where adapters are declared to differ (`expect`).
 
 pub mod adapters;
+mod cache;
 pub mod expect;
 mod readback;
 mod timing;
 
+pub use cache::{LayoutObjects, PipelineStats};
 pub use readback::{read_buffer, read_texture};
 pub use timing::{PassTimer, TimestampSlot, Timings};
 
@@ -82,6 +84,8 @@ pub struct Gpu {
     cell_timeout_ns: AtomicU64,
     /// When the current cell began (`begin_cell`); its waits share the limit.
     cell_started: Mutex<Option<Instant>>,
+    /// Shader modules, layouts and pipelines made on this device, by what determines them.
+    pipelines: cache::PipelineCache,
 }
 
 impl Gpu {
@@ -155,6 +159,7 @@ impl Gpu {
             requested: None,
             cell_timeout_ns: AtomicU64::new(DEFAULT_CELL_TIMEOUT.as_nanos() as u64),
             cell_started: Mutex::new(None),
+            pipelines: Default::default(),
         })
     }
 

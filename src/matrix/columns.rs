@@ -21,6 +21,9 @@ pub struct Measured<'a> {
     pub stats: Option<&'a FrameStats>,
     pub skipped_passes: &'a [String],
     pub vs_baseline: Option<&'a BaselineChange>,
+    /// Timed frames, untimed ones before them, and whether the one timed frame was a
+    /// first draw (`None` for a failed cell).
+    pub frames: Option<crate::measure::FrameCount>,
 }
 
 impl Measured<'_> {
@@ -48,6 +51,11 @@ impl CellRecord {
             stats: self.stats.as_ref(),
             skipped_passes: &self.skipped_passes,
             vs_baseline: self.vs_baseline.as_ref(),
+            frames: self.ok().then_some(crate::measure::FrameCount {
+                warmup: self.warmup_frames,
+                timed: self.frames,
+                cold_start: self.cold_start,
+            }),
         }
     }
 }
@@ -63,6 +71,7 @@ impl RenderReport {
             stats: self.stats.as_ref(),
             skipped_passes: &self.skipped_passes,
             vs_baseline: None,
+            frames: Some(self.frame_count),
         }
     }
 }
@@ -206,6 +215,19 @@ pub const COLUMNS: &[Column] = &[
         text: |m| match (m.spread(0), m.spread(1)) {
             (Some(a), Some(b)) => format!("{a:.2}-{b:.2}"),
             _ => "-".into(),
+        },
+    },
+    Column {
+        key: "frames",
+        heading: "frames",
+        shown: CSV_AND_HTML,
+        value: |m| m.frames.map(|f| f.timed).into(),
+        text: |m| {
+            or_dash(m.frames, |f| match (f.warmup, f.cold_start) {
+                (_, true) => format!("{} (cold)", f.timed),
+                (0, _) => f.timed.to_string(),
+                (w, _) => format!("{w}+{}", f.timed),
+            })
         },
     },
     Column {

@@ -102,6 +102,11 @@ fn provenance(h: &mut String, results: &Results) {
             ("tool", p.tool.clone()),
             ("command", p.command.join(" ")),
             ("shard", p.shard.clone().unwrap_or_else(|| "all".into())),
+            ("frames", p.frames.clone()),
+            (
+                "run cost",
+                p.cost.as_ref().map_or_else(|| "-".into(), |c| c.line()),
+            ),
         ];
         for (k, v) in rows {
             let _ = write!(h, "<tr><th>{k}</th><td>{}</td></tr>", esc(&v));

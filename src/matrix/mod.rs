@@ -26,11 +26,12 @@ use serde_json::{Map, Value};
 use sha2::{Digest, Sha256};
 
 use crate::compose::Composer;
-use crate::gpu::{AdapterSummary, Gpu};
+use crate::gpu::{AdapterSummary, Gpu, PipelineStats};
+use crate::measure::Frames;
 use crate::metrics::ErrorMetrics;
 use crate::reference::ReferenceCache;
-use crate::render::{FrameStats, Renderer};
-use crate::run::{CellOptions, run_cell, write_images, write_png};
+use crate::render::FrameStats;
+use crate::run::{CellCost, CellOptions, run_cell, write_images, write_png};
 use crate::scene::SCENES;
 use crate::variant::DebugView;
 
@@ -62,6 +63,16 @@ pub struct CellRecord {
     /// Passes the last timed frame skipped (not needed by this scene and variant).
     #[serde(default)]
     pub skipped_passes: Vec<String>,
+    /// Untimed frames run before the timed ones.
+    #[serde(default)]
+    pub warmup_frames: u32,
+    /// The one timed frame was also the first draw of pipelines made for this cell (see
+    /// `measure::Budget`).
+    #[serde(default)]
+    pub cold_start: bool,
+    /// Where the cell's wall-clock time went (absent for a failed cell).
+    #[serde(default)]
+    pub cost_ms: Option<CellCost>,
 }
 
 #[derive(Clone, Debug, Default, Serialize, Deserialize)]
@@ -107,6 +118,9 @@ impl CellRecord {
             pareto: false,
             vs_baseline: None,
             skipped_passes: Vec::new(),
+            warmup_frames: 0,
+            cold_start: false,
+            cost_ms: None,
         }
     }
 }
@@ -129,6 +143,46 @@ pub struct Provenance {
     pub variant_files: BTreeMap<String, VariantFile>,
     /// Built-in scene generators and their defaults, by name.
     pub scenes: BTreeMap<String, ParamsRecord>,
+    /// How many frames each cell rendered: an exact count, or by budget.
+    #[serde(default)]
+    pub frames: String,
+    /// What the run spent and where (absent in results written before it was recorded).
+    #[serde(default)]
+    pub cost: Option<RunCost>,
+}
+
+/// What a run spent: wall-clock seconds over its cells, split as each cell's cost is, and
+/// what compiling pipelines once per run did.
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+pub struct RunCost {
+    pub wall_s: f64,
+    /// Each cell's cost, summed.
+    pub cells_ms: CellCost,
+    pub pipelines: PipelineStats,
+    pub warmup_frames: u32,
+    pub timed_frames: u32,
+}
+
+impl RunCost {
+    /// One line for the terminal.
+    pub fn line(&self) -> String {
+        let c = &self.cells_ms;
+        let s = |ms: f64| format!("{:.0} s", ms / 1e3);
+        format!(
+            "{:.0} s over the cells: frames {} ({} timed, {} untimed), counters {}, reference {}, images {}, set-up {}; {} pipelines compiled, {} reused ({:.1} s compiling)",
+            self.wall_s,
+            s(c.frames),
+            self.timed_frames,
+            self.warmup_frames,
+            s(c.counters),
+            s(c.reference),
+            s(c.images),
+            s(c.setup),
+            self.pipelines.created,
+            self.pipelines.reused,
+            self.pipelines.creation_ms / 1e3
+        )
+    }
 }
 
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -179,8 +233,8 @@ impl Results {
 /// How a matrix runs.
 #[derive(Clone, Debug)]
 pub struct MatrixOptions {
-    pub warmup: u32,
-    pub frames: u32,
+    /// Frames per cell: by budget, or an exact count.
+    pub frames: Frames,
     pub out: PathBuf,
     /// Show a progress bar on stderr.
     pub progress: bool,
@@ -218,15 +272,22 @@ pub fn run(
         .expect("valid template")
         .progress_chars("=> "),
     );
+    let start = std::time::Instant::now();
+    // Pipeline counts of devices replaced during the run.
+    let mut replaced = PipelineStats::default();
     let mut records = Vec::with_capacity(cells.len());
     // Why there is no usable device (the last one broke and no new one could be opened).
     let mut no_device: Option<String> = None;
     for cell in cells {
         bar.set_message(cell.spec.id.clone());
         if no_device.is_some() {
+            let before = gpu.pipeline_stats();
             no_device = gpu
                 .reopen()
-                .map(|fresh| *gpu = fresh)
+                .map(|fresh| {
+                    replaced = add_pipelines(replaced, before);
+                    *gpu = fresh
+                })
                 .err()
                 .map(no_usable_device);
         }
@@ -234,10 +295,15 @@ pub fn run(
             Some(why) => CellRecord::failed(cell.spec.clone(), why.clone()),
             None => run_guarded(gpu, composer, cell, options, &images, &references),
         };
+        let before = gpu.pipeline_stats();
         if let Some(why) = &mut record.failure
             && no_device.is_none()
             && let Some(note) = renew_if_unusable(gpu, &mut no_device)
         {
+            if no_device.is_none() {
+                // Replaced by a new device: keep what the old one compiled in the count.
+                replaced = add_pipelines(replaced, before);
+            }
             bar.println(format!("{}: {note}", cell.spec.id));
             why.push_str(&format!(" [{note}]"));
         }
@@ -252,8 +318,27 @@ pub fn run(
         bar.inc(1);
     }
     bar.finish_and_clear();
+    let mut cost = RunCost {
+        wall_s: start.elapsed().as_secs_f64(),
+        pipelines: add_pipelines(replaced, gpu.pipeline_stats()),
+        ..Default::default()
+    };
+    for r in &records {
+        if let Some(c) = &r.cost_ms {
+            let t = &mut cost.cells_ms;
+            t.setup += c.setup;
+            t.frames += c.frames;
+            t.counters += c.counters;
+            t.reference += c.reference;
+            t.images += c.images;
+        }
+        cost.warmup_frames += r.warmup_frames;
+        cost.timed_frames += r.frames;
+    }
+    let mut provenance = provenance(gpu, options);
+    provenance.cost = Some(cost);
     let mut results = Results {
-        provenance: vec![provenance(gpu, options)],
+        provenance: vec![provenance],
         cells: records,
     };
     derive(&mut results.cells, None);
@@ -302,6 +387,14 @@ fn renew_if_unusable(gpu: &mut Gpu, no_device: &mut Option<String>) -> Option<St
     }
 }
 
+fn add_pipelines(a: PipelineStats, b: PipelineStats) -> PipelineStats {
+    PipelineStats {
+        created: a.created + b.created,
+        reused: a.reused + b.reused,
+        creation_ms: a.creation_ms + b.creation_ms,
+    }
+}
+
 fn no_usable_device(e: crate::gpu::GpuError) -> String {
     format!("no usable GPU device: opening a new one failed: {e}")
 }
@@ -319,6 +412,11 @@ fn run_one(
         Ok(v) => v,
         Err(why) => return CellRecord::failed(spec, why.clone()),
     };
+    let v = &loaded.variant;
+    // The lights-per-cluster view shows where a clustered variant spends its time.
+    let debug_view =
+        (v.pipeline.is_clustered() && spec.sweep.is_empty() && v.debug_view == DebugView::Off)
+            .then_some(DebugView::LightsPerCluster);
     let result = run_cell(
         gpu,
         composer,
@@ -326,17 +424,18 @@ fn run_one(
         &spec.scene,
         spec.params.into(),
         CellOptions {
-            warmup: options.warmup,
             frames: options.frames,
             stats: true,
             out: None,
             references: Some(references),
+            debug_view,
         },
     );
-    let c = match result {
+    let mut c = match result {
         Ok(c) => c,
         Err(e) => return CellRecord::failed(spec, e.to_string()),
     };
+    let start = std::time::Instant::now();
     let stem = spec.file_stem();
     let relative = |p: &Path| {
         p.strip_prefix(&options.out)
@@ -352,26 +451,14 @@ fn run_one(
         }
         Err(e) => return CellRecord::failed(spec, e.to_string()),
     }
-    // The lights-per-cluster view shows where a clustered variant spends its time.
-    let v = &loaded.variant;
-    if v.pipeline.is_clustered() && spec.sweep.is_empty() && v.debug_view == DebugView::Off {
-        let mut debug = v.clone();
-        debug.debug_view = DebugView::LightsPerCluster;
-        debug.post = Default::default();
+    if let Some(debug) = &c.debug {
         let path = images.join(format!("{stem}.debug.png"));
-        let written = crate::scene::generate(&spec.scene, spec.params.into())
-            .map_err(|e| e.to_string())
-            .and_then(|scene| {
-                let mut r =
-                    Renderer::new(gpu, composer, &debug, &scene).map_err(|e| e.to_string())?;
-                let f = r.render().map_err(|e| e.to_string())?;
-                let rgb: Vec<u8> = f.ldr.iter().flat_map(|p| [p[0], p[1], p[2]]).collect();
-                write_png(&path, f.width, f.height, &rgb).map_err(|e| e.to_string())
-            });
-        if written.is_ok() {
+        let rgb: Vec<u8> = debug.iter().flat_map(|p| [p[0], p[1], p[2]]).collect();
+        if write_png(&path, c.frame.width, c.frame.height, &rgb).is_ok() {
             files.debug = Some(relative(&path));
         }
     }
+    c.report.cost_ms.images += start.elapsed().as_secs_f64() * 1e3;
     let r = c.report;
     CellRecord {
         spec,
@@ -389,6 +476,9 @@ fn run_one(
         pareto: false,
         vs_baseline: None,
         skipped_passes: r.skipped_passes,
+        warmup_frames: r.frame_count.warmup,
+        cold_start: r.frame_count.cold_start,
+        cost_ms: Some(r.cost_ms),
     }
 }
 
@@ -634,6 +724,18 @@ fn provenance(gpu: &Gpu, options: &MatrixOptions) -> Provenance {
         }
         .into(),
         command: options.command.clone(),
+        frames: match options.frames {
+            Frames::Exact { warmup, timed } => {
+                format!("exact: {warmup} untimed then {timed} timed per cell")
+            }
+            Frames::Budget(b) => format!(
+                "by budget: until 3+ frames lie within +-{}% of their median, {} ms of timed frames, or {} frames",
+                b.precision * 100.0,
+                b.budget_ms,
+                b.max_frames
+            ),
+        },
+        cost: None,
         shard: options.shard.map(|(k, n)| format!("{k}/{n}")),
         variant_files: options.variant_files.clone(),
         scenes: SCENES

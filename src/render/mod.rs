@@ -110,6 +110,22 @@ pub struct Renderer<'g> {
     skips: Skips,
     /// Frames rendered (not counting instrumented ones).
     frames_done: u32,
+    /// Pipelines of the timed frame that this renderer created rather than found made
+    /// earlier in the run (see `cold`).
+    fresh_pipelines: u32,
+    /// Features set by the scene rather than the variant (spots, textures).
+    frame_features: Vec<(&'static str, bool)>,
+    /// Naive forward's counters come from a clustered twin (see `stats`).
+    naive_counting: Option<NaiveCounting<'g>>,
+}
+
+/// The clustered twin that counts naive forward's light evaluations: made on first use.
+enum NaiveCounting<'g> {
+    Pending {
+        composer: Composer,
+        scene: Box<Scene>,
+    },
+    Ready(Box<Renderer<'g>>),
 }
 
 /// What this renderer's frames may leave out (all false when the variant skips nothing).
@@ -170,6 +186,25 @@ impl<'g> Renderer<'g> {
         variant: &Variant,
         scene: &Scene,
     ) -> Result<Self, RenderError> {
+        let mut renderer = Self::build_renderer(gpu, composer, variant, scene, false)?;
+        if variant.pipeline == Pipeline::NaiveForward {
+            renderer.naive_counting = Some(NaiveCounting::Pending {
+                composer: composer.clone(),
+                scene: Box::new(scene.clone()),
+            });
+        }
+        Ok(renderer)
+    }
+
+    /// `count_every_light`: the instrumented passes count every light per fragment (the
+    /// counting twin of naive forward, see `stats`).
+    fn build_renderer(
+        gpu: &'g Gpu,
+        composer: &Composer,
+        variant: &Variant,
+        scene: &Scene,
+        count_every_light: bool,
+    ) -> Result<Self, RenderError> {
         let (width, height) = (scene.params.width, scene.params.height);
         gpu.check_size(width, height)?;
         gpu.check_scene(scene)?;
@@ -200,7 +235,13 @@ impl<'g> Renderer<'g> {
             ("spot_lights", !skips.no_spots),
             ("base_color_texture", scene.textures.is_some()),
         ];
-        let instrumented_frame = [frame[0], frame[1], ("stats", true)];
+        let frame_features = frame.to_vec();
+        let instrumented_frame = [
+            frame[0],
+            frame[1],
+            ("stats", true),
+            ("count_every_light", count_every_light),
+        ];
         let mut composed: Composed = Vec::new();
         for p in &plan.passes {
             if composed.iter().any(|(q, _, _)| q.id == p.id) {
@@ -228,6 +269,7 @@ impl<'g> Renderer<'g> {
                 _ => None,
             })
             .collect();
+        let created_before = gpu.pipeline_stats().created;
         let post = gpu.scoped("creating the post chain", || {
             PostChain::new(gpu, variant, &post_passes, &res)
         })??;
@@ -247,12 +289,19 @@ impl<'g> Renderer<'g> {
             reallocations: 0,
             skips,
             frames_done: 0,
+            fresh_pipelines: 0,
+            frame_features,
+            naive_counting: None,
         };
         gpu.scoped("creating pipelines", || -> Result<(), RenderError> {
-            for (pass, timed, instrumented) in &composed {
+            for (pass, timed, _) in &composed {
                 if let Some(b) = renderer.build(*pass, timed, false)? {
                     renderer.timed.push(b);
                 }
+            }
+            // What the timed frames draw with is known now; the rest only counts.
+            renderer.fresh_pipelines = gpu.pipeline_stats().created - created_before;
+            for (pass, _, instrumented) in &composed {
                 if let Some(i) = instrumented
                     && let Some(b) = renderer.build(*pass, i, true)?
                 {
@@ -290,14 +339,14 @@ impl<'g> Renderer<'g> {
                 l,
                 &self.variant,
                 instrumented,
-            )),
-            PassId::Screen(p) => Pipelines::Render(screen::pipelines(gpu, p, composed, l)),
+            )?),
+            PassId::Screen(p) => Pipelines::Render(screen::pipelines(gpu, p, composed, l)?),
             PassId::Clustering(p) => Pipelines::Compute(ComputePipelines::new(
                 gpu,
                 composed,
                 l,
                 clustering::entries(p),
-            )),
+            )?),
             PassId::Post(_) => return Ok(None),
         };
         let groups = self.bind(pass.id, &layout)?;
@@ -351,6 +400,14 @@ impl<'g> Renderer<'g> {
             height: self.height,
             lights: self.res.scene.light_count,
         }
+    }
+
+    /// Whether the next frame is the first to draw with pipelines created for this
+    /// renderer: software rasterisers compile shader variants on a pipeline's first draw,
+    /// so that frame's time includes compiling. Pipelines found made earlier in the run are
+    /// taken as warm (the cell that made them drew with them).
+    pub fn cold(&self) -> bool {
+        self.fresh_pipelines > 0 && self.frames_done == 0
     }
 
     /// Render one frame (timed) and read back its images.
@@ -500,6 +557,50 @@ impl<'g> Renderer<'g> {
             }
             _ => {}
         }
+    }
+
+    /// Debug view `view` of the last frame, drawn from its depth and light lists by the
+    /// debug pass alone (the same image a whole frame of the variant with that view shows;
+    /// post effects, which a debug view leaves out, change neither). 8-bit RGBA, row-major.
+    pub fn debug_image(
+        &self,
+        composer: &Composer,
+        view: crate::variant::DebugView,
+    ) -> Result<Vec<[u8; 4]>, RenderError> {
+        let gpu = self.gpu;
+        let mut v = self.variant.clone();
+        v.debug_view = view;
+        v.post = Default::default();
+        let id = PassId::Screen(compose::ScreenPass::DebugView);
+        let Some(pass) = compose::passes(&v).into_iter().find(|p| p.id == id) else {
+            return Err(RenderError::Reflection(format!(
+                "variant has no debug pass for view {view:?}"
+            )));
+        };
+        let composed = composer.compose_with(&v, &pass, &self.frame_features)?;
+        gpu.scoped("drawing a debug view", || -> Result<(), RenderError> {
+            let layout = PassLayout::of(gpu, &composed)?;
+            let pipelines = screen::pipelines(
+                gpu,
+                compose::ScreenPass::DebugView,
+                &composed,
+                &layout.pipeline,
+            )?;
+            let groups = layout.bind_groups(gpu, id.name(), |g, b| self.res.scene_binding(g, b))?;
+            let mut e = gpu.device.create_command_encoder(&Default::default());
+            screen::encode(
+                compose::ScreenPass::DebugView,
+                &pipelines,
+                &groups,
+                &mut e,
+                None,
+                &self.res,
+            );
+            gpu.queue.submit([e.finish()]);
+            Ok(())
+        })??;
+        let ldr = read_texture(gpu, &self.res.targets.ldr.texture, 4)?;
+        Ok(bytemuck::cast_slice(&ldr).to_vec())
     }
 
     /// The shading pass's HDR image of the last frame, before post-processing.

@@ -59,15 +59,14 @@ impl<'g> PassRunner<'g> {
     }
 }
 
-pub fn shader_module(gpu: &Gpu, pass: &ComposedPass) -> wgpu::ShaderModule {
-    gpu.device
-        .create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some(&pass.name),
-            source: wgpu::ShaderSource::Wgsl(pass.wgsl.as_str().into()),
-        })
+/// The shader module of a composed pass (one per distinct WGSL on the device).
+pub fn shader_module(gpu: &Gpu, pass: &ComposedPass) -> Result<wgpu::ShaderModule, GpuError> {
+    gpu.shader_module(&pass.name, &pass.wgsl)
 }
 
-/// A render pipeline of a composed pass with vertex and (optional) fragment entry points.
+/// A render pipeline of a composed pass with vertex and (optional) fragment entry points,
+/// created once per device for its WGSL and state (`layout` is the pass's own, which its
+/// WGSL determines).
 pub fn render_pipeline(
     gpu: &Gpu,
     pass: &ComposedPass,
@@ -76,30 +75,36 @@ pub fn render_pipeline(
     vertex_buffers: &[Option<wgpu::VertexBufferLayout<'_>>],
     targets: &[Option<wgpu::ColorTargetState>],
     depth: Option<wgpu::DepthStencilState>,
-) -> wgpu::RenderPipeline {
-    let module = shader_module(gpu, pass);
-    gpu.device
-        .create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some(&pass.name),
-            layout: Some(layout),
-            vertex: wgpu::VertexState {
-                module: &module,
-                entry_point: Some(vs),
-                compilation_options: Default::default(),
-                buffers: vertex_buffers,
-            },
-            primitive: wgpu::PrimitiveState::default(),
-            depth_stencil: depth,
-            multisample: wgpu::MultisampleState::default(),
-            fragment: fs.map(|fs| wgpu::FragmentState {
-                module: &module,
-                entry_point: Some(fs),
-                compilation_options: Default::default(),
-                targets,
-            }),
-            multiview_mask: None,
-            cache: None,
-        })
+) -> Result<wgpu::RenderPipeline, GpuError> {
+    let key = format!(
+        "{}\0{vs}|{fs:?}|{vertex_buffers:?}|{targets:?}|{depth:?}",
+        pass.wgsl
+    );
+    let module = shader_module(gpu, pass)?;
+    gpu.render_pipeline(&pass.name, key, || {
+        gpu.device
+            .create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some(&pass.name),
+                layout: Some(layout),
+                vertex: wgpu::VertexState {
+                    module: &module,
+                    entry_point: Some(vs),
+                    compilation_options: Default::default(),
+                    buffers: vertex_buffers,
+                },
+                primitive: wgpu::PrimitiveState::default(),
+                depth_stencil: depth.clone(),
+                multisample: wgpu::MultisampleState::default(),
+                fragment: fs.map(|fs| wgpu::FragmentState {
+                    module: &module,
+                    entry_point: Some(fs),
+                    compilation_options: Default::default(),
+                    targets,
+                }),
+                multiview_mask: None,
+                cache: None,
+            })
+    })
 }
 
 /// The compute pipelines of a pass, one per entry point, sharing its layout.
@@ -111,26 +116,27 @@ impl ComputePipelines {
         pass: &ComposedPass,
         layout: &wgpu::PipelineLayout,
         entries: &[&'static str],
-    ) -> Self {
-        let module = shader_module(gpu, pass);
-        Self(
-            entries
-                .iter()
-                .map(|&entry| {
-                    let pipeline =
-                        gpu.device
-                            .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                                label: Some(entry),
-                                layout: Some(layout),
-                                module: &module,
-                                entry_point: Some(entry),
-                                compilation_options: Default::default(),
-                                cache: None,
-                            });
-                    (entry, pipeline)
-                })
-                .collect(),
-        )
+    ) -> Result<Self, GpuError> {
+        let module = shader_module(gpu, pass)?;
+        let pipelines = entries
+            .iter()
+            .map(|&entry| {
+                let key = format!("{}\0{entry}", pass.wgsl);
+                let pipeline = gpu.compute_pipeline(&pass.name, key, || {
+                    gpu.device
+                        .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                            label: Some(entry),
+                            layout: Some(layout),
+                            module: &module,
+                            entry_point: Some(entry),
+                            compilation_options: Default::default(),
+                            cache: None,
+                        })
+                })?;
+                Ok((entry, pipeline))
+            })
+            .collect::<Result<_, GpuError>>()?;
+        Ok(Self(pipelines))
     }
 
     /// The pipeline of `entry`, one of those it was made with.

@@ -180,7 +180,7 @@ impl PostChain {
                 .filter(|s| s.pass == pass)
                 .map(|s| s.entry)
                 .collect();
-            let pipelines = ComputePipelines::new(gpu, composed, &layout.pipeline, &entries);
+            let pipelines = ComputePipelines::new(gpu, composed, &layout.pipeline, &entries)?;
             built.push((pass, layout, pipelines, composed));
         }
         let mut steps = Vec::new();

@@ -5,7 +5,7 @@ use super::gbuffer;
 use super::passes::{begin_render, clear_attachment, color_target, render_pipeline};
 use super::resources::{DepthSetup, SceneBuffers, Targets};
 use crate::compose::{ComposedPass, RasterPass};
-use crate::gpu::{Gpu, TimestampSlot};
+use crate::gpu::{Gpu, GpuError, TimestampSlot};
 use crate::variant::Variant;
 
 /// The render pipelines of a raster pass, drawn in order.
@@ -16,7 +16,7 @@ pub fn pipelines(
     layout: &wgpu::PipelineLayout,
     variant: &Variant,
     instrumented: bool,
-) -> Vec<wgpu::RenderPipeline> {
+) -> Result<Vec<wgpu::RenderPipeline>, GpuError> {
     let d = DepthSetup::of(variant);
     let vertex = [Some(SceneBuffers::vertex_layout())];
     let build = |fs: Option<&str>, targets: &[Option<wgpu::ColorTargetState>], depth| {
@@ -30,12 +30,16 @@ pub fn pipelines(
             Some(depth),
         )
     };
-    match pass {
-        RasterPass::DepthPrepass => vec![build(None, &[], d.state(d.compare(), true))],
+    Ok(match pass {
+        RasterPass::DepthPrepass => vec![build(None, &[], d.state(d.compare(), true))?],
         RasterPass::GBuffer => {
             let formats = gbuffer::formats(variant);
             let targets: Vec<_> = formats.into_iter().map(color_target).collect();
-            vec![build(Some("fs_main"), &targets, d.state(d.compare(), true))]
+            vec![build(
+                Some("fs_main"),
+                &targets,
+                d.state(d.compare(), true),
+            )?]
         }
         RasterPass::Forward => {
             // After a pre-pass, shade exactly the nearest fragment, once.
@@ -45,9 +49,9 @@ pub fn pipelines(
                 d.state(d.compare(), true)
             };
             let fs = if instrumented { "fs_stats" } else { "fs_main" };
-            vec![build(Some(fs), &[color_target(gpu.hdr_format)], depth)]
+            vec![build(Some(fs), &[color_target(gpu.hdr_format)], depth)?]
         }
-    }
+    })
 }
 
 /// Encode a raster pass: its attachments, then the scene's triangles.

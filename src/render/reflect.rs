@@ -8,7 +8,7 @@ use naga::{AddressSpace, ImageClass, ImageDimension, ScalarKind, ShaderStage, Ty
 
 use super::RenderError;
 use crate::compose::ComposedPass;
-use crate::gpu::Gpu;
+use crate::gpu::{Gpu, LayoutObjects};
 
 /// The layout entries of each bind group a pass uses, by group index, in binding order.
 pub type GroupEntries = BTreeMap<u32, Vec<wgpu::BindGroupLayoutEntry>>;
@@ -140,7 +140,7 @@ fn storage_format(f: naga::StorageFormat) -> Option<wgpu::TextureFormat> {
 }
 
 /// The bind group layouts of a pass and the pipeline layout made of them; a group the pass
-/// does not use is a gap.
+/// does not use is a gap. Made once per device for each distinct WGSL.
 pub struct PassLayout {
     entries: GroupEntries,
     groups: Vec<Option<wgpu::BindGroupLayout>>,
@@ -152,29 +152,33 @@ impl PassLayout {
     pub fn of(gpu: &Gpu, pass: &ComposedPass) -> Result<Self, RenderError> {
         let entries = layout_entries(pass)?;
         let count = entries.keys().next_back().map_or(0, |g| g + 1);
-        let groups: Vec<Option<wgpu::BindGroupLayout>> = (0..count)
-            .map(|g| {
-                entries.get(&g).map(|e| {
-                    gpu.device
-                        .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-                            label: Some(&pass.name),
-                            entries: e,
-                        })
+        let objects = gpu.pass_layout(&pass.wgsl, || {
+            let groups: Vec<Option<wgpu::BindGroupLayout>> = (0..count)
+                .map(|g| {
+                    entries.get(&g).map(|e| {
+                        gpu.device
+                            .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                                label: Some(&pass.name),
+                                entries: e,
+                            })
+                    })
                 })
-            })
-            .collect();
-        let refs: Vec<Option<&wgpu::BindGroupLayout>> = groups.iter().map(Option::as_ref).collect();
-        let pipeline = gpu
-            .device
-            .create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                label: Some(&pass.name),
-                bind_group_layouts: &refs,
-                immediate_size: 0,
-            });
+                .collect();
+            let refs: Vec<Option<&wgpu::BindGroupLayout>> =
+                groups.iter().map(Option::as_ref).collect();
+            let pipeline = gpu
+                .device
+                .create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                    label: Some(&pass.name),
+                    bind_group_layouts: &refs,
+                    immediate_size: 0,
+                });
+            LayoutObjects { groups, pipeline }
+        })?;
         Ok(Self {
             entries,
-            groups,
-            pipeline,
+            groups: objects.groups,
+            pipeline: objects.pipeline,
         })
     }
 

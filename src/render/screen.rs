@@ -5,7 +5,7 @@
 use super::passes::{begin_render, clear_attachment, color_target, render_pipeline};
 use super::resources::{FrameResources, LDR_FORMAT};
 use crate::compose::{ComposedPass, ScreenPass};
-use crate::gpu::{Gpu, TimestampSlot};
+use crate::gpu::{Gpu, GpuError, TimestampSlot};
 
 /// The render pipelines of a screen pass, drawn in order.
 pub fn pipelines(
@@ -13,12 +13,12 @@ pub fn pipelines(
     pass: ScreenPass,
     composed: &ComposedPass,
     layout: &wgpu::PipelineLayout,
-) -> Vec<wgpu::RenderPipeline> {
+) -> Result<Vec<wgpu::RenderPipeline>, GpuError> {
     let build = |vs: &str, fs: &str, target: Option<wgpu::ColorTargetState>| {
         render_pipeline(gpu, composed, layout, (vs, Some(fs)), &[], &[target], None)
     };
-    match pass {
-        ScreenPass::Resolve => vec![build("vs_main", "fs_main", color_target(gpu.hdr_format))],
+    Ok(match pass {
+        ScreenPass::Resolve => vec![build("vs_main", "fs_main", color_target(gpu.hdr_format))?],
         // The ambient term over every pixel, then each light added in its rectangle.
         ScreenPass::ScissorLights => {
             let additive = Some(wgpu::ColorTargetState {
@@ -34,14 +34,14 @@ pub fn pipelines(
                 write_mask: wgpu::ColorWrites::ALL,
             });
             vec![
-                build("vs_ambient", "fs_ambient", additive.clone()),
-                build("vs_light", "fs_light", additive),
+                build("vs_ambient", "fs_ambient", additive.clone())?,
+                build("vs_light", "fs_light", additive)?,
             ]
         }
         ScreenPass::DebugView | ScreenPass::Tonemap => {
-            vec![build("vs_main", "fs_main", color_target(LDR_FORMAT))]
+            vec![build("vs_main", "fs_main", color_target(LDR_FORMAT))?]
         }
-    }
+    })
 }
 
 /// What sits at `@group(group) @binding(binding)` of a screen pass: the scene passes'

@@ -4,9 +4,10 @@
 use serde::Serialize;
 
 use super::resources::Target;
-use super::{Pipelines, RenderError, Renderer, clustering, gbuffer};
+use super::{NaiveCounting, Pipelines, RenderError, Renderer, clustering, gbuffer};
 use crate::compose::{ClusterPass, PassId};
 use crate::gpu::{GpuError, read_buffer};
+use crate::variant::{Clusters, DebugView, Pipeline, Variant};
 
 /// Exact counters of a frame, from an instrumented run of it.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, serde::Deserialize)]
@@ -55,9 +56,52 @@ pub struct FrameStats {
     pub first_out_of_grid: Option<[u32; 3]>,
 }
 
-impl Renderer<'_> {
+/// What the shading pass counted: evaluations, useful ones, most useful at one pixel.
+struct ShadingCounts {
+    evals: u64,
+    useful: u64,
+    max_useful_per_pixel: u32,
+}
+
+impl<'g> Renderer<'g> {
     /// Render the frame again with instrumented shading and return its exact counters.
+    ///
+    /// Naive forward's shading counters come from its clustered twin: the same
+    /// rasterisation (pre-pass or not, depth format and test, vertex shader), exact light
+    /// lists, and shading that counts every light as evaluated per fragment and tests only
+    /// the lights of its list for range. Exact lists hold every light in range of a
+    /// fragment, so the useful count is naive forward's own, at a small part of the cost of
+    /// looping over every light (`tests/measure.rs` holds them equal).
     pub fn stats(&mut self) -> Result<FrameStats, RenderError> {
+        self.stats_with(true)
+    }
+
+    /// `stats`, with naive forward counting on its own instrumented frame.
+    pub fn stats_without_twin(&mut self) -> Result<FrameStats, RenderError> {
+        self.stats_with(false)
+    }
+
+    /// The counting twin of a naive forward renderer, made on first use.
+    fn naive_twin(&mut self) -> Result<Option<&mut Renderer<'g>>, RenderError> {
+        if let Some(NaiveCounting::Pending { composer, scene }) = &self.naive_counting {
+            let twin = Variant {
+                pipeline: Pipeline::ClusteredForward,
+                clusters: Some(Clusters::default()),
+                post: Default::default(),
+                debug_view: DebugView::Off,
+                ..self.variant.clone()
+            };
+            let r = Renderer::build_renderer(self.gpu, composer, &twin, scene, true)?;
+            self.naive_counting = Some(NaiveCounting::Ready(Box::new(r)));
+        }
+        Ok(match &mut self.naive_counting {
+            Some(NaiveCounting::Ready(r)) => Some(r),
+            _ => None,
+        })
+    }
+
+    /// Run an instrumented frame and sum its shading counters.
+    fn count_shading(&mut self) -> Result<ShadingCounts, RenderError> {
         let gpu = self.gpu;
         self.run_fitted(true)?;
         // Sum and maximum of a per-pixel counter.
@@ -68,10 +112,25 @@ impl Renderer<'_> {
             Ok((sum, counts.iter().copied().max().unwrap_or(0)))
         };
         let useful = total(&self.res.counters.useful)?;
-        let mut stats = FrameStats {
-            light_evals: total(&self.res.counters.evals)?.0,
-            useful_light_evals: useful.0,
+        Ok(ShadingCounts {
+            evals: total(&self.res.counters.evals)?.0,
+            useful: useful.0,
             max_useful_per_pixel: useful.1,
+        })
+    }
+
+    fn stats_with(&mut self, twin: bool) -> Result<FrameStats, RenderError> {
+        let gpu = self.gpu;
+        // A twin that cannot be made (its cluster buffers over a limit) leaves naive forward
+        // counting on its own frame: slower, as exact.
+        let counts = match self.naive_twin() {
+            Ok(Some(t)) if twin => t.count_shading()?,
+            _ => self.count_shading()?,
+        };
+        let mut stats = FrameStats {
+            light_evals: counts.evals,
+            useful_light_evals: counts.useful,
+            max_useful_per_pixel: counts.max_useful_per_pixel,
             gbuffer_bytes_per_pixel: if self.variant.pipeline.is_deferred() {
                 gbuffer::bytes_per_pixel(&self.variant)
             } else {

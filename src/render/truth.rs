@@ -73,7 +73,7 @@ pub fn raster_truth(
                 color_target(TRUTH_FORMAT),
             ],
             Some(depth_state),
-        );
+        )?;
         let prepass_pipeline = match &prepass {
             Some(p) => {
                 let layout = PassLayout::of(gpu, p)?;
@@ -86,7 +86,7 @@ pub fn raster_truth(
                     &vertex,
                     &[],
                     Some(depth.state(depth.compare(), true)),
-                );
+                )?;
                 Some((pipeline, groups))
             }
             None => None,

@@ -81,8 +81,7 @@ pub fn run_case(gpu: &Gpu, composer: &Composer, case: &Case, name: &str, v: &Var
         &loaded,
         &case.scene,
         CellOptions {
-            warmup: 0,
-            frames: 1,
+            frames: crate::measure::Frames::exact(0, 1),
             ..Default::default()
         },
     );

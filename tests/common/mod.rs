@@ -36,7 +36,7 @@ pub fn cell(gpu: &Gpu, v: &LoadedVariant, scene: &str, p: SceneParams) -> CellRe
         scene,
         p,
         CellOptions {
-            warmup: 0,
+            frames: clusterlab::measure::Frames::exact(0, 1),
             ..Default::default()
         },
     )

@@ -1,0 +1,186 @@
+//! What makes a run cheap without changing its figures: pipelines compiled once per device
+//! and shared by every cell whose passes compose alike, the debug view drawn from the timed
+//! frame instead of a frame of its own, and instrumented frames that only count.
+
+mod common;
+
+use clusterlab::compose::Composer;
+use clusterlab::measure::Frames;
+use clusterlab::render::Renderer;
+use clusterlab::run::{CellOptions, run_cell};
+use clusterlab::scene;
+use clusterlab::variant::DebugView;
+use common::{gpu, load, small};
+
+#[test]
+fn a_second_renderer_of_the_same_passes_compiles_nothing_and_renders_the_same() {
+    let gpu = gpu();
+    let composer = Composer::default();
+    let v = load("clustered_deferred_16x16x24");
+    let scene = scene::generate("atrium", small("atrium", 64, 36, Some(64))).unwrap();
+    let before = gpu.pipeline_stats();
+    let mut first = Renderer::new(&gpu, &composer, &v.variant, &scene).unwrap();
+    let made = gpu.pipeline_stats();
+    assert!(made.created > before.created, "{made:?}");
+    assert!(first.cold(), "fresh pipelines: the first frame compiles");
+    let a = first.render().unwrap();
+    assert!(!first.cold());
+
+    // Another light count composes to the same WGSL: every pipeline is found, none made.
+    let other = scene::generate("atrium", small("atrium", 64, 36, Some(32))).unwrap();
+    let mut second = Renderer::new(&gpu, &composer, &v.variant, &other).unwrap();
+    let after = gpu.pipeline_stats();
+    assert_eq!(after.created, made.created, "{after:?}");
+    assert!(after.reused > made.reused);
+    assert!(!second.cold(), "pipelines drawn with before are warm");
+    second.render().unwrap();
+
+    // And the shared pipelines render the first scene exactly as before.
+    let mut third = Renderer::new(&gpu, &composer, &v.variant, &scene).unwrap();
+    let b = third.render().unwrap();
+    assert_eq!(a.ldr, b.ldr);
+    assert_eq!(a.hdr, b.hdr);
+    assert_eq!(first.stats().unwrap(), third.stats().unwrap());
+}
+
+#[test]
+fn the_debug_view_of_the_timed_frame_is_the_debug_variants_own_frame() {
+    let gpu = gpu();
+    let composer = Composer::default();
+    let scene = scene::generate("atrium", small("atrium", 96, 54, Some(128))).unwrap();
+    for name in [
+        "forward_plus",
+        "forward_plus_no_prepass",
+        "clustered_deferred_16x16x24",
+        "clustered_deferred_olsson",
+        "clustered_deferred_toon_bloom",
+    ] {
+        let v = load(name);
+        let cell = run_cell(
+            &gpu,
+            &composer,
+            &v,
+            "atrium",
+            scene.params,
+            CellOptions {
+                frames: Frames::exact(0, 2),
+                debug_view: Some(DebugView::LightsPerCluster),
+                ..Default::default()
+            },
+        )
+        .unwrap();
+        let from_timed = cell.debug.expect("asked for");
+        // The variant with the view on, its own frames (two: previous-frame ranges settle).
+        let mut debug = v.variant.clone();
+        debug.debug_view = DebugView::LightsPerCluster;
+        debug.post = Default::default();
+        let mut r = Renderer::new(&gpu, &composer, &debug, &scene).unwrap();
+        r.render().unwrap();
+        let own = r.render().unwrap();
+        let differing = own
+            .ldr
+            .iter()
+            .zip(&from_timed)
+            .filter(|(a, b)| a != b)
+            .count();
+        assert_eq!(differing, 0, "{name}: {differing} pixels differ");
+        // The view shows something: lit clusters are not black.
+        assert!(from_timed.iter().any(|p| p[..3] != [0, 0, 0]), "{name}");
+    }
+}
+
+#[test]
+fn frames_by_budget_time_a_long_frame_once_and_short_ones_until_precise() {
+    use clusterlab::measure::Budget;
+    let gpu = gpu();
+    let composer = Composer::default();
+    let v = load("forward_plus");
+    let params = small("atrium", 64, 36, Some(32));
+    let run = |budget: Budget| {
+        run_cell(
+            &gpu,
+            &composer,
+            &v,
+            "atrium",
+            params,
+            CellOptions {
+                frames: Frames::Budget(budget),
+                stats: false,
+                ..Default::default()
+            },
+        )
+        .unwrap()
+        .report
+    };
+    // A budget any frame spends, and a precision any first-use cost is within: the first
+    // frame is timed, and is the only one, though it compiled its pipelines.
+    let once = run(Budget {
+        precision: 1e9,
+        budget_ms: 1e-6,
+        max_frames: 20,
+    });
+    assert_eq!(once.frames, 1);
+    assert_eq!(once.frame_count.warmup, 0);
+    assert!(
+        once.frame_count.cold_start,
+        "a new device: its first frame compiled"
+    );
+    // A budget no frame spends and a precision any frames meet: a warm-up frame, then
+    // exactly the 3 frames a precision is judged on.
+    let precise = run(Budget {
+        precision: 1e9,
+        budget_ms: 1e9,
+        max_frames: 20,
+    });
+    assert_eq!(precise.frames, clusterlab::measure::MIN_FRAMES as u32);
+    assert_eq!(precise.frame_count.warmup, 1);
+    assert!(!precise.frame_count.cold_start);
+    // A first frame that spends the budget but not by enough to hide its first use is a
+    // warm-up too (a 64x36 frame is far below 15 ms / 3%).
+    let short = run(Budget {
+        precision: 0.03,
+        budget_ms: 1e-6,
+        max_frames: 20,
+    });
+    assert_eq!((short.frame_count.warmup, short.frames), (1, 1));
+    // A precision no frames meet: the frame cap.
+    let capped = run(Budget {
+        precision: 1e-12,
+        budget_ms: 1e9,
+        max_frames: 5,
+    });
+    assert_eq!(capped.frames, 5);
+    let [lo, hi] = [0, 1].map(|i| capped.gpu_ms_spread["total"][i].as_f64().unwrap());
+    let median = capped.gpu_ms["total"].as_f64().unwrap();
+    assert!(lo <= median && median <= hi, "{lo} {median} {hi}");
+}
+
+#[test]
+fn naive_counters_from_the_clustered_twin_equal_naive_forwards_own() {
+    let gpu = gpu();
+    let composer = Composer::default();
+    let mut prepass = load("naive_forward").variant;
+    prepass.depth_prepass = true;
+    let cases = [
+        ("naive_forward", load("naive_forward").variant, "atrium"),
+        ("naive_forward", load("naive_forward").variant, "stage"),
+        (
+            "naive_forward_ggx",
+            load("naive_forward_ggx").variant,
+            "spheres",
+        ),
+        ("naive_forward + pre-pass", prepass, "atrium"),
+    ];
+    for (name, v, scene_name) in cases {
+        let scene = scene::generate(scene_name, small(scene_name, 96, 54, None)).unwrap();
+        let mut r = Renderer::new(&gpu, &composer, &v, &scene).unwrap();
+        r.render().unwrap();
+        let twin = r.stats().unwrap();
+        let own = r.stats_without_twin().unwrap();
+        assert!(
+            own.useful_light_evals > 0,
+            "{name}@{scene_name}: nothing lit"
+        );
+        assert_eq!(twin, own, "{name}@{scene_name}");
+    }
+}
