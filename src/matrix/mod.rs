@@ -729,7 +729,7 @@ fn provenance(gpu: &Gpu, options: &MatrixOptions) -> Provenance {
                 format!("exact: {warmup} untimed then {timed} timed per cell")
             }
             Frames::Budget(b) => format!(
-                "by budget: until 3+ frames lie within +-{}% of their median, {} ms of timed frames, or {} frames",
+                "by budget: until 3+ frames lie within +-{}% of their median, {} ms of frames are spent (a warm-up included), or {} frames",
                 b.precision * 100.0,
                 b.budget_ms,
                 b.max_frames
