@@ -34,12 +34,17 @@ pub struct PipelineCache {
     inner: Mutex<Inner>,
 }
 
+/// A pipeline the cache keeps.
+enum Kept {
+    Render(wgpu::RenderPipeline),
+    Compute(wgpu::ComputePipeline),
+}
+
 #[derive(Default)]
 struct Inner {
     modules: HashMap<String, wgpu::ShaderModule>,
     layouts: HashMap<String, LayoutObjects>,
-    render: HashMap<String, wgpu::RenderPipeline>,
-    compute: HashMap<String, wgpu::ComputePipeline>,
+    pipelines: HashMap<String, Kept>,
     stats: PipelineStats,
 }
 
@@ -94,18 +99,10 @@ impl Gpu {
         key: String,
         make: impl FnOnce() -> wgpu::RenderPipeline,
     ) -> Result<wgpu::RenderPipeline, GpuError> {
-        let mut cache = self.pipelines.lock();
-        if let Some(p) = cache.render.get(&key) {
-            let pipeline = p.clone();
-            cache.stats.reused += 1;
-            return Ok(pipeline);
-        }
-        let start = Instant::now();
-        let pipeline = self.scoped(&format!("creating the pipeline of pass `{label}`"), make)?;
-        cache.stats.creation_ms += start.elapsed().as_secs_f64() * 1e3;
-        cache.stats.created += 1;
-        cache.render.insert(key, pipeline.clone());
-        Ok(pipeline)
+        self.kept(label, key, make, Kept::Render, |k| match k {
+            Kept::Render(p) => Some(p),
+            _ => None,
+        })
     }
 
     /// The compute pipeline keyed by `key` (the WGSL and the entry point), made by `make`
@@ -116,8 +113,22 @@ impl Gpu {
         key: String,
         make: impl FnOnce() -> wgpu::ComputePipeline,
     ) -> Result<wgpu::ComputePipeline, GpuError> {
+        self.kept(label, key, make, Kept::Compute, |k| match k {
+            Kept::Compute(p) => Some(p),
+            _ => None,
+        })
+    }
+
+    fn kept<P: Clone>(
+        &self,
+        label: &str,
+        key: String,
+        make: impl FnOnce() -> P,
+        wrap: fn(P) -> Kept,
+        unwrap: fn(&Kept) -> Option<&P>,
+    ) -> Result<P, GpuError> {
         let mut cache = self.pipelines.lock();
-        if let Some(p) = cache.compute.get(&key) {
+        if let Some(p) = cache.pipelines.get(&key).and_then(unwrap) {
             let pipeline = p.clone();
             cache.stats.reused += 1;
             return Ok(pipeline);
@@ -126,7 +137,7 @@ impl Gpu {
         let pipeline = self.scoped(&format!("creating the pipeline of pass `{label}`"), make)?;
         cache.stats.creation_ms += start.elapsed().as_secs_f64() * 1e3;
         cache.stats.created += 1;
-        cache.compute.insert(key, pipeline.clone());
+        cache.pipelines.insert(key, wrap(pipeline.clone()));
         Ok(pipeline)
     }
 }
