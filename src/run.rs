@@ -199,7 +199,13 @@ pub fn run_scene(
     let shaded = variant.variant.debug_view == crate::variant::DebugView::Off;
     let (stats, error) = std::thread::scope(|s| {
         let compare = s.spawn(|| shaded.then(|| metrics::compare(&frame, &reference)));
-        let stats = options.stats.then(|| renderer.stats()).transpose();
+        let stats = options
+            .stats
+            .then(|| {
+                renderer.prepare_counting(composer, scene);
+                renderer.stats()
+            })
+            .transpose();
         let error = compare.join().expect("error metrics do not panic");
         (stats, error)
     });

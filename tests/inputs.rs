@@ -147,22 +147,18 @@ fn bad_values_are_refused_with_what_would_be_valid() {
 fn a_debug_view_reports_no_error_figure() {
     let dir = scratch("debug");
     let variant = std::fs::canonicalize("variants/forward_plus.ron").unwrap();
-    let out = Command::new(env!("CARGO_BIN_EXE_clusterlab"))
-        .current_dir(&dir)
-        .args([
-            "render",
-            "--scene",
-            "one_light",
-            "--size",
-            "32x18",
-            "--json",
-            "--debug-view",
-            "lights-per-cluster",
-        ])
-        .arg("--variant")
-        .arg(&variant)
-        .output()
-        .expect("run clusterlab");
+    let render = |extra: &[&str]| {
+        Command::new(env!("CARGO_BIN_EXE_clusterlab"))
+            .current_dir(&dir)
+            .args(["render", "--scene", "one_light", "--size", "32x18"])
+            .args(["--debug-view", "lights-per-cluster"])
+            .args(extra)
+            .arg("--variant")
+            .arg(&variant)
+            .output()
+            .expect("run clusterlab")
+    };
+    let out = render(&["--json"]);
     assert!(
         out.status.success(),
         "{}",
@@ -171,21 +167,7 @@ fn a_debug_view_reports_no_error_figure() {
     let report: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert!(report["error"].is_null(), "{}", report["error"]);
     // And the summary shows no error columns for it.
-    let out = Command::new(env!("CARGO_BIN_EXE_clusterlab"))
-        .current_dir(&dir)
-        .args([
-            "render",
-            "--scene",
-            "one_light",
-            "--size",
-            "32x18",
-            "--debug-view",
-            "lights-per-cluster",
-        ])
-        .arg("--variant")
-        .arg(&variant)
-        .output()
-        .unwrap();
+    let out = render(&[]);
     let text = String::from_utf8_lossy(&out.stdout);
     assert!(out.status.success());
     assert!(!text.contains("PSNR") && !text.contains("max8"), "{text}");

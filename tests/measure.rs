@@ -175,8 +175,9 @@ fn naive_counters_from_the_clustered_twin_equal_naive_forwards_own() {
         let scene = scene::generate(scene_name, small(scene_name, 96, 54, None)).unwrap();
         let mut r = Renderer::new(&gpu, &composer, &v, &scene).unwrap();
         r.render().unwrap();
+        let own = r.stats().unwrap();
+        r.prepare_counting(&composer, &scene);
         let twin = r.stats().unwrap();
-        let own = r.stats_without_twin().unwrap();
         assert!(
             own.useful_light_evals > 0,
             "{name}@{scene_name}: nothing lit"

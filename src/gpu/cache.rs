@@ -34,17 +34,18 @@ pub struct PipelineCache {
     inner: Mutex<Inner>,
 }
 
-/// A pipeline the cache keeps.
+/// What the cache keeps, by kind.
 enum Kept {
+    Module(wgpu::ShaderModule),
+    Layout(LayoutObjects),
     Render(wgpu::RenderPipeline),
     Compute(wgpu::ComputePipeline),
 }
 
 #[derive(Default)]
 struct Inner {
-    modules: HashMap<String, wgpu::ShaderModule>,
-    layouts: HashMap<String, LayoutObjects>,
-    pipelines: HashMap<String, Kept>,
+    /// By kind and key (a module and a layout share their WGSL as key).
+    kept: HashMap<(&'static str, String), Kept>,
     stats: PipelineStats,
 }
 
@@ -56,21 +57,24 @@ impl Gpu {
 
     /// The shader module of `wgsl`, created on first use.
     pub fn shader_module(&self, label: &str, wgsl: &str) -> Result<wgpu::ShaderModule, GpuError> {
-        let mut cache = self.pipelines.lock();
-        if let Some(m) = cache.modules.get(wgsl) {
-            return Ok(m.clone());
-        }
-        let start = Instant::now();
-        let module = self.scoped(&format!("compiling the shader of pass `{label}`"), || {
+        let what = format!("compiling the shader of pass `{label}`");
+        let make = || {
             self.device
                 .create_shader_module(wgpu::ShaderModuleDescriptor {
                     label: Some(label),
                     source: wgpu::ShaderSource::Wgsl(wgsl.into()),
                 })
-        })?;
-        cache.stats.creation_ms += start.elapsed().as_secs_f64() * 1e3;
-        cache.modules.insert(wgsl.to_string(), module.clone());
-        Ok(module)
+        };
+        self.kept(
+            &what,
+            ("module", wgsl.into()),
+            make,
+            Kept::Module,
+            |k| match k {
+                Kept::Module(m) => Some(m),
+                _ => None,
+            },
+        )
     }
 
     /// The layouts of the pass whose WGSL is `wgsl`, made by `make` on first use (the
@@ -80,65 +84,73 @@ impl Gpu {
         wgsl: &str,
         make: impl FnOnce() -> LayoutObjects,
     ) -> Result<LayoutObjects, GpuError> {
-        let mut cache = self.pipelines.lock();
-        if let Some(l) = cache.layouts.get(wgsl) {
-            return Ok(l.clone());
-        }
-        let start = Instant::now();
-        let layout = self.scoped("creating a pipeline layout", make)?;
-        cache.stats.creation_ms += start.elapsed().as_secs_f64() * 1e3;
-        cache.layouts.insert(wgsl.to_string(), layout.clone());
-        Ok(layout)
+        let what = "creating a pipeline layout";
+        self.kept(
+            what,
+            ("layout", wgsl.into()),
+            make,
+            Kept::Layout,
+            |k| match k {
+                Kept::Layout(l) => Some(l),
+                _ => None,
+            },
+        )
     }
 
     /// The render pipeline keyed by `key` (the WGSL and every piece of pipeline state),
-    /// made by `make` on first use. A pipeline whose creation failed is not kept.
+    /// made by `make` on first use.
     pub fn render_pipeline(
         &self,
         label: &str,
         key: String,
         make: impl FnOnce() -> wgpu::RenderPipeline,
     ) -> Result<wgpu::RenderPipeline, GpuError> {
-        self.kept(label, key, make, Kept::Render, |k| match k {
+        let what = format!("creating the pipeline of pass `{label}`");
+        self.kept(&what, ("render", key), make, Kept::Render, |k| match k {
             Kept::Render(p) => Some(p),
             _ => None,
         })
     }
 
     /// The compute pipeline keyed by `key` (the WGSL and the entry point), made by `make`
-    /// on first use. A pipeline whose creation failed is not kept.
+    /// on first use.
     pub fn compute_pipeline(
         &self,
         label: &str,
         key: String,
         make: impl FnOnce() -> wgpu::ComputePipeline,
     ) -> Result<wgpu::ComputePipeline, GpuError> {
-        self.kept(label, key, make, Kept::Compute, |k| match k {
+        let what = format!("creating the pipeline of pass `{label}`");
+        self.kept(&what, ("compute", key), make, Kept::Compute, |k| match k {
             Kept::Compute(p) => Some(p),
             _ => None,
         })
     }
 
-    fn kept<P: Clone>(
+    /// The object kept under `key`, or made by `make` (inside an error scope named `what`)
+    /// and kept: an object whose creation failed is not kept. Pipelines count as created or
+    /// reused; every creation's time counts.
+    fn kept<T: Clone>(
         &self,
-        label: &str,
-        key: String,
-        make: impl FnOnce() -> P,
-        wrap: fn(P) -> Kept,
-        unwrap: fn(&Kept) -> Option<&P>,
-    ) -> Result<P, GpuError> {
+        what: &str,
+        key: (&'static str, String),
+        make: impl FnOnce() -> T,
+        wrap: fn(T) -> Kept,
+        unwrap: fn(&Kept) -> Option<&T>,
+    ) -> Result<T, GpuError> {
+        let pipeline = matches!(key.0, "render" | "compute");
         let mut cache = self.pipelines.lock();
-        if let Some(p) = cache.pipelines.get(&key).and_then(unwrap) {
-            let pipeline = p.clone();
-            cache.stats.reused += 1;
-            return Ok(pipeline);
+        if let Some(t) = cache.kept.get(&key).and_then(unwrap) {
+            let t = t.clone();
+            cache.stats.reused += u32::from(pipeline);
+            return Ok(t);
         }
         let start = Instant::now();
-        let pipeline = self.scoped(&format!("creating the pipeline of pass `{label}`"), make)?;
+        let t = self.scoped(what, make)?;
         cache.stats.creation_ms += start.elapsed().as_secs_f64() * 1e3;
-        cache.stats.created += 1;
-        cache.pipelines.insert(key, wrap(pipeline.clone()));
-        Ok(pipeline)
+        cache.stats.created += u32::from(pipeline);
+        cache.kept.insert(key, wrap(t.clone()));
+        Ok(t)
     }
 }
 

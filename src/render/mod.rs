@@ -115,17 +115,8 @@ pub struct Renderer<'g> {
     fresh_pipelines: u32,
     /// Features set by the scene rather than the variant (spots, textures).
     frame_features: Vec<(&'static str, bool)>,
-    /// Naive forward's counters come from a clustered twin (see `stats`).
-    naive_counting: Option<NaiveCounting<'g>>,
-}
-
-/// The clustered twin that counts naive forward's light evaluations: made on first use.
-enum NaiveCounting<'g> {
-    Pending {
-        composer: Composer,
-        scene: Box<Scene>,
-    },
-    Ready(Box<Renderer<'g>>),
+    /// The clustered twin naive forward counts on, once made (see `prepare_counting`).
+    naive_twin: Option<Box<Renderer<'g>>>,
 }
 
 /// What this renderer's frames may leave out (all false when the variant skips nothing).
@@ -186,18 +177,11 @@ impl<'g> Renderer<'g> {
         variant: &Variant,
         scene: &Scene,
     ) -> Result<Self, RenderError> {
-        let mut renderer = Self::build_renderer(gpu, composer, variant, scene, false)?;
-        if variant.pipeline == Pipeline::NaiveForward {
-            renderer.naive_counting = Some(NaiveCounting::Pending {
-                composer: composer.clone(),
-                scene: Box::new(scene.clone()),
-            });
-        }
-        Ok(renderer)
+        Self::build_renderer(gpu, composer, variant, scene, false)
     }
 
     /// `count_every_light`: the instrumented passes count every light per fragment (the
-    /// counting twin of naive forward, see `stats`).
+    /// counting twin of naive forward, see `prepare_counting`).
     fn build_renderer(
         gpu: &'g Gpu,
         composer: &Composer,
@@ -291,7 +275,7 @@ impl<'g> Renderer<'g> {
             frames_done: 0,
             fresh_pipelines: 0,
             frame_features,
-            naive_counting: None,
+            naive_twin: None,
         };
         gpu.scoped("creating pipelines", || -> Result<(), RenderError> {
             for (pass, timed, _) in &composed {

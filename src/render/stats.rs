@@ -4,9 +4,11 @@
 use serde::Serialize;
 
 use super::resources::Target;
-use super::{NaiveCounting, Pipelines, RenderError, Renderer, clustering, gbuffer};
+use super::{Pipelines, RenderError, Renderer, clustering, gbuffer};
+use crate::compose::Composer;
 use crate::compose::{ClusterPass, PassId};
 use crate::gpu::{GpuError, read_buffer};
+use crate::scene::Scene;
 use crate::variant::{Clusters, DebugView, Pipeline, Variant};
 
 /// Exact counters of a frame, from an instrumented run of it.
@@ -64,40 +66,28 @@ struct ShadingCounts {
 }
 
 impl<'g> Renderer<'g> {
-    /// Render the frame again with instrumented shading and return its exact counters.
-    ///
-    /// Naive forward's shading counters come from its clustered twin: the same
-    /// rasterisation (pre-pass or not, depth format and test, vertex shader), exact light
-    /// lists, and shading that counts every light as evaluated per fragment and tests only
-    /// the lights of its list for range. Exact lists hold every light in range of a
-    /// fragment, so the useful count is naive forward's own, at a small part of the cost of
-    /// looping over every light (`tests/measure.rs` holds them equal).
-    pub fn stats(&mut self) -> Result<FrameStats, RenderError> {
-        self.stats_with(true)
-    }
-
-    /// `stats`, with naive forward counting on its own instrumented frame.
-    pub fn stats_without_twin(&mut self) -> Result<FrameStats, RenderError> {
-        self.stats_with(false)
-    }
-
-    /// The counting twin of a naive forward renderer, made on first use.
-    fn naive_twin(&mut self) -> Result<Option<&mut Renderer<'g>>, RenderError> {
-        if let Some(NaiveCounting::Pending { composer, scene }) = &self.naive_counting {
-            let twin = Variant {
-                pipeline: Pipeline::ClusteredForward,
-                clusters: Some(Clusters::default()),
-                post: Default::default(),
-                debug_view: DebugView::Off,
-                ..self.variant.clone()
-            };
-            let r = Renderer::build_renderer(self.gpu, composer, &twin, scene, true)?;
-            self.naive_counting = Some(NaiveCounting::Ready(Box::new(r)));
+    /// Make naive forward's counting twin, so that `stats` counts on it: a clustered
+    /// renderer with the same rasterisation (pre-pass or not, depth format and test, vertex
+    /// shader), exact light lists, and shading that counts every light as evaluated per
+    /// fragment and tests only the lights of its list for range. Exact lists hold every
+    /// light in range of a fragment, so the useful count is naive forward's own, at a small
+    /// part of the cost of looping over every light (`tests/measure.rs` holds them equal).
+    /// Nothing to do for other pipelines; a twin that cannot be made (its cluster buffers
+    /// over a limit) leaves naive forward counting on its own frame: slower, as exact.
+    pub fn prepare_counting(&mut self, composer: &Composer, scene: &Scene) {
+        if self.variant.pipeline != Pipeline::NaiveForward || self.naive_twin.is_some() {
+            return;
         }
-        Ok(match &mut self.naive_counting {
-            Some(NaiveCounting::Ready(r)) => Some(r),
-            _ => None,
-        })
+        let twin = Variant {
+            pipeline: Pipeline::ClusteredForward,
+            clusters: Some(Clusters::default()),
+            post: Default::default(),
+            debug_view: DebugView::Off,
+            ..self.variant.clone()
+        };
+        self.naive_twin = Renderer::build_renderer(self.gpu, composer, &twin, scene, true)
+            .ok()
+            .map(Box::new);
     }
 
     /// Run an instrumented frame and sum its shading counters.
@@ -119,13 +109,13 @@ impl<'g> Renderer<'g> {
         })
     }
 
-    fn stats_with(&mut self, twin: bool) -> Result<FrameStats, RenderError> {
+    /// Render the frame again with instrumented shading and return its exact counters
+    /// (naive forward's shading counters on its twin, once `prepare_counting` made it).
+    pub fn stats(&mut self) -> Result<FrameStats, RenderError> {
         let gpu = self.gpu;
-        // A twin that cannot be made (its cluster buffers over a limit) leaves naive forward
-        // counting on its own frame: slower, as exact.
-        let counts = match self.naive_twin() {
-            Ok(Some(t)) if twin => t.count_shading()?,
-            _ => self.count_shading()?,
+        let counts = match &mut self.naive_twin {
+            Some(twin) => twin.count_shading()?,
+            None => self.count_shading()?,
         };
         let mut stats = FrameStats {
             light_evals: counts.evals,
