@@ -56,10 +56,36 @@ pub fn run_kernel_for(
     inputs: &[KernelInput],
     output_sizes: &[u64],
 ) -> Result<Vec<Vec<u8>>, RenderError> {
+    run_kernel_with(
+        gpu,
+        composer,
+        (variant, &[]),
+        root,
+        entry,
+        invocations,
+        inputs,
+        output_sizes,
+    )
+}
+
+/// [`run_kernel_for`] with flags of the kernel's own besides the variant's.
+#[allow(clippy::too_many_arguments)]
+fn run_kernel_with(
+    gpu: &Gpu,
+    composer: &Composer,
+    (variant, kernel_flags): (&Variant, &[(&'static str, bool)]),
+    root: &str,
+    entry: &str,
+    invocations: u32,
+    inputs: &[KernelInput],
+    output_sizes: &[u64],
+) -> Result<Vec<Vec<u8>>, RenderError> {
+    let mut features = crate::compose::feature_flags(variant);
+    features.extend_from_slice(kernel_flags);
     let pass = composer.compose_root(
         root,
         &format!("passes::{root}"),
-        &crate::compose::feature_flags(variant),
+        &features,
         &crate::compose::constants_module(variant),
     )?;
     let outputs = gpu.scoped(root, || {
@@ -252,13 +278,41 @@ pub fn gpu_codecs(
     normals: &[[f32; 4]],
     codes: &[[u32; 2]],
 ) -> Result<CodecResults, RenderError> {
+    codec_kernel(gpu, composer, codec, normals, codes, false)
+}
+
+/// [`gpu_codecs`] for the polar codec with the encoder it had before this project fixed it
+/// (the polar angle from `acos(z)`; codes up to 4 steps off at 16 bits on lavapipe). A
+/// deliberate break, kept so that the tests can show their codec check rejects it.
+pub fn gpu_codecs_old_acos_polar(
+    gpu: &Gpu,
+    composer: &Composer,
+    bits: u32,
+    normals: &[[f32; 4]],
+    codes: &[[u32; 2]],
+) -> Result<CodecResults, RenderError> {
+    let polar = NormalCodec::Polar { bits: 2 * bits };
+    codec_kernel(gpu, composer, polar, normals, codes, true)
+}
+
+fn codec_kernel(
+    gpu: &Gpu,
+    composer: &Composer,
+    codec: NormalCodec,
+    normals: &[[f32; 4]],
+    codes: &[[u32; 2]],
+    old_acos_polar: bool,
+) -> Result<CodecResults, RenderError> {
     let n = normals.len();
     assert_eq!(n, codes.len(), "one code per normal");
     let params = [n as u32, 0, 0, 0];
-    let out = run_kernel_for(
+    let out = run_kernel_with(
         gpu,
         composer,
-        &with_codec(codec),
+        (
+            &with_codec(codec),
+            &[("twin_old_acos_polar", old_acos_polar)],
+        ),
         "twin_codecs",
         "codec_main",
         n as u32,

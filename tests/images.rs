@@ -1,7 +1,8 @@
 //! Image snapshots: every variant in variants/ on a small scene, compared with the reviewed
-//! PNG in snapshots/images/ (reviewed on lavapipe) within the 2 LSB per channel that
-//! rasterisers may round differently. Where an adapter legitimately differs further, the
-//! difference is declared once in `clusterlab::gpu::expect`, not widened here for everyone.
+//! PNG in snapshots/images/ (reviewed on lavapipe): every pixel within 1 LSB per channel, and
+//! at most `MAX_SHARE_OFF` of them off at all (see `judge`). Where an adapter legitimately
+//! differs further, the difference is declared once in `clusterlab::gpu::expect`, not
+//! widened here for everyone.
 //! A failing image leaves `NAME.snap.new.png` (review it with `cargo insta review`) and
 //! `NAME.diff.png` (where it differs) in snapshots/images/.
 
@@ -14,8 +15,19 @@ use clusterlab::gpu::expect::{self, Allowance, Check};
 use clusterlab::run::{CellOptions, run_cell};
 use common::{gpu, small};
 
-/// Per-channel difference tolerated (rasteriser rounding).
-const TOLERANCE: u8 = 2;
+/// Per-channel difference tolerated: two colours less than an LSB apart round to 8-bit
+/// values at most 1 apart.
+const TOLERANCE: u8 = 1;
+
+/// The share of pixels that may differ at all. An HDR target of 16-bit floats (OpenGL)
+/// rounds each colour by at most 2^-11 relative; through the tonemap and sRGB encoding that
+/// moves a displayed value by at most 0.0232 LSB (the maximum of 255 * (D(x (1 + 2^-11)) -
+/// D(x)) over x, at x = 0.42, for D = sRGB(x / (1 + x))). A value that moves by d LSB changes
+/// its 8-bit rounding only if a rounding boundary lies within d of it: for values spread
+/// over the LSBs, in a share d of the pixels. Measured (128x72, 30 variants): at most 155 of
+/// 9216 pixels (1.7%) off by 1 on llvmpipe through OpenGL, 30 (0.3%) on lavapipe.
+const MAX_SHARE_OFF: f64 = 0.0232;
+
 const FOLDER: &str = "snapshots/images";
 
 fn encode_png(w: u32, h: u32, rgb: &[u8]) -> Vec<u8> {
@@ -41,13 +53,40 @@ fn pixel_diff(a: &[u8], b: &[u8]) -> u8 {
         .unwrap_or(0)
 }
 
-/// How many pixels differ from `old` by more than the tolerance, and the largest difference.
-fn pixels_off(old: &[u8], new: &[u8]) -> (usize, u8) {
+/// How many pixels differ from `old` by more than the tolerance, the largest difference,
+/// and how many differ at all.
+fn pixels_off(old: &[u8], new: &[u8]) -> (usize, u8, usize) {
     old.chunks(3)
         .zip(new.chunks(3))
         .map(|(a, b)| pixel_diff(a, b))
-        .filter(|&d| d > TOLERANCE)
-        .fold((0, 0), |(n, worst), d| (n + 1, worst.max(d)))
+        .filter(|&d| d > 0)
+        .fold((0, 0, 0), |(n, worst, any), d| {
+            (n + usize::from(d > TOLERANCE), worst.max(d), any + 1)
+        })
+}
+
+/// Whether an image `new` matches the reviewed `old` (RGB bytes): every pixel within
+/// `TOLERANCE`, at most `MAX_SHARE_OFF` of them off at all, unless the adapter declares
+/// `allowed` pixels further off.
+fn judge(old: &[u8], new: &[u8], allowed: Option<Allowance>) -> Result<(), String> {
+    let (over, worst, any) = pixels_off(old, new);
+    let pixels = old.len() / 3;
+    let extra = match allowed {
+        Some(Allowance::PixelsOff { pixels, lsb }) if worst <= lsb => pixels,
+        _ => 0,
+    };
+    if over > extra {
+        return Err(format!(
+            "{over} pixels differ by more than {TOLERANCE} LSB, up to {worst} (allowed on this adapter: {allowed:?})"
+        ));
+    }
+    if any as f64 > MAX_SHARE_OFF * pixels as f64 + extra as f64 {
+        return Err(format!(
+            "{any} of {pixels} pixels differ (at most {:.2}%)",
+            MAX_SHARE_OFF * 100.0
+        ));
+    }
+    Ok(())
 }
 
 /// Compare with the stored snapshot; returns an error message when out of tolerance (and
@@ -61,17 +100,11 @@ fn check_image(
 ) -> Result<(), String> {
     let stored_path = PathBuf::from(FOLDER).join(format!("{name}.snap.png"));
     let stored = decode_png(&stored_path);
-    let off = stored
-        .as_ref()
-        .filter(|old| old.dimensions() == (w, h))
-        .map(|old| pixels_off(old.as_raw(), rgb));
-    let within = match (off, allowed) {
-        (Some((0, _)), _) => true,
-        (Some((n, worst)), Some(Allowance::PixelsOff { pixels, lsb })) => {
-            n <= pixels && worst <= lsb
-        }
-        _ => false,
+    let verdict = match &stored {
+        Some(old) if old.dimensions() == (w, h) => judge(old.as_raw(), rgb, allowed),
+        _ => Err("no reviewed image of this size in snapshots/images/".to_string()),
     };
+    let within = verdict.is_ok();
     // Within tolerance, assert the stored bytes themselves so insta sees no change.
     let bytes = if within {
         std::fs::read(&stored_path).expect("stored snapshot reads")
@@ -100,18 +133,18 @@ fn check_image(
     let mut settings = insta::Settings::clone_current();
     settings.set_snapshot_path("../snapshots/images");
     settings.set_prepend_module_to_snapshot(false);
-    settings.bind(|| {
-        std::panic::catch_unwind(|| {
-            insta::assert_binary_snapshot!(&format!("{name}.png"), bytes);
+    settings
+        .bind(|| {
+            std::panic::catch_unwind(|| {
+                insta::assert_binary_snapshot!(&format!("{name}.png"), bytes);
+            })
         })
-    })
-    .map_err(|_| match off {
-        Some((n, worst)) => format!(
-            "{name}: {n} pixels differ from snapshots/images/{name}.snap.png by more than \
-             {TOLERANCE} LSB, up to {worst} (allowed on this adapter: {allowed:?}; see {name}.diff.png)"
-        ),
-        None => format!("{name}: no reviewed image of this size in snapshots/images/"),
-    })
+        .map_err(|_| {
+            format!(
+                "{name}: {} (snapshots/images/{name}.snap.png; see {name}.diff.png)",
+                verdict.err().unwrap_or_default()
+            )
+        })
 }
 
 #[test]
@@ -152,4 +185,35 @@ fn every_variant_matches_its_reviewed_image() {
         }
     }
     assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+/// The breaks the judgement exists for, on a reviewed image: one pixel 3 LSB off, every
+/// pixel 2 LSB off, and 1 LSB on 3% of the pixels each fail it; the image itself passes.
+#[test]
+fn the_image_judgement_rejects_a_shifted_image() {
+    let path = PathBuf::from(FOLDER).join("forward_plus@atrium.snap.png");
+    let old = decode_png(&path).expect("a reviewed image").into_raw();
+    let shifted = |lsb: u8, every: usize, limit: usize| -> Vec<u8> {
+        let mut new = old.clone();
+        for (i, p) in new.chunks_mut(3).enumerate() {
+            if i % every == 0 && i / every < limit {
+                p[0] = if p[0] >= 128 { p[0] - lsb } else { p[0] + lsb };
+            }
+        }
+        new
+    };
+    assert_eq!(judge(&old, &old, None), Ok(()));
+    let one_pixel_3_lsb = shifted(3, 1, 1);
+    let all_2_lsb = shifted(2, 1, usize::MAX);
+    let three_percent_1_lsb = shifted(1, 33, usize::MAX);
+    let share_1_lsb = shifted(1, 50, usize::MAX);
+    for (what, new) in [
+        ("one pixel 3 LSB off", &one_pixel_3_lsb),
+        ("every pixel 2 LSB off", &all_2_lsb),
+        ("3% of pixels 1 LSB off", &three_percent_1_lsb),
+    ] {
+        assert!(judge(&old, new, None).is_err(), "{what} passes");
+    }
+    // Within the derived share: 2% of pixels 1 LSB off.
+    assert_eq!(judge(&old, &share_1_lsb, None), Ok(()));
 }
