@@ -12,6 +12,7 @@ use clusterlab::gpu::Gpu;
 use clusterlab::render::Renderer;
 use clusterlab::scene::{self, Scene};
 use clusterlab::twins;
+use clusterlab::variant::PostEffect;
 use clusterlab::variant::*;
 use common::{cell, gpu, load, small};
 use glam::DVec3;
@@ -64,13 +65,17 @@ fn run_chain(gpu: &Gpu, v: &Variant, scene: &Scene) -> ChainRun {
     }
 }
 
-/// How far a GPU image is from the twin's: the largest error relative to max(1, |value|)
-/// over the pixels that agree, and how many pixels do not (error above `agree`).
+/// How far a GPU image is from the twin's: the largest error relative to the twin's value
+/// over the pixels that agree, and how many pixels do not (relative error above `agree`).
+/// Relative to the value itself, not to 1: every effect is a weighted sum or a choice of
+/// non-negative colours, whose f32 rounding is relative. A zero is matched only by a zero
+/// or by an f32 rounding of one (below 2^-126, the smallest normal f32).
 fn compare(gpu_out: &Image, twin: &Image, agree: f64) -> (f64, usize) {
     let mut worst: f64 = 0.0;
     let mut disagree = 0;
     for (g, t) in gpu_out.pixels.iter().zip(&twin.pixels) {
-        let e = ((*g - *t).abs() / t.abs().max(DVec3::ONE)).max_element();
+        let e =
+            ((*g - *t).abs() / t.abs().max(DVec3::splat(f32::MIN_POSITIVE as f64))).max_element();
         if e > agree {
             disagree += 1;
         } else {
@@ -80,6 +85,66 @@ fn compare(gpu_out: &Image, twin: &Image, agree: f64) -> (f64, usize) {
     (worst, disagree)
 }
 
+/// `v` with only its first `stages` post effects (in the order a frame applies them), and
+/// its shading as it is.
+fn first_effects(v: &Variant, stages: usize) -> Variant {
+    let mut v = v.clone();
+    let effects: Vec<PostEffect> = v.post.effects().collect();
+    for e in effects.into_iter().skip(stages) {
+        match e {
+            // Per-light bands belong to the shading pass: only the outlines go.
+            PostEffect::Toon => match &mut v.post.toon {
+                Some(t) if t.mode == ToonMode::PerLight => t.outlines = None,
+                toon => *toon = None,
+            },
+            PostEffect::Bloom => v.post.bloom = None,
+            PostEffect::MotionBlur => v.post.motion_blur = None,
+        }
+    }
+    v
+}
+
+/// The twin parameters of effect `e` of `params` alone.
+fn only(params: &PostParams, e: PostEffect) -> PostParams {
+    match e {
+        PostEffect::Toon => PostParams {
+            toon_bands: params.toon_bands,
+            outline_threshold: params.outline_threshold,
+            ..Default::default()
+        },
+        PostEffect::Bloom => PostParams {
+            bloom: params.bloom,
+            ..Default::default()
+        },
+        PostEffect::MotionBlur => PostParams {
+            motion_blur_samples: params.motion_blur_samples,
+            ..Default::default()
+        },
+    }
+}
+
+/// Whether a GPU effect's output matches its twin fed the same input: every pixel within
+/// 2e-5 relative (f32 against f64: a few ULP of 2^-24 per operation, over blur windows of
+/// up to a few hundred taps), but for `allowed` pixels where a decision (band edge,
+/// outline threshold, rounded motion sample) may fall the other way in f32.
+fn effect_matches(
+    name: &str,
+    gpu_out: &Image,
+    twin: &Image,
+    allowed: usize,
+) -> Result<f64, String> {
+    let (worst, disagree) = compare(gpu_out, twin, 1e-4);
+    if worst >= 2e-5 {
+        return Err(format!("{name}: worst relative error {worst:e}"));
+    }
+    if disagree > allowed {
+        return Err(format!(
+            "{name}: {disagree} pixels differ from the twin (at most {allowed})"
+        ));
+    }
+    Ok(worst)
+}
+
 #[test]
 fn every_effect_matches_its_cpu_twin_on_the_gpu_input() {
     let gpu = gpu();
@@ -87,33 +152,65 @@ fn every_effect_matches_its_cpu_twin_on_the_gpu_input() {
     let pixels = (scene.params.width * scene.params.height) as usize;
     for name in POST_VARIANTS {
         let v = load(name).variant;
+        let mut checked = 0;
         let params = PostParams::of(&v);
-        let run = run_chain(&gpu, &v, &scene);
+        let effects: Vec<PostEffect> = v.post.effects().collect();
         let cams = CameraPair::of(&scene, v.depth.mapping());
-        let g =
-            Geometry::from_device_depth(scene.params.width, scene.params.height, &run.depth, &cams);
-        let twin = post::apply(&params, &run.input, &g);
-        let (worst, disagree) = compare(&run.output, &twin, 1e-4);
-        eprintln!("{name}: worst relative error {worst:.2e}, {disagree} of {pixels} pixels differ");
-        // f32 arithmetic against f64: a few ulps, accumulated over the blur window.
-        assert!(worst < 2e-5, "{name}: worst relative error {worst:e}");
-        // Band edges, outline thresholds and rounded motion samples are decisions; f32 and
-        // f64 may decide a pixel that sits on the edge differently, and only such pixels.
-        let decisions = params.toon_bands.is_some()
-            || params.outline_threshold.is_some()
-            || params.motion_blur_samples.is_some();
-        let allowed = if decisions { pixels / 1000 } else { 0 };
-        assert!(
-            disagree <= allowed,
-            "{name}: {disagree} pixels differ from the twin (at most {allowed})"
-        );
-        if params.any() {
-            let (_, changed) = compare(&run.output, &run.input, 1e-3);
+        // Each effect's input is the GPU's output of the effects before it: the chain up to
+        // it, run on the GPU (its passes are deterministic, so that is the full chain's
+        // intermediate image).
+        let mut input = run_chain(&gpu, &first_effects(&v, 0), &scene);
+        for (i, &effect) in effects.iter().enumerate() {
+            let run = run_chain(&gpu, &first_effects(&v, i + 1), &scene);
+            // Toon variants that band inside the shading pass have no toon pass.
+            let stage = only(&params, effect);
+            if !stage.any() {
+                continue;
+            }
+            let g = Geometry::from_device_depth(
+                scene.params.width,
+                scene.params.height,
+                &run.depth,
+                &cams,
+            );
+            let twin = post::apply(&stage, &input.output, &g);
+            // Band edges, outline thresholds and rounded motion samples are decisions: f32
+            // and f64 may decide a pixel on the edge differently, and only such pixels.
+            let decisions = effect != PostEffect::Bloom;
+            let allowed = if decisions { pixels / 1000 } else { 0 };
+            let what = format!("{name}, {effect:?}");
+            let worst = effect_matches(&what, &run.output, &twin, allowed)
+                .unwrap_or_else(|e| panic!("{e}"));
+            eprintln!("{what}: worst relative error {worst:.2e}");
+            let (_, changed) = compare(&run.output, &input.output, 1e-3);
             assert!(
                 changed > pixels / 100,
-                "{name}: the effect changed {changed} pixels"
+                "{what}: the effect changed {changed} pixels"
             );
+            // The break this test exists for: the twin fed another input than the GPU's
+            // (the image before the effects, not the GPU's output of those before it).
+            if i > 0 {
+                let before = run_chain(&gpu, &first_effects(&v, 0), &scene);
+                let wrong = post::apply(&stage, &before.output, &g);
+                assert!(
+                    effect_matches(&what, &run.output, &wrong, allowed).is_err(),
+                    "{what}: the twin fed the unprocessed image passes too"
+                );
+            }
+            checked += 1;
+            input = run;
         }
+        // One check per post effect pass the variant composes (bloom has three).
+        let passes: std::collections::BTreeSet<&str> = compose::passes(&v)
+            .iter()
+            .filter_map(|p| match p.name() {
+                "toon" => Some("toon"),
+                "bloom_threshold" | "bloom_blur" | "bloom_composite" => Some("bloom"),
+                "motion_blur" => Some("motion_blur"),
+                _ => None,
+            })
+            .collect();
+        assert_eq!(checked, passes.len(), "{name}: effects checked");
     }
 }
 
