@@ -515,7 +515,8 @@ fn the_round_trip_bound_rejects_the_old_acos_polar_encoder() {
 }
 
 /// The GPU's light assignment never leaves a light out of a cluster it touches, for any
-/// set of lights (positions anywhere around and inside the frustum, any radius).
+/// set of lights (positions anywhere around and inside the frustum, any radius), camera,
+/// grid and slicing scheme.
 #[test]
 fn gpu_light_assignment_keeps_every_touching_light() {
     use clusterlab::scene::Light;
@@ -541,22 +542,54 @@ fn gpu_light_assignment_keeps_every_touching_light() {
         .into_iter()
         .filter(|(_, v)| v.pipeline.is_clustered())
         .collect();
-    let mut runner = TestRunner::new(Config::with_cases(8));
+    // Any camera looking into the room from inside it, with any field of view, and any grid
+    // and slicing scheme of the schema's list.
+    let camera = (
+        (-6.0..6.0f64, 0.5..6.0f64, -6.0..10.0f64),
+        (-8.0..8.0f64, 0.0..4.0f64, -10.0..0.0f64),
+        10.0..120.0f64,
+    );
+    let grid = (
+        1u32..=32,
+        1u32..=32,
+        1u32..=48,
+        any::<proptest::sample::Index>(),
+    );
+    let mut runner = TestRunner::new(Config::with_cases(16));
     runner
-        .run(&proptest::collection::vec(light, 1..200), |lights| {
-            let mut scene = base.clone();
-            scene.params.lights = lights.len() as u32;
-            scene.lights = lights;
-            for (name, v) in &variants {
-                let (count, first) = clusterlab::stress::missing_lights(&gpu, &composer, v, &scene)
-                    .map_err(TestCaseError::fail)?;
-                prop_assert!(
-                    count == 0,
-                    "{name}: {count} missing, first {}",
-                    first.unwrap_or_default()
-                );
-            }
-            Ok(())
-        })
+        .run(
+            &(proptest::collection::vec(light, 1..200), camera, grid),
+            |(lights, (eye, target, fov), (gx, gy, gz, pick))| {
+                let mut scene = base.clone();
+                scene.params.lights = lights.len() as u32;
+                scene.lights = lights;
+                scene.camera.eye = DVec3::new(eye.0, eye.1, eye.2);
+                scene.camera.target = DVec3::new(target.0, target.1, target.2);
+                prop_assume!(scene.camera.eye.distance(scene.camera.target) > 0.5);
+                scene.camera.fov_y = fov.to_radians();
+                for (name, v) in &variants {
+                    let mut v = v.clone();
+                    let c = v.clusters.as_mut().expect("clustered");
+                    let schemes = ZSlicing::every(scene.camera.near, scene.camera.far);
+                    c.slicing = schemes[pick.index(schemes.len())];
+                    let min_z = if matches!(c.slicing, ZSlicing::NearSliceThenExponential { .. }) {
+                        2
+                    } else {
+                        1
+                    };
+                    c.grid = (gx, gy, gz.max(min_z));
+                    let v = &v;
+                    let (count, first) =
+                        clusterlab::stress::missing_lights(&gpu, &composer, v, &scene)
+                            .map_err(TestCaseError::fail)?;
+                    prop_assert!(
+                        count == 0,
+                        "{name}: {count} missing, first {}",
+                        first.unwrap_or_default()
+                    );
+                }
+                Ok(())
+            },
+        )
         .unwrap_or_else(|e| panic!("{e}"));
 }

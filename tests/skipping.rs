@@ -87,7 +87,7 @@ fn a_still_scene_keeps_its_lists_and_a_moving_one_rebuilds_them() {
     let (on, off) = both(&gpu, &v, &still);
     assert_same_image(&on, &off, "still");
     assert!(skipped(&on).contains(&"light_assign"), "{:?}", on.skipped);
-    assert!(!off.timings.passes.is_empty() && off.timings.get("light_assign") >= 0.0);
+    // Without skipping the still frame assigns again.
     assert!(off.timings.passes.iter().any(|(n, _)| n == "light_assign"));
 
     let moving = scene::generate("atrium", small("atrium", 64, 36, Some(32))).unwrap();

@@ -10,8 +10,29 @@ use clusterlab::stress;
 fn the_stress_suite_passes() {
     let mut gpu = common::gpu();
     let runs = stress::run(&mut gpu, &Composer::default(), None, &|_| {});
-    let cases: std::collections::BTreeSet<&str> = runs.iter().map(|r| r.case.as_str()).collect();
-    assert!(cases.len() >= 30, "{} cases", cases.len());
+    // Every case of the list ran, on every variant it lists, and README states those counts.
+    let listed = stress::cases();
+    let ran: Vec<(&str, &str)> = runs
+        .iter()
+        .map(|r| (r.case.as_str(), r.variant.as_str()))
+        .collect();
+    let expected: Vec<(&str, &str)> = listed
+        .iter()
+        .flat_map(|c| {
+            c.variants
+                .iter()
+                .map(|(v, _)| (c.name.as_str(), v.as_str()))
+        })
+        .collect();
+    assert_eq!(ran, expected);
+    let readme = std::fs::read_to_string("README.md").expect("README.md");
+    let readme = readme.split_whitespace().collect::<Vec<_>>().join(" ");
+    let claim = format!(
+        "runs {} adversarial cases on every pipeline each applies to ({} runs",
+        listed.len(),
+        expected.len()
+    );
+    assert!(readme.contains(&claim), "README does not say `{claim}`");
     for pipeline in [
         "naive_forward",
         "forward_plus",

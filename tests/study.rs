@@ -137,16 +137,29 @@ fn depth_comes_back_as_reeds_model_says() {
                 r.max_relative_gpu
             );
         } else {
-            // Elsewhere the storage step sets the error: never far below the model.
+            // Elsewhere the storage step sets the error, as Reed's model of one rounding of
+            // the stored value says. Reversed 24-bit sits on it (the samples find 0.45 to
+            // 1.01 of it on lavapipe); the standard mappings and float32 come out
+            // above it, by the f32 arithmetic of the projection and of the rebuild (1.4 to 4.6
+            // times), never below it. A wrong mapping or depth rebuild is off by orders of
+            // magnitude.
+            let ratio = r.max_relative_gpu / r.max_relative_model;
+            // Where OpenGL's clip space is kept (the deviation above), depth is rounded again
+            // by the remap from [-1, 1] and by f32 arithmetic near 1, as in the standard
+            // mappings: held to their upper bound there.
+            let window = if r.format != "Float32" && r.reversed_z {
+                0.4..=if as_24_bit { 5.0 } else { 1.25 }
+            } else {
+                1.0..=5.0
+            };
             assert!(
-                r.max_relative_stored > 0.2 * r.max_relative_model,
-                "{} {}: {} against model {}",
+                window.contains(&ratio),
+                "{} {}: {} is {ratio} times the model {} (window {window:?})",
                 r.setup,
                 r.from,
-                r.max_relative_stored,
+                r.max_relative_gpu,
                 r.max_relative_model
             );
-            assert!(r.max_relative_gpu < 10.0 * r.max_relative_model);
         }
     }
     // Standard float32 is no better than 24-bit far away (Reed's point).
@@ -167,12 +180,13 @@ fn depth_comes_back_as_reeds_model_says() {
 #[test]
 fn slicing_counts_what_shading_does() {
     let gpu = common::gpu();
+    let lights = 64;
     let rows = slicing::run(
         &gpu,
         &Composer::default(),
-        &["one_light"],
+        &["atrium"],
         (64, 36),
-        None,
+        Some(lights),
         1,
     )
     .expect("slicing study");
@@ -181,17 +195,30 @@ fn slicing_counts_what_shading_does() {
         rows.len(),
         slicing::GRIDS.len() * slicing::schemes(0.1, 60.0).len() + 2
     );
-    let useful = rows[0].useful_evaluations;
+    // The useful evaluations are the scene's, counted by naive forward on the same frame.
+    let scene =
+        clusterlab::scene::generate("atrium", common::small("atrium", 64, 36, Some(lights)))
+            .expect("atrium");
+    let naive = clusterlab::variant::Variant {
+        depth_prepass: true,
+        ..Default::default()
+    };
+    let mut r = clusterlab::render::Renderer::new(&gpu, &Composer::default(), &naive, &scene)
+        .expect("naive forward");
+    r.render().expect("frame");
+    let useful = r.stats().expect("counters").useful_light_evals;
+    assert!(useful > 0);
     for r in &rows {
         assert!(r.error.is_none(), "{} {}: {:?}", r.scheme, r.grid, r.error);
-        // The useful evaluations are the scene's, whatever the clusters.
         assert_eq!(r.useful_evaluations, useful, "{} {}", r.scheme, r.grid);
         assert!(r.evaluations >= r.useful_evaluations);
         assert!(r.occupied_clusters > 0 && r.occupied_clusters <= r.clusters);
-        // One light: every occupied cluster holds it or not.
-        assert!(r.max_lights_per_occupied <= 1);
-        assert!((0.0..=1.0).contains(&r.mean_lights_per_occupied));
+        assert!(r.max_lights_per_occupied <= lights);
+        assert!(r.mean_lights_per_occupied <= r.max_lights_per_occupied as f64);
     }
+    // The culling differs: finer grids and schemes perform different numbers of evaluations.
+    let performed: std::collections::BTreeSet<u64> = rows.iter().map(|r| r.evaluations).collect();
+    assert!(performed.len() > rows.len() / 2, "{performed:?}");
 }
 
 #[test]
