@@ -396,7 +396,19 @@ fn parse_range(s: &str) -> Result<(f32, f32), String> {
     Ok((n(a)?, n(b)?))
 }
 
+/// Output piped into a reader that stops early (`clusterlab wgsl ... | head`) ends the
+/// program quietly, as a Unix tool does, instead of a panic at the next `print!`: Rust
+/// ignores SIGPIPE, so every later write fails with a broken pipe.
+fn end_quietly_on_closed_pipe() {
+    #[cfg(unix)]
+    // SAFETY: setting a signal's action to its default before any thread starts.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
+}
+
 fn main() -> ExitCode {
+    end_quietly_on_closed_pipe();
     quiet_mesa_wsi();
     let cli = Cli::parse();
     let result = match cli.command {
@@ -548,7 +560,7 @@ fn scenes() {
         let d = &s.defaults;
         println!("{:<10} {}", s.name, s.description);
         println!(
-            "           default: {}x{}, {} lights ({} spots), radius {}..{}, seed {}, time {}",
+            "           default: {}x{}, {} lights (spot fraction {}), radius {}..{}, seed {}, time {}",
             d.width,
             d.height,
             d.lights,
