@@ -1,7 +1,8 @@
 //! The command line as README describes it: `validate` (one line per variant, exit code 1
 //! on any failure), `explain` (every field and choice of the schema), `wgsl --pass` (that
 //! pass, as the library composes it), `scenes` (every built-in scene with its defaults) and
-//! `stress FILTER --json` (exit code 1 when a check fails).
+//! `stress FILTER --json` (exit code 1 when a check fails), and `CLUSTERLAB_TIMING` with the
+//! `timing_source` it chooses.
 
 mod common;
 
@@ -12,10 +13,21 @@ use clusterlab::compose::{self, Composer};
 
 /// Run the binary: exit code, stdout, stderr.
 fn clusterlab(args: &[&str]) -> (Option<i32>, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_clusterlab"))
-        .args(args)
-        .output()
-        .expect("clusterlab runs");
+    clusterlab_with(args, &[])
+}
+
+/// Run the binary with environment variables `env` set (an empty value removes one).
+fn clusterlab_with(args: &[&str], env: &[(&str, &str)]) -> (Option<i32>, String, String) {
+    let mut command = Command::new(env!("CARGO_BIN_EXE_clusterlab"));
+    command.args(args);
+    for (k, v) in env {
+        if v.is_empty() {
+            command.env_remove(k);
+        } else {
+            command.env(k, v);
+        }
+    }
+    let out = command.output().expect("clusterlab runs");
     (
         out.status.code(),
         String::from_utf8_lossy(&out.stdout).into_owned(),
@@ -192,4 +204,69 @@ fn stress_json_exits_1_when_a_check_fails_and_0_when_all_pass() {
             "{r}"
         );
     }
+}
+
+#[test]
+fn clusterlab_timing_chooses_the_timing_source_and_refuses_other_values() {
+    let (_, report, _) = clusterlab(&["adapters", "--json"]);
+    let report: serde_json::Value = serde_json::from_str(&report).expect("adapters JSON");
+    let chosen = &report["adapters"][report["chosen"].as_u64().expect("an adapter") as usize];
+    let software = chosen["device_type"] == "Cpu";
+    let has_timestamps = chosen["capabilities"]
+        .as_array()
+        .expect("capabilities")
+        .iter()
+        .any(|c| {
+            c["name"].as_str().is_some_and(|n| n.contains("timestamp")) && c["present"] == true
+        });
+    let render = [
+        "render",
+        "--variant",
+        "forward_plus",
+        "--scene",
+        "one_light",
+        "--size",
+        "32x18",
+        "--json",
+    ];
+    let source_and_passes = |timing: &str| {
+        let (code, out, err) = clusterlab_with(&render, &[("CLUSTERLAB_TIMING", timing)]);
+        assert_eq!(code, Some(0), "CLUSTERLAB_TIMING={timing}: {err}");
+        let r: serde_json::Value = serde_json::from_str(&out).expect("render JSON");
+        let passes: Vec<String> = r["gpu_ms"]
+            .as_object()
+            .expect("gpu_ms")
+            .keys()
+            .cloned()
+            .collect();
+        (
+            r["timing_source"]
+                .as_str()
+                .expect("timing_source")
+                .to_string(),
+            passes,
+        )
+    };
+    let timestamps = if has_timestamps {
+        "gpu timestamps"
+    } else {
+        "wall clock"
+    };
+    let (default, passes) = source_and_passes("");
+    // Software adapters' timestamps do not wait for compute work: the wall clock there.
+    assert_eq!(default, if software { "wall clock" } else { timestamps });
+    let (wall, wall_passes) = source_and_passes("wall");
+    assert_eq!(wall, "wall clock");
+    let (forced, forced_passes) = source_and_passes("timestamps");
+    assert_eq!(forced, timestamps);
+    // Each way times the same passes.
+    assert_eq!(passes, wall_passes);
+    assert_eq!(passes, forced_passes);
+    let (code, _, err) = clusterlab_with(&render, &[("CLUSTERLAB_TIMING", "sometimes")]);
+    assert_eq!(code, Some(1));
+    assert!(
+        err.contains("`sometimes` (from CLUSTERLAB_TIMING)")
+            && err.contains("`timestamps` or `wall`"),
+        "{err}"
+    );
 }

@@ -146,10 +146,25 @@ pub fn hdr_format(adapter: &wgpu::Adapter) -> wgpu::TextureFormat {
 /// timed by the wall clock instead, which on a CPU device is exactly its cost.
 /// `CLUSTERLAB_TIMING=timestamps` or `=wall` overrides the choice.
 pub fn timestamps_are_per_pass(device: wgpu::DeviceType) -> bool {
-    match std::env::var("CLUSTERLAB_TIMING").as_deref() {
-        Ok("timestamps") => true,
-        Ok("wall") => false,
-        _ => device != wgpu::DeviceType::Cpu,
+    timing_override()
+        .ok()
+        .flatten()
+        .unwrap_or(device != wgpu::DeviceType::Cpu)
+}
+
+/// `CLUSTERLAB_TIMING`: Some(true) for `timestamps`, Some(false) for `wall`, None when
+/// unset; any other value is an error that names it (`Gpu::new` refuses it).
+pub fn timing_override() -> Result<Option<bool>, String> {
+    match std::env::var("CLUSTERLAB_TIMING") {
+        Err(_) => Ok(None),
+        Ok(v) => match v.as_str() {
+            "timestamps" => Ok(Some(true)),
+            "wall" => Ok(Some(false)),
+            other => Err(format!(
+                "`{other}` (from CLUSTERLAB_TIMING) is not a way to time passes; use \
+                 `timestamps` or `wall`, or leave it unset"
+            )),
+        },
     }
 }
 

@@ -40,6 +40,9 @@ pub enum GpuError {
     UnknownBackend { value: String, from: &'static str },
     #[error("could not open the GPU device: {0}")]
     Device(String),
+    /// An environment setting clusterlab reads that has no meaning.
+    #[error("{0}")]
+    Setting(String),
     /// A wgpu validation, out-of-memory or internal error captured while running a pass.
     #[error("GPU error: {0}")]
     Captured(String),
@@ -92,6 +95,7 @@ impl Gpu {
     /// Open the best adapter of `backend` (e.g. "vulkan", "gl"); `None` honours
     /// `WGPU_BACKEND`, else prefers Vulkan and falls back to any backend.
     pub fn new(backend: Option<&str>) -> Result<Gpu, GpuError> {
+        adapters::timing_override().map_err(GpuError::Setting)?;
         let mut gpu = Self::find(backend)?;
         gpu.requested = backend.map(str::to_string);
         Ok(gpu)
