@@ -97,6 +97,7 @@ fn a_broken_variant_fails_its_cells_and_the_rest_run_and_report() {
             assert!(out.join(image).is_file(), "{image}");
         }
     }
+    speedups_and_pareto_front_follow_from_the_cells(&r, &text);
     let p = &r.provenance[0];
     assert_eq!(p.variant_files["forward_plus"].sha256.len(), 64);
     assert!(!p.git_revision.is_empty() && !p.date.is_empty());
@@ -115,6 +116,158 @@ fn a_broken_variant_fails_its_cells_and_the_rest_run_and_report() {
         .filter(|p| p.to_string_lossy().contains(".tmp"))
         .collect();
     assert!(leftovers.is_empty(), "{leftovers:?}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Each speed-up is naive forward's time over the cell's in the same group, rounded to
+/// 3 decimals; the Pareto front is the group's cells that no other is at least as fast and
+/// as accurate as, and strictly better in one; the printed table marks exactly those with
+/// `*`. Recomputed here from the cells' own times and errors.
+fn speedups_and_pareto_front_follow_from_the_cells(r: &Results, printed: &str) {
+    let round3 = |x: f64| (x * 1000.0).round() / 1000.0;
+    let groups: std::collections::BTreeSet<String> =
+        r.cells.iter().map(|c| c.spec.group()).collect();
+    assert_eq!(groups.len(), 4);
+    for g in &groups {
+        let cells: Vec<_> = r
+            .cells
+            .iter()
+            .filter(|c| &c.spec.group() == g && c.ok())
+            .collect();
+        let naive = cells
+            .iter()
+            .find(|c| c.spec.variant == "naive_forward")
+            .and_then(|c| c.total_ms())
+            .expect("a naive cell");
+        let point = |c: &clusterlab::matrix::CellRecord| {
+            (c.total_ms().unwrap(), c.error.as_ref().unwrap().rmse_8bit)
+        };
+        for c in &cells {
+            let t = c.total_ms().unwrap();
+            assert_eq!(c.speedup_vs_naive, Some(round3(naive / t)), "{}", c.spec.id);
+            let (t, e) = point(c);
+            let dominated = cells.iter().any(|o| {
+                let (to, eo) = point(o);
+                o.spec.id != c.spec.id && to <= t && eo <= e && (to < t || eo < e)
+            });
+            assert_eq!(c.pareto, !dominated, "{}", c.spec.id);
+            // The table's row of the cell, under its group's heading.
+            let section = printed
+                .split(&format!("\n{g}\n"))
+                .nth(1)
+                .unwrap_or_else(|| panic!("no table for {g}"));
+            let row = section
+                .lines()
+                .find(|l| {
+                    l.get(2..)
+                        .is_some_and(|rest| rest.starts_with(&format!("{} ", c.spec.variant)))
+                })
+                .unwrap_or_else(|| panic!("no row for {} under {g}", c.spec.variant));
+            assert_eq!(row.starts_with('*'), c.pareto, "{row}");
+        }
+        // Somebody is on the front.
+        assert!(cells.iter().any(|c| c.pareto), "{g}");
+    }
+}
+
+/// Copy folder `from` into `to`, recursively.
+fn copy_tree(from: &Path, to: &Path) {
+    std::fs::create_dir_all(to).unwrap();
+    for e in std::fs::read_dir(from).unwrap().flatten() {
+        let target = to.join(e.file_name());
+        if e.path().is_dir() {
+            copy_tree(&e.path(), &target);
+        } else {
+            std::fs::copy(e.path(), &target).unwrap();
+        }
+    }
+}
+
+fn matrix_with(args: &[&str], env: (&str, &str)) -> (i32, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_clusterlab"))
+        .args(args)
+        .env(env.0, env.1)
+        .output()
+        .expect("clusterlab runs");
+    let text =
+        String::from_utf8_lossy(&out.stdout).into_owned() + &String::from_utf8_lossy(&out.stderr);
+    (out.status.code().unwrap_or(-1), text)
+}
+
+#[test]
+fn cells_that_fail_from_a_shader_error_or_an_adapter_limit_fail_alone() {
+    let dir = scratch("failing");
+    // A syntax error in the resolve pass, which only deferred variants compose.
+    let shaders = dir.join("shaders");
+    copy_tree(Path::new("shaders"), &shaders);
+    let resolve = shaders.join("passes/resolve.wesl");
+    let text = std::fs::read_to_string(&resolve).unwrap();
+    std::fs::write(&resolve, text.replacen("fn ", "fn broken ", 1)).unwrap();
+    let out = dir.join("shader");
+    let common = [
+        "--scenes",
+        "one_light",
+        "--size",
+        "48x27",
+        "--frames",
+        "1",
+        "--warmup",
+        "0",
+        "--out",
+    ];
+    let mut args = vec![
+        "matrix",
+        "--variants",
+        "forward_plus",
+        "clustered_deferred_16x16x24",
+    ];
+    args.extend(common);
+    args.push(out.to_str().unwrap());
+    let (code, text) = matrix_with(&args, ("CLUSTERLAB_SHADERS", shaders.to_str().unwrap()));
+    assert_eq!(code, 1, "{text}");
+    let r = Results::load(&out).expect("results.json");
+    for c in &r.cells {
+        if c.spec.variant == "clustered_deferred_16x16x24" {
+            let why = c.failure.as_deref().expect("the deferred cell fails");
+            assert!(
+                why.contains("pass `resolve`") && why.contains("passes/resolve.wesl:"),
+                "{why}"
+            );
+        } else {
+            assert!(c.ok(), "{}: {:?}", c.spec.id, c.failure);
+        }
+    }
+    // A light buffer over the adapter's (lowered) buffer limit: only the cell with many
+    // lights fails, naming the limit.
+    let out = dir.join("limit");
+    let mut args = vec![
+        "matrix",
+        "--variants",
+        "forward_plus",
+        "--sweep",
+        "lights=1,4096",
+    ];
+    args.extend(common);
+    args.push(out.to_str().unwrap());
+    let (code, text) = matrix_with(&args, ("CLUSTERLAB_MAX_BUFFER_SIZE", "65536"));
+    assert_eq!(code, 1, "{text}");
+    let r = Results::load(&out).expect("results.json");
+    assert_eq!(
+        r.cells.len(),
+        4,
+        "2 light counts x (forward_plus, naive baseline)"
+    );
+    for c in &r.cells {
+        if c.spec.params.lights == 4096 {
+            let why = c.failure.as_deref().expect("the 4096-light cell fails");
+            assert!(
+                why.contains("4096 lights take") && why.contains("65536 bytes"),
+                "{why}"
+            );
+        } else {
+            assert!(c.ok(), "{}: {:?}", c.spec.id, c.failure);
+        }
+    }
     let _ = std::fs::remove_dir_all(&dir);
 }
 
