@@ -210,6 +210,105 @@ fn clustered_output_equals_naive_output() {
     }
 }
 
+/// README's claim for the variant files as shipped, each on its own grid, slicing, depth and
+/// G-buffer: every clustered variant with exact lists (and no post effect, which naive
+/// forward would not have) within its bound of naive forward and of the reference.
+#[test]
+fn every_shipped_clustered_variant_with_exact_lists_equals_naive() {
+    let gpu = gpu();
+    let composer = Composer::default();
+    let files =
+        clusterlab::variant::find_files(std::path::Path::new("variants")).expect("variants/");
+    let shipped: Vec<LoadedVariant> = files
+        .iter()
+        .map(|f| clusterlab::variant::load(f).expect("loads"))
+        .filter(|v| {
+            let v = &v.variant;
+            v.pipeline.is_clustered()
+                && !matches!(v.clusters().lists, LightLists::Capped { .. })
+                && v.post.toon.is_none()
+                && v.post.bloom.is_none()
+                && v.post.motion_blur.is_none()
+                && v.debug_view == clusterlab::variant::DebugView::Off
+        })
+        .collect();
+    assert!(shipped.len() >= 10, "{} variants", shipped.len());
+    for scene_name in ["atrium", "stage"] {
+        let scene = scene::generate(scene_name, small(scene_name, 96, 54, None)).unwrap();
+        for v in &shipped {
+            let frame = render(&gpu, &v.variant, &scene, 2);
+            let mut naive_v = naive_twin(&v.variant);
+            naive_v.depth_prepass = true;
+            let mut r = Renderer::new(&gpu, &composer, &naive_v, &scene).unwrap();
+            let naive = r.render().unwrap();
+            let overlap = r.stats().unwrap().max_useful_per_pixel;
+            let (reference, _) = reference_frame(&gpu, &composer, v, &scene).unwrap();
+            let naive_ldr: Vec<[u8; 3]> = naive.ldr.iter().map(|p| [p[0], p[1], p[2]]).collect();
+            for (against, ldr) in [("the reference", &reference.ldr), ("naive", &naive_ldr)] {
+                let over = clusterlab::stress::worst_over_bound(
+                    &v.variant,
+                    &gpu,
+                    overlap,
+                    &frame,
+                    ldr,
+                    &reference.hdr,
+                );
+                assert!(
+                    over.is_none(),
+                    "{} on {scene_name}: (pixel, LSB, bound) {over:?} from {against}",
+                    v.name
+                );
+            }
+        }
+    }
+}
+
+/// The boxes the GPU builds are the CPU twin's: equal to f32 rounding (16 ULP of the
+/// corner's largest coordinate, far inside the 1e-4 padding both add), on exponential,
+/// Olsson and linear grids.
+#[test]
+fn gpu_cluster_boxes_are_the_twins() {
+    let gpu = gpu();
+    let scene = scene::generate("atrium", small("atrium", 96, 54, Some(16))).unwrap();
+    // Olsson's slices without his sample bounds (which shrink boxes to the samples).
+    let mut olsson = common::load("forward_plus").variant;
+    olsson.clusters.as_mut().unwrap().slicing = ZSlicing::OlssonCubic;
+    let variants = [
+        ("forward_plus", common::load("forward_plus").variant),
+        ("forward_plus with Olsson slices", olsson),
+        (
+            "clustered_deferred_15x15x15_linear",
+            common::load("clustered_deferred_15x15x15_linear").variant,
+        ),
+    ];
+    for (name, v) in variants {
+        let mut r = Renderer::new(&gpu, &Composer::default(), &v, &scene).unwrap();
+        r.render().unwrap();
+        let boxes = r.cluster_bounds().unwrap().expect("clustered");
+        let want = cpu::cluster_bounds(&Grid::of(&v, &scene));
+        assert_eq!(boxes.len(), want.len(), "{name}");
+        let mut compared = 0;
+        for (c, (have, want)) in boxes.iter().zip(&want).enumerate() {
+            // An empty slice (Olsson's that run past far) has no box to compare.
+            let Some(want) = want else { continue };
+            for (corner, expected) in [(have[0], want.min), (have[1], want.max)] {
+                // Every coordinate is a ray times a depth: rounded relative to the corner's
+                // largest coordinate (its depth, mostly), by a few f32 ULP (2^-24 each).
+                let scale = expected.abs().max_element() + 1e-3;
+                for axis in 0..3 {
+                    let (h, e) = (corner[axis] as f64, expected[axis]);
+                    assert!(
+                        (h - e).abs() <= 16.0 * 2f64.powi(-24) * scale,
+                        "{name}: cluster {c} axis {axis}: GPU {h}, twin {e}"
+                    );
+                }
+            }
+            compared += 1;
+        }
+        assert!(compared * 2 > want.len(), "{name}: {compared} boxes");
+    }
+}
+
 #[test]
 fn capped_lists_drop_lights_exactly_when_the_cap_bites() {
     let gpu = gpu();

@@ -240,3 +240,54 @@ fn light_loops_past_the_adapters_loop_cap_are_refused() {
         (None, r) => assert!(r.is_ok(), "no cap here, yet refused"),
     }
 }
+
+/// README: every pipeline shades with the same finite-range falloff, exactly zero at a
+/// light's radius. On the GPU: with one light, every pixel farther from it than its radius
+/// (by more than f32 rounding of the distance, 1e-5) is exactly the unlit image's, and every
+/// pixel well inside it that faces it is brighter.
+#[test]
+fn every_pipeline_adds_exactly_nothing_past_a_lights_radius() {
+    use clusterlab::compose::Composer;
+    use clusterlab::render::{Renderer, raster_truth};
+    let gpu = gpu();
+    let composer = Composer::default();
+    let lit = clusterlab::scene::generate("one_light", small("one_light", 96, 54, None)).unwrap();
+    let mut dark = lit.clone();
+    dark.lights[0].color = [0.0; 3];
+    let light = lit.lights[0];
+    let centre = glam::DVec3::from(light.position.map(f64::from));
+    let radius = light.radius as f64;
+    for name in [
+        "naive_forward",
+        "forward_plus",
+        "clustered_deferred_16x16x24",
+        "deferred_scissor",
+    ] {
+        let v = load(name).variant;
+        let truth = raster_truth(&gpu, &composer, &v, &lit).unwrap();
+        let frame = |scene| {
+            let mut r = Renderer::new(&gpu, &composer, &v, scene).unwrap();
+            r.render().unwrap().hdr
+        };
+        let (with, without) = (frame(&lit), frame(&dark));
+        let (mut outside, mut inside) = (0, 0);
+        for i in 0..truth.position.len() {
+            if !truth.covered(i) {
+                continue;
+            }
+            let s = truth.surface(i);
+            let d = s.position.distance(centre);
+            if d > radius * (1.0 + 1e-5) {
+                assert_eq!(with[i], without[i], "{name}: pixel {i} at {d} > {radius}");
+                outside += 1;
+            } else if d < radius * 0.9 && s.normal.dot(centre - s.position) > 0.0 {
+                assert!(with[i][0] > without[i][0], "{name}: pixel {i} at {d}");
+                inside += 1;
+            }
+        }
+        assert!(
+            outside > 100 && inside > 100,
+            "{name}: {outside} outside, {inside} inside"
+        );
+    }
+}

@@ -183,3 +183,47 @@ pub fn shade(s: &Surface, eye: DVec3, lights: &[Light], p: &ShadingParams) -> DV
         .sum();
     direct + s.albedo * p.ambient
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Karis's window is exactly zero at and past the radius (so a conservative cluster test
+    /// never changes the picture), one at the light, and falls in between.
+    #[test]
+    fn the_range_window_is_exactly_zero_at_the_radius() {
+        for r in [1e-4, 0.5, 3.0, 1e6] {
+            assert_eq!(range_window(r, r), 0.0);
+            assert_eq!(attenuation(r, r), 0.0);
+            assert_eq!(range_window(r * 1.5, r), 0.0);
+            assert_eq!(range_window(0.0, r), 1.0);
+            let inside = range_window(r * (1.0 - 1e-6), r);
+            assert!(inside > 0.0 && inside < 1e-10, "{inside}");
+            let samples: Vec<f64> = (0..=100)
+                .map(|i| range_window(r * i as f64 / 100.0, r))
+                .collect();
+            assert!(samples.windows(2).all(|w| w[0] >= w[1]));
+        }
+        // (1 - (1/2)^4)^2 = (15/16)^2.
+        assert_eq!(range_window(1.0, 2.0), (15.0f64 / 16.0).powi(2));
+    }
+
+    /// Published GGX forms at points with closed forms: D at n.h = 1 is 1 / (pi a^2); the
+    /// height-correlated visibility at n.l = n.v = 1 is 1/4; Schlick at v.h = 1 is f0 and at
+    /// v.h = 0 is 1.
+    #[test]
+    fn ggx_terms_take_their_closed_form_values() {
+        let a = 0.3;
+        assert!((d_ggx(1.0, a) - 1.0 / (std::f64::consts::PI * a * a)).abs() < 1e-12);
+        assert!((v_smith_ggx_correlated(1.0, 1.0, a) - 0.25).abs() < 1e-15);
+        let f0 = DVec3::splat(0.04);
+        assert_eq!(f_schlick(1.0, f0), f0);
+        assert_eq!(f_schlick(0.0, f0), DVec3::ONE);
+        assert_eq!(
+            ggx_alpha(0.0),
+            MIN_PERCEPTUAL_ROUGHNESS * MIN_PERCEPTUAL_ROUGHNESS
+        );
+        assert_eq!(blinn_phong(DVec3::Z, DVec3::Z, DVec3::Z, 32.0), 1.0);
+        assert_eq!(blinn_phong(DVec3::Z, -DVec3::Z, DVec3::Z, 32.0), 0.0);
+    }
+}

@@ -207,6 +207,16 @@ impl ClusterBuffers {
         Ok(bytemuck::pod_read_unaligned(&bytes))
     }
 
+    /// Each cluster's view-space box as the GPU holds it: [min, max], xyz and a fourth word.
+    pub fn read_bounds(&self, gpu: &Gpu) -> Result<Vec<[[f32; 4]; 2]>, GpuError> {
+        let n = self.clusters as u64 * 32;
+        let bytes = read_buffer(gpu, &self.bounds, 0, n)?;
+        Ok(bytes
+            .chunks_exact(32)
+            .map(bytemuck::pod_read_unaligned)
+            .collect())
+    }
+
     /// Lights in each cluster's list.
     pub fn read_counts(&self, gpu: &Gpu) -> Result<Vec<u32>, GpuError> {
         let n = self.clusters as u64 * 4;

@@ -600,6 +600,14 @@ impl<'g> Renderer<'g> {
         }
     }
 
+    /// The cluster boxes after the last frame (clustered variants): [min, max] per cluster.
+    pub fn cluster_bounds(&self) -> Result<Option<Vec<[[f32; 4]; 2]>>, RenderError> {
+        match &self.res.clusters {
+            Some(c) => Ok(Some(c.read_bounds(self.gpu)?)),
+            None => Ok(None),
+        }
+    }
+
     /// The depth buffer of the last frame (read it with `twins::gpu_depth_samples`).
     pub fn depth_texture(&self) -> &wgpu::Texture {
         &self.res.targets.depth.texture
