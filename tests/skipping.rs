@@ -148,3 +148,85 @@ fn a_scene_without_spots_shades_without_the_cone() {
         );
     }
 }
+
+/// `matrix --sweep skipping=on,off`: both settings of every variant side by side on the
+/// same frames, the same images and counters, and only the "on" cells skip passes: on a
+/// scene without lights the clustering, and the bloom blur where no pixel is bright.
+#[test]
+fn the_skipping_sweep_puts_both_settings_side_by_side() {
+    use clusterlab::matrix::Results;
+    let out = std::env::temp_dir().join(format!("clusterlab-skipping-{}", std::process::id()));
+    let status = std::process::Command::new(env!("CARGO_BIN_EXE_clusterlab"))
+        .args([
+            "matrix",
+            "--variants",
+            "forward_plus",
+            "clustered_deferred_bloom_separable",
+            "--scenes",
+            "empty,one_light",
+            "--size",
+            "48x27",
+            "--sweep",
+            "skipping=on,off",
+            "--frames",
+            "2",
+            "--warmup",
+            "0",
+            "--out",
+        ])
+        .arg(&out)
+        .output()
+        .expect("clusterlab runs");
+    assert!(
+        status.status.success(),
+        "{}",
+        String::from_utf8_lossy(&status.stderr)
+    );
+    let r = Results::load(&out).expect("results.json");
+    for variant in ["forward_plus", "clustered_deferred_bloom_separable"] {
+        for scene in ["empty", "one_light"] {
+            let cell = |setting: &str| {
+                r.cells
+                    .iter()
+                    .find(|c| {
+                        c.spec.variant == variant
+                            && c.spec.scene == scene
+                            && c.spec
+                                .sweep
+                                .iter()
+                                .any(|(k, v)| k == "skipping" && v == setting)
+                    })
+                    .unwrap_or_else(|| panic!("{variant} on {scene} with skipping={setting}"))
+            };
+            let (on, off) = (cell("on"), cell("off"));
+            let what = format!("{variant} on {scene}");
+            assert!(
+                off.skipped_passes.is_empty(),
+                "{what}: {:?}",
+                off.skipped_passes
+            );
+            let image = |c: &clusterlab::matrix::CellRecord| {
+                std::fs::read(out.join(c.images.image.as_ref().expect("an image"))).expect("PNG")
+            };
+            assert_eq!(image(on), image(off), "{what}: the images differ");
+            assert_eq!(on.stats, off.stats, "{what}: the counters differ");
+            let skipped = |p: &str| on.skipped_passes.iter().any(|s| s == p);
+            assert_eq!(
+                skipped("light_assign"),
+                scene == "empty",
+                "{what}: {:?}",
+                on.skipped_passes
+            );
+            if variant.contains("bloom") {
+                // The empty scene's ambient light is below the bloom threshold.
+                assert_eq!(
+                    skipped("bloom_blur"),
+                    scene == "empty",
+                    "{what}: {:?}",
+                    on.skipped_passes
+                );
+            }
+        }
+    }
+    let _ = std::fs::remove_dir_all(&out);
+}
