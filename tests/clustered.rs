@@ -140,6 +140,29 @@ fn render(gpu: &Gpu, v: &Variant, scene: &Scene, frames: u32) -> FrameOutput {
     last.expect("a frame")
 }
 
+/// Every pixel of `frame` within its bound (`stress::pixel_error_bound`: 1 LSB for exact
+/// variants on f32 targets) of the reference and of naive forward's `naive`; `overlap` is
+/// the most lights that reach one pixel.
+fn assert_within_bound(
+    gpu: &Gpu,
+    v: &Variant,
+    overlap: u32,
+    frame: &FrameOutput,
+    naive: &FrameOutput,
+    reference: &clusterlab::cpu::frame::ReferenceFrame,
+    what: &str,
+) {
+    let naive_ldr: Vec<[u8; 3]> = naive.ldr.iter().map(|p| [p[0], p[1], p[2]]).collect();
+    for (against, ldr) in [("the reference", &reference.ldr), ("naive", &naive_ldr)] {
+        let over =
+            clusterlab::stress::worst_over_bound(v, gpu, overlap, frame, ldr, &reference.hdr);
+        assert!(
+            over.is_none(),
+            "{what}: (pixel, LSB, bound) {over:?} from {against}"
+        );
+    }
+}
+
 #[test]
 fn clustered_output_equals_naive_output() {
     let gpu = gpu();
@@ -191,21 +214,8 @@ fn clustered_output_equals_naive_output() {
                 scene.lights.iter().filter(|l| l.is_spot()).count()
             );
             assert_eq!(e.nan_pixels, 0, "{what}");
-            let naive_ldr: Vec<[u8; 3]> = naive.ldr.iter().map(|p| [p[0], p[1], p[2]]).collect();
-            for (against, ldr) in [("the reference", &reference.ldr), ("naive", &naive_ldr)] {
-                let over = clusterlab::stress::worst_over_bound(
-                    &v.variant,
-                    &gpu,
-                    overlap,
-                    &frame,
-                    ldr,
-                    &reference.hdr,
-                );
-                assert!(
-                    over.is_none(),
-                    "{what}: (pixel, LSB, bound) {over:?} from {against} (bound {bound} on f32 targets)"
-                );
-            }
+            let what = format!("{what} (bound {bound} on f32 targets)");
+            assert_within_bound(&gpu, &v.variant, overlap, &frame, &naive, &reference, &what);
         }
     }
 }
@@ -243,22 +253,8 @@ fn every_shipped_clustered_variant_with_exact_lists_equals_naive() {
             let naive = r.render().unwrap();
             let overlap = r.stats().unwrap().max_useful_per_pixel;
             let (reference, _) = reference_frame(&gpu, &composer, v, &scene).unwrap();
-            let naive_ldr: Vec<[u8; 3]> = naive.ldr.iter().map(|p| [p[0], p[1], p[2]]).collect();
-            for (against, ldr) in [("the reference", &reference.ldr), ("naive", &naive_ldr)] {
-                let over = clusterlab::stress::worst_over_bound(
-                    &v.variant,
-                    &gpu,
-                    overlap,
-                    &frame,
-                    ldr,
-                    &reference.hdr,
-                );
-                assert!(
-                    over.is_none(),
-                    "{} on {scene_name}: (pixel, LSB, bound) {over:?} from {against}",
-                    v.name
-                );
-            }
+            let what = format!("{} on {scene_name}", v.name);
+            assert_within_bound(&gpu, &v.variant, overlap, &frame, &naive, &reference, &what);
         }
     }
 }
