@@ -249,7 +249,7 @@ fn cells_that_fail_from_a_shader_error_or_an_adapter_limit_fail_alone() {
     ];
     args.extend(common);
     args.push(out.to_str().unwrap());
-    let (code, text) = matrix_with(&args, ("CLUSTERLAB_MAX_BUFFER_SIZE", "65536"));
+    let (code, text) = matrix_with(&args, ("CLUSTERLAB_MAX_BUFFER_SIZE", "131072"));
     assert_eq!(code, 1, "{text}");
     let r = Results::load(&out).expect("results.json");
     assert_eq!(
@@ -261,7 +261,32 @@ fn cells_that_fail_from_a_shader_error_or_an_adapter_limit_fail_alone() {
         if c.spec.params.lights == 4096 {
             let why = c.failure.as_deref().expect("the 4096-light cell fails");
             assert!(
-                why.contains("4096 lights take") && why.contains("65536 bytes"),
+                why.contains("4096 lights take") && why.contains("131072 bytes"),
+                "{why}"
+            );
+        } else {
+            assert!(c.ok(), "{}: {:?}", c.spec.id, c.failure);
+        }
+    }
+    // A grid whose cluster boxes pass the same limit: only its cell fails, naming it.
+    let out = dir.join("grid");
+    let mut args = vec![
+        "matrix",
+        "--variants",
+        "forward_plus",
+        "--sweep",
+        "grid=4x4x4,64x64x64",
+    ];
+    args.extend(common);
+    args.push(out.to_str().unwrap());
+    let (code, text) = matrix_with(&args, ("CLUSTERLAB_MAX_BUFFER_SIZE", "131072"));
+    assert_eq!(code, 1, "{text}");
+    let r = Results::load(&out).expect("results.json");
+    for c in &r.cells {
+        if c.spec.id.contains("64x64x64") {
+            let why = c.failure.as_deref().expect("the 64x64x64 cell fails");
+            assert!(
+                why.contains("grid 64x64x64") && why.contains("131072 bytes"),
                 "{why}"
             );
         } else {

@@ -245,6 +245,26 @@ impl Gpu {
         Ok(())
     }
 
+    /// Check that a cluster grid of `grid` fits the adapter's buffers: its largest per-cluster
+    /// buffer is the boxes, 32 bytes a cluster, bound whole as storage.
+    pub fn check_grid(&self, grid: (u32, u32, u32)) -> Result<(), GpuError> {
+        let l = &self.limits;
+        let max = l.max_buffer_size.min(l.max_storage_buffer_binding_size);
+        let clusters = grid.0 as u64 * grid.1 as u64 * grid.2 as u64;
+        let bytes = clusters * 32;
+        if bytes > max {
+            return Err(GpuError::TooLarge(format!(
+                "grid {}x{}x{}: its {clusters} cluster boxes take {bytes} bytes, more than the {max} bytes adapter `{}` allows in one buffer; use a coarser grid (at most {} clusters)",
+                grid.0,
+                grid.1,
+                grid.2,
+                self.adapter.name,
+                max / 32
+            )));
+        }
+        Ok(())
+    }
+
     /// Check that a `width` x `height` frame fits the adapter's limits.
     pub fn check_size(&self, width: u32, height: u32) -> Result<(), GpuError> {
         let max = self.limits.max_texture_dimension_2d;

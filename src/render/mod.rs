@@ -192,6 +192,9 @@ impl<'g> Renderer<'g> {
         let (width, height) = (scene.params.width, scene.params.height);
         gpu.check_size(width, height)?;
         gpu.check_scene(scene)?;
+        if variant.pipeline.is_clustered() {
+            gpu.check_grid(variant.clusters().grid)?;
+        }
         check_for_scene(variant, scene)?;
         // Every pipeline but scissor deferred loops over up to all the lights per pixel.
         if let Some(limit) = crate::gpu::expect::max_lights_per_pixel(gpu)

@@ -365,8 +365,12 @@ impl FrameResources {
             let c = variant.clusters();
             let count = c.grid.0 * c.grid.1 * c.grid.2;
             let lights = scene.lights.len() as u32;
-            // A first guess; a frame whose lists overflow grows the buffer and runs again.
-            let capacity = (count * lights.clamp(1, 32)).max(1024);
+            // A first guess, within what one binding holds; a frame whose lists overflow
+            // grows the buffer and runs again (or says the lists cannot fit).
+            let bindable = (gpu.limits.max_storage_buffer_binding_size / 4).min(u32::MAX as u64);
+            let capacity = (count as u64 * lights.clamp(1, 32) as u64)
+                .max(1024)
+                .min(bindable) as u32;
             let range = super::ClusterRange::new(scene.camera.near as f32, scene.camera.far as f32);
             super::ClusterBuffers::new(gpu, count, lights, capacity, range)
         });
