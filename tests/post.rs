@@ -134,7 +134,7 @@ fn effect_matches(
     gpu_out: &Image,
     twin: &Image,
     allowed: usize,
-) -> Result<f64, String> {
+) -> Result<(f64, usize), String> {
     let (worst, disagree) = compare(gpu_out, twin, 1e-4);
     if worst >= 2e-5 {
         return Err(format!("{name}: worst relative error {worst:e}"));
@@ -144,7 +144,7 @@ fn effect_matches(
             "{name}: {disagree} pixels differ from the twin (at most {allowed})"
         ));
     }
-    Ok(worst)
+    Ok((worst, disagree))
 }
 
 #[test]
@@ -181,9 +181,11 @@ fn every_effect_matches_its_cpu_twin_on_the_gpu_input() {
             let decisions = effect != PostEffect::Bloom;
             let allowed = if decisions { pixels / 1000 } else { 0 };
             let what = format!("{name}, {effect:?}");
-            let worst = effect_matches(&what, &run.output, &twin, allowed)
+            let (worst, decided) = effect_matches(&what, &run.output, &twin, allowed)
                 .unwrap_or_else(|e| panic!("{e}"));
-            eprintln!("{what}: worst relative error {worst:.2e}");
+            eprintln!(
+                "{what}: worst relative error {worst:.2e}, {decided} pixels decided otherwise"
+            );
             let (_, changed) = compare(&run.output, &input.output, 1e-3);
             assert!(
                 changed > pixels / 100,
