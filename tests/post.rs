@@ -65,17 +65,18 @@ fn run_chain(gpu: &Gpu, v: &Variant, scene: &Scene) -> ChainRun {
     }
 }
 
-/// How far a GPU image is from the twin's: the largest error relative to the twin's value
+/// How far a GPU image is from the twin's: the largest error relative to `scale` (the
+/// magnitude of what the effect summed at each pixel; the twin's value itself by default)
 /// over the pixels that agree, and how many pixels do not (relative error above `agree`).
-/// Relative to the value itself, not to 1: every effect is a weighted sum or a choice of
+/// Relative to the value, not to 1: every effect is a weighted sum or a choice of
 /// non-negative colours, whose f32 rounding is relative. A zero is matched only by a zero
 /// or by an f32 rounding of one (below 2^-126, the smallest normal f32).
-fn compare(gpu_out: &Image, twin: &Image, agree: f64) -> (f64, usize) {
+fn compare_scaled(gpu_out: &Image, twin: &Image, scale: &Image, agree: f64) -> (f64, usize) {
     let mut worst: f64 = 0.0;
     let mut disagree = 0;
-    for (g, t) in gpu_out.pixels.iter().zip(&twin.pixels) {
-        let e =
-            ((*g - *t).abs() / t.abs().max(DVec3::splat(f32::MIN_POSITIVE as f64))).max_element();
+    for ((g, t), s) in gpu_out.pixels.iter().zip(&twin.pixels).zip(&scale.pixels) {
+        let floor = DVec3::splat(f32::MIN_POSITIVE as f64);
+        let e = ((*g - *t).abs() / t.abs().max(s.abs()).max(floor)).max_element();
         if e > agree {
             disagree += 1;
         } else {
@@ -83,6 +84,10 @@ fn compare(gpu_out: &Image, twin: &Image, agree: f64) -> (f64, usize) {
         }
     }
     (worst, disagree)
+}
+
+fn compare(gpu_out: &Image, twin: &Image, agree: f64) -> (f64, usize) {
+    compare_scaled(gpu_out, twin, twin, agree)
 }
 
 /// `v` with only its first `stages` post effects (in the order a frame applies them), and
@@ -124,18 +129,22 @@ fn only(params: &PostParams, e: PostEffect) -> PostParams {
 }
 
 /// Whether a GPU effect's output matches its twin fed the same input: every pixel within
-/// 2e-5 relative, but for `allowed` pixels where a decision (band edge, outline threshold,
-/// rounded motion sample) may fall the other way in f32. The bound: an f32 sum of n
-/// non-negative terms is within gamma_n = n 2^-24 / (1 - n 2^-24) of its value (Higham
-/// 2002, section 4.2); the largest window, naive bloom's 17x17 = 289 taps, gives 1.7e-5,
-/// and the weights' and the normalisation's few ULP bring it to 2e-5.
+/// 2e-5 of `scale`, but for `allowed` pixels where a decision (band edge, outline
+/// threshold, rounded motion sample) may fall the other way in f32. The bound: an f32 sum
+/// of n terms is within gamma_n = n 2^-24 / (1 - n 2^-24) of the sum of the terms'
+/// magnitudes (Higham 2002, section 4.2); the largest window, naive bloom's 17x17 = 289
+/// taps, gives 1.7e-5, and the weights' and the normalisation's few ULP bring it to 2e-5.
+/// For bloom the magnitudes are the colours before the bright pass (which subtracts the
+/// threshold, so a colour just above it loses its leading bits): `scale` is the output
+/// plus the blur of the input. For the other effects it is the output.
 fn effect_matches(
     name: &str,
     gpu_out: &Image,
     twin: &Image,
+    scale: &Image,
     allowed: usize,
 ) -> Result<(f64, usize), String> {
-    let (worst, disagree) = compare(gpu_out, twin, 1e-4);
+    let (worst, disagree) = compare_scaled(gpu_out, twin, scale, 1e-4);
     if worst >= 2e-5 {
         return Err(format!("{name}: worst relative error {worst:e}"));
     }
@@ -176,12 +185,27 @@ fn every_effect_matches_its_cpu_twin_on_the_gpu_input() {
                 &cams,
             );
             let twin = post::apply(&stage, &input.output, &g);
+            let scale = match stage.bloom {
+                Some((_, radius)) => {
+                    let spread = post::blur(&input.output, radius);
+                    Image::new(
+                        twin.width,
+                        twin.height,
+                        twin.pixels
+                            .iter()
+                            .zip(&spread.pixels)
+                            .map(|(t, s)| *t + *s)
+                            .collect(),
+                    )
+                }
+                None => twin.clone(),
+            };
             // Band edges, outline thresholds and rounded motion samples are decisions: f32
             // and f64 may decide a pixel on the edge differently, and only such pixels.
             let decisions = effect != PostEffect::Bloom;
             let allowed = if decisions { pixels / 1000 } else { 0 };
             let what = format!("{name}, {effect:?}");
-            let (worst, decided) = effect_matches(&what, &run.output, &twin, allowed)
+            let (worst, decided) = effect_matches(&what, &run.output, &twin, &scale, allowed)
                 .unwrap_or_else(|e| panic!("{e}"));
             eprintln!(
                 "{what}: worst relative error {worst:.2e}, {decided} pixels decided otherwise"
@@ -197,7 +221,7 @@ fn every_effect_matches_its_cpu_twin_on_the_gpu_input() {
                 let before = run_chain(&gpu, &first_effects(&v, 0), &scene);
                 let wrong = post::apply(&stage, &before.output, &g);
                 assert!(
-                    effect_matches(&what, &run.output, &wrong, allowed).is_err(),
+                    effect_matches(&what, &run.output, &wrong, &scale, allowed).is_err(),
                     "{what}: the twin fed the unprocessed image passes too"
                 );
             }
