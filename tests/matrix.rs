@@ -194,17 +194,19 @@ fn matrix_with(args: &[&str], env: (&str, &str)) -> (i32, String) {
     (out.status.code().unwrap_or(-1), text)
 }
 
-#[test]
-fn cells_that_fail_from_a_shader_error_or_an_adapter_limit_fail_alone() {
-    let dir = scratch("failing");
-    // A syntax error in the resolve pass, which only deferred variants compose.
-    let shaders = dir.join("shaders");
-    copy_tree(Path::new("shaders"), &shaders);
-    let resolve = shaders.join("passes/resolve.wesl");
-    let text = std::fs::read_to_string(&resolve).unwrap();
-    std::fs::write(&resolve, text.replacen("fn ", "fn broken ", 1)).unwrap();
-    let out = dir.join("shader");
-    let common = [
+/// Run `matrix ARGS` on one_light (48x27, one frame) into `out` with `env` set: the exit
+/// code is 1, the cells `fails` picks fail with a message holding every one of `says`, and
+/// every other cell runs. Returns the results.
+fn only_some_cells_fail(
+    args: &[&str],
+    out: &Path,
+    env: (&str, &str),
+    fails: impl Fn(&clusterlab::matrix::CellRecord) -> bool,
+    says: &[&str],
+) -> Results {
+    let mut all = vec!["matrix"];
+    all.extend_from_slice(args);
+    all.extend([
         "--scenes",
         "one_light",
         "--size",
@@ -214,85 +216,69 @@ fn cells_that_fail_from_a_shader_error_or_an_adapter_limit_fail_alone() {
         "--warmup",
         "0",
         "--out",
-    ];
-    let mut args = vec![
-        "matrix",
-        "--variants",
-        "forward_plus",
-        "clustered_deferred_16x16x24",
-    ];
-    args.extend(common);
-    args.push(out.to_str().unwrap());
-    let (code, text) = matrix_with(&args, ("CLUSTERLAB_SHADERS", shaders.to_str().unwrap()));
+    ]);
+    all.push(out.to_str().unwrap());
+    let (code, text) = matrix_with(&all, env);
     assert_eq!(code, 1, "{text}");
-    let r = Results::load(&out).expect("results.json");
+    let r = Results::load(out).expect("results.json");
     for c in &r.cells {
-        if c.spec.variant == "clustered_deferred_16x16x24" {
-            let why = c.failure.as_deref().expect("the deferred cell fails");
-            assert!(
-                why.contains("pass `resolve`") && why.contains("passes/resolve.wesl:"),
-                "{why}"
-            );
+        if fails(c) {
+            let why = c
+                .failure
+                .as_deref()
+                .unwrap_or_else(|| panic!("{} fails", c.spec.id));
+            assert!(says.iter().all(|w| why.contains(w)), "{why}");
         } else {
             assert!(c.ok(), "{}: {:?}", c.spec.id, c.failure);
         }
     }
+    r
+}
+
+#[test]
+fn cells_that_fail_from_a_shader_error_or_an_adapter_limit_fail_alone() {
+    let dir = scratch("failing");
+    // A syntax error in the resolve pass, which only deferred variants compose.
+    let shaders = dir.join("shaders");
+    copy_tree(Path::new("shaders"), &shaders);
+    let resolve = shaders.join("passes/resolve.wesl");
+    let text = std::fs::read_to_string(&resolve).unwrap();
+    std::fs::write(&resolve, text.replacen("fn ", "fn broken ", 1)).unwrap();
+    only_some_cells_fail(
+        &["--variants", "forward_plus", "clustered_deferred_16x16x24"],
+        &dir.join("shader"),
+        ("CLUSTERLAB_SHADERS", shaders.to_str().unwrap()),
+        |c| c.spec.variant == "clustered_deferred_16x16x24",
+        &["pass `resolve`", "passes/resolve.wesl:"],
+    );
     // A light buffer over the adapter's (lowered) buffer limit: only the cell with many
     // lights fails, naming the limit.
-    let out = dir.join("limit");
-    let mut args = vec![
-        "matrix",
-        "--variants",
-        "forward_plus",
-        "--sweep",
-        "lights=1,4096",
-    ];
-    args.extend(common);
-    args.push(out.to_str().unwrap());
-    let (code, text) = matrix_with(&args, ("CLUSTERLAB_MAX_BUFFER_SIZE", "131072"));
-    assert_eq!(code, 1, "{text}");
-    let r = Results::load(&out).expect("results.json");
+    let cap = ("CLUSTERLAB_MAX_BUFFER_SIZE", "131072");
+    let r = only_some_cells_fail(
+        &["--variants", "forward_plus", "--sweep", "lights=1,4096"],
+        &dir.join("limit"),
+        cap,
+        |c| c.spec.params.lights == 4096,
+        &["4096 lights take", "131072 bytes"],
+    );
     assert_eq!(
         r.cells.len(),
         4,
         "2 light counts x (forward_plus, naive baseline)"
     );
-    for c in &r.cells {
-        if c.spec.params.lights == 4096 {
-            let why = c.failure.as_deref().expect("the 4096-light cell fails");
-            assert!(
-                why.contains("4096 lights take") && why.contains("131072 bytes"),
-                "{why}"
-            );
-        } else {
-            assert!(c.ok(), "{}: {:?}", c.spec.id, c.failure);
-        }
-    }
     // A grid whose cluster boxes pass the same limit: only its cell fails, naming it.
-    let out = dir.join("grid");
-    let mut args = vec![
-        "matrix",
-        "--variants",
-        "forward_plus",
-        "--sweep",
-        "grid=4x4x4,64x64x64",
-    ];
-    args.extend(common);
-    args.push(out.to_str().unwrap());
-    let (code, text) = matrix_with(&args, ("CLUSTERLAB_MAX_BUFFER_SIZE", "131072"));
-    assert_eq!(code, 1, "{text}");
-    let r = Results::load(&out).expect("results.json");
-    for c in &r.cells {
-        if c.spec.id.contains("64x64x64") {
-            let why = c.failure.as_deref().expect("the 64x64x64 cell fails");
-            assert!(
-                why.contains("grid 64x64x64") && why.contains("131072 bytes"),
-                "{why}"
-            );
-        } else {
-            assert!(c.ok(), "{}: {:?}", c.spec.id, c.failure);
-        }
-    }
+    only_some_cells_fail(
+        &[
+            "--variants",
+            "forward_plus",
+            "--sweep",
+            "grid=4x4x4,64x64x64",
+        ],
+        &dir.join("grid"),
+        cap,
+        |c| c.spec.id.contains("64x64x64"),
+        &["grid 64x64x64", "131072 bytes"],
+    );
     let _ = std::fs::remove_dir_all(&dir);
 }
 
