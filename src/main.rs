@@ -99,17 +99,18 @@ enum Command {
         /// Codecs: uniform unit vectors to sample (1 to 67108864).
         #[arg(long, default_value_t = 1 << 20, value_parser = parse_samples)]
         samples: usize,
-        /// Slicing and cones: image size, WIDTHxHEIGHT.
+        /// Slicing, cones and culling: image size, WIDTHxHEIGHT.
         #[arg(long, default_value = "640x360", value_parser = parse_size)]
         size: (u32, u32),
-        /// Slicing and cones: comma-separated scenes, built-in names or glTF files (default:
+        /// Slicing, cones and culling: comma-separated scenes, built-in names or glTF files (default:
         /// every built-in scene).
         #[arg(long, value_delimiter = ',')]
         scenes: Vec<String>,
-        /// Slicing and cones: lights in every scene (default: each scene's own).
+        /// Slicing, cones and culling: lights in every scene (default: each scene's own;
+        /// culling: 64, 1024, 4096 and 16384).
         #[arg(long)]
         lights: Option<u32>,
-        /// Slicing and cones: timed frames per run, at least 1 (the median is reported).
+        /// Slicing, cones and culling: timed frames per run, at least 1 (the median is reported).
         #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..))]
         frames: u32,
         #[command(flatten)]

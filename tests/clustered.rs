@@ -8,9 +8,11 @@ use std::collections::BTreeSet;
 
 use clusterlab::compose::Composer;
 use clusterlab::cpu::clusters::{self as cpu, Grid};
+use clusterlab::cpu::truth::RasterTruth;
+use clusterlab::cpu::zbin::ZBins;
 use clusterlab::gpu::Gpu;
 use clusterlab::reference::reference_frame;
-use clusterlab::render::{FrameOutput, Renderer};
+use clusterlab::render::{FrameOutput, Renderer, raster_truth};
 use clusterlab::scene::{self, Light, SCENES, Scene};
 use clusterlab::variant::*;
 use common::{gpu, small};
@@ -82,7 +84,17 @@ fn exact_variants() -> Vec<LoadedVariant> {
         let c = v.clusters.as_mut().unwrap();
         c.active_clusters = true;
         c.sample_bounds = true;
-        out.push(loaded(&format!("{pipeline:?} sample bounds"), v));
+        out.push(loaded(&format!("{pipeline:?} sample bounds"), v.clone()));
+        v.clusters.as_mut().unwrap().culling = Culling::DepthMask;
+        out.push(loaded(&format!("{pipeline:?} 2.5D masks"), v));
+        out.push(loaded(
+            &format!("{pipeline:?} tiled 2.5D"),
+            depth_mask_variant(pipeline, (16, 9, 1), ZSlicing::Exponential),
+        ));
+        out.push(loaded(
+            &format!("{pipeline:?} z-binning"),
+            zbin_variant(pipeline, (16, 9, 24)),
+        ));
     }
     let mut cpu = clustered(Pipeline::ClusteredForward, ZSlicing::Exponential);
     cpu.clusters.as_mut().unwrap().assignment = Assignment::Cpu;
@@ -96,6 +108,26 @@ fn exact_variants() -> Vec<LoadedVariant> {
         },
     ));
     out
+}
+
+/// 2.5D culling on `grid`: active clusters, sample bounds and depth masks.
+fn depth_mask_variant(pipeline: Pipeline, grid: (u32, u32, u32), slicing: ZSlicing) -> Variant {
+    let mut v = clustered(pipeline, slicing);
+    let c = v.clusters.as_mut().unwrap();
+    c.grid = grid;
+    c.active_clusters = true;
+    c.sample_bounds = true;
+    c.culling = Culling::DepthMask;
+    v
+}
+
+/// Z-binning over `grid`'s tiles and slices.
+fn zbin_variant(pipeline: Pipeline, grid: (u32, u32, u32)) -> Variant {
+    let mut v = clustered(pipeline, ZSlicing::Exponential);
+    let c = v.clusters.as_mut().unwrap();
+    c.grid = grid;
+    c.culling = Culling::ZBinning;
+    v
 }
 
 /// What scenes with spots run besides `exact_variants` (whose clustered variants use the
@@ -318,6 +350,7 @@ fn capped_lists_drop_lights_exactly_when_the_cap_bites() {
         SpotTest::Cone,
         None,
         None,
+        None,
     );
     let longest = lists.max_per_cluster;
     assert!(
@@ -363,7 +396,7 @@ fn assert_lists_match(gpu: &Gpu, v: &Variant, scene: &Scene, what: &str) {
     let grid: Grid = Grid::of(v, scene);
     let bounds = cpu::cluster_bounds(&grid);
     let lights = cpu::view_lights(&scene.lights, scene.camera.view());
-    let want = cpu::assign(&grid, &bounds, &lights, SpotTest::Cone, None, None);
+    let want = cpu::assign(&grid, &bounds, &lights, SpotTest::Cone, None, None, None);
     let mut compared = 0;
     for (c, set) in got.iter().enumerate() {
         let expected: BTreeSet<u32> = want.list(c).iter().copied().collect();
@@ -635,6 +668,7 @@ fn lists_that_outgrow_their_buffer_grow_it_and_stay_exact() {
         SpotTest::Cone,
         None,
         None,
+        None,
     );
     let total = want.indices.len() as u64;
     // f32 and f64 may decide a borderline light differently (see assert_lists_match).
@@ -678,6 +712,7 @@ fn long_lists_are_sorted_and_complete() {
             v.clusters().spot_test,
             None,
             None,
+            None,
         );
         let longest = (0..got.counts.len()).map(|c| got.list(c).len()).max();
         assert!(
@@ -699,6 +734,287 @@ fn long_lists_are_sorted_and_complete() {
             let expected: BTreeSet<u32> = want.list(c).iter().copied().collect();
             let listed: BTreeSet<u32> = list.iter().copied().collect();
             assert_eq!(listed, expected, "{name}: cluster {c}");
+        }
+    }
+}
+
+/// Whether `light` clearly reaches world point `p`: closer than its radius by a relative
+/// 1e-4 and inside its outer cone by 2e-6 in cosine, so no rounding of the GPU's can decide
+/// it otherwise.
+fn clearly_reaches(light: &Light, p: DVec3) -> bool {
+    let to_p = p - DVec3::from(light.position.map(f64::from));
+    let d = to_p.length();
+    if d >= light.radius as f64 * (1.0 - 1e-4) {
+        return false;
+    }
+    if !light.is_spot() {
+        return true;
+    }
+    let axis = DVec3::from(light.direction.map(f64::from)).normalize();
+    d > 0.0 && to_p.dot(axis) / d > light.cos_outer as f64 + 2e-6
+}
+
+/// Each covered pixel of `truth`: its index, world position and view depth.
+fn visible_samples(truth: &RasterTruth, scene: &Scene) -> Vec<(usize, DVec3, f64)> {
+    let view = scene.camera.view();
+    (0..truth.position.len())
+        .filter(|&i| truth.covered(i))
+        .map(|i| {
+            let p = truth.position[i];
+            let world = DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64);
+            (i, world, -view.transform_point3(world).z)
+        })
+        .collect()
+}
+
+/// The lights that clearly reach a sample but are missing from the list of the cluster the
+/// sample is shaded with (samples within 1e-4 of a slice boundary left out: f32 and f64 may
+/// put them in either slice), as (pixel, light); and how many (sample, light) pairs were
+/// checked.
+fn missing_lights(
+    grid: &Grid,
+    scene: &Scene,
+    samples: &[(usize, DVec3, f64)],
+    list_of: impl Fn(usize) -> Vec<u32>,
+) -> (Vec<(usize, u32)>, usize) {
+    let slices = grid.slices();
+    let (w, h) = (scene.params.width, scene.params.height);
+    let tile = |p: usize, size: u32, tiles: u32| {
+        (((p as f64 + 0.5) * tiles as f64 / size as f64) as u32).min(tiles - 1)
+    };
+    let (mut missing, mut checked) = (Vec::new(), 0);
+    for &(i, p, z) in samples {
+        let k = slices.slice(z);
+        if slices.slice(z * (1.0 - 1e-4)) != k || slices.slice(z * (1.0 + 1e-4)) != k {
+            continue;
+        }
+        let c = grid.index(
+            tile(i % w as usize, w, grid.x),
+            tile(i / w as usize, h, grid.y),
+            k,
+        );
+        let list = list_of(c);
+        for (l, light) in scene.lights.iter().enumerate() {
+            if clearly_reaches(light, p) {
+                checked += 1;
+                if !list.contains(&(l as u32)) {
+                    missing.push((i, l as u32));
+                }
+            }
+        }
+    }
+    (missing, checked)
+}
+
+/// 2.5D culling never leaves out a light that reaches a visible sample, on the GPU and in
+/// its f64 twin (masks built from the raster truth's depths), and culls more than the boxes
+/// alone; the GPU's sample ranges hold the twin's. A twin with each mask moved one cell
+/// deeper (a deliberate break) must miss lights.
+#[test]
+fn depth_masks_keep_every_light_that_reaches_a_sample() {
+    let gpu = gpu();
+    let composer = Composer::default();
+    for (scene_name, lights, spots) in [
+        ("atrium", 512, 0.0),
+        ("atrium", 512, 0.5),
+        ("stage", 256, 1.0),
+    ] {
+        let mut params = small(scene_name, 128, 72, Some(lights));
+        params.spots = spots;
+        let scene = scene::generate(scene_name, params).unwrap();
+        for v in [
+            depth_mask_variant(
+                Pipeline::ClusteredForward,
+                (16, 9, 1),
+                ZSlicing::Exponential,
+            ),
+            depth_mask_variant(
+                Pipeline::ClusteredDeferred,
+                (16, 9, 24),
+                ZSlicing::Exponential,
+            ),
+        ] {
+            let what = format!(
+                "{:?} {:?} on {scene_name} ({spots} spots)",
+                v.pipeline,
+                v.clusters().grid
+            );
+            let mut r = Renderer::new(&gpu, &composer, &v, &scene).unwrap();
+            r.render().unwrap();
+            let gpu_lists = r.cluster_lists().unwrap().unwrap();
+            let gpu_masks = r.depth_masks().unwrap().unwrap();
+            let truth = raster_truth(&gpu, &composer, &v, &scene).unwrap();
+            let samples = visible_samples(&truth, &scene);
+            let mut depths = vec![None; truth.position.len()];
+            for &(i, _, z) in &samples {
+                depths[i] = Some(z);
+            }
+            let grid = Grid::of(&v, &scene);
+            let masks = cpu::depth_masks(&grid, (scene.params.width, scene.params.height), &depths);
+            let bounds = cpu::sample_bounds(&grid, &masks);
+            let view_lights = cpu::view_lights(&scene.lights, scene.camera.view());
+            let assign = |m: Option<&[Option<cpu::DepthMask>]>| {
+                cpu::assign(&grid, &bounds, &view_lights, SpotTest::Cone, None, None, m)
+            };
+            let twin = assign(Some(&masks));
+            let boxes = assign(None);
+            for (c, m) in masks.iter().enumerate() {
+                let Some(m) = m else { continue };
+                let range = gpu_masks[c].range;
+                assert!(
+                    range[1] > 0.0
+                        && range[0] as f64 <= m.range.0 * (1.0 + 1e-6)
+                        && range[1] as f64 >= m.range.1 * (1.0 - 1e-6),
+                    "{what}: cluster {c}: GPU range {range:?}, twin {:?}",
+                    m.range
+                );
+            }
+            let (missing, checked) =
+                missing_lights(&grid, &scene, &samples, |c| gpu_lists.list(c).to_vec());
+            assert!(
+                missing.is_empty(),
+                "{what}: GPU lists miss (pixel, light) {:?}",
+                &missing[..missing.len().min(5)]
+            );
+            assert!(checked > 1000, "{what}: only {checked} pairs checked");
+            let (missing, _) = missing_lights(&grid, &scene, &samples, |c| twin.list(c).to_vec());
+            assert!(
+                missing.is_empty(),
+                "{what}: twin lists miss {:?}",
+                &missing[..missing.len().min(5)]
+            );
+            // The same variant culling with boxes alone, on the GPU.
+            let mut unmasked = v.clone();
+            unmasked.clusters.as_mut().unwrap().culling = Culling::Boxes;
+            let mut r = Renderer::new(&gpu, &composer, &unmasked, &scene).unwrap();
+            r.render().unwrap();
+            let gpu_boxes = r.cluster_lists().unwrap().unwrap();
+            // Tiles span the scene's depth, so their masks cut lights between surfaces;
+            // thin 3D clusters seldom have such gaps, and the masks may only not add.
+            let fewer = |a: usize, b: usize| {
+                if v.clusters().grid.2 == 1 {
+                    a < b
+                } else {
+                    a <= b
+                }
+            };
+            assert!(
+                fewer(twin.indices.len(), boxes.indices.len())
+                    && fewer(gpu_lists.indices.len(), gpu_boxes.indices.len()),
+                "{what}: masks culled too little: list entries twin {} against {} with boxes alone, GPU {} against {}",
+                twin.indices.len(),
+                boxes.indices.len(),
+                gpu_lists.indices.len(),
+                gpu_boxes.indices.len()
+            );
+            // The break: each mask one cell deeper loses lights at the nearest samples.
+            let shifted: Vec<Option<cpu::DepthMask>> = masks
+                .iter()
+                .map(|m| {
+                    m.map(|m| cpu::DepthMask {
+                        mask: m.mask << 1,
+                        ..m
+                    })
+                })
+                .collect();
+            let broken = assign(Some(&shifted));
+            let (missing, _) = missing_lights(&grid, &scene, &samples, |c| broken.list(c).to_vec());
+            assert!(
+                !missing.is_empty(),
+                "{what}: the check missed the shifted masks"
+            );
+        }
+    }
+}
+
+/// Z-binning never leaves out a light that reaches a visible sample, on the GPU and in its
+/// f64 twin; the GPU sorts lights by depth as the twin does (to f32 rounding); a twin whose
+/// bins each keep only the nearer half of their range (a deliberate break) must miss lights.
+#[test]
+fn zbins_keep_every_light_that_reaches_a_sample() {
+    let gpu = gpu();
+    let composer = Composer::default();
+    for (scene_name, lights, spots) in [
+        ("atrium", 700, 0.0),
+        ("atrium", 700, 0.5),
+        ("stage", 256, 1.0),
+    ] {
+        let mut params = small(scene_name, 128, 72, Some(lights));
+        params.spots = spots;
+        let scene = scene::generate(scene_name, params).unwrap();
+        for v in [
+            zbin_variant(Pipeline::ClusteredForward, (16, 9, 24)),
+            zbin_variant(Pipeline::ClusteredDeferred, (8, 8, 64)),
+        ] {
+            let what = format!(
+                "{:?} {:?} on {scene_name} ({spots} spots)",
+                v.pipeline,
+                v.clusters().grid
+            );
+            let mut r = Renderer::new(&gpu, &composer, &v, &scene).unwrap();
+            r.render().unwrap();
+            let gpu_lists = r.cluster_lists().unwrap().unwrap();
+            let truth = raster_truth(&gpu, &composer, &v, &scene).unwrap();
+            let samples = visible_samples(&truth, &scene);
+            let grid = Grid::of(&v, &scene);
+            let view_lights = cpu::view_lights(&scene.lights, scene.camera.view());
+            let twin = ZBins::build(&grid, &view_lights);
+            let (missing, checked) =
+                missing_lights(&grid, &scene, &samples, |c| gpu_lists.list(c).to_vec());
+            assert!(
+                missing.is_empty(),
+                "{what}: GPU bins miss (pixel, light) {:?}",
+                &missing[..missing.len().min(5)]
+            );
+            assert!(checked > 1000, "{what}: only {checked} pairs checked");
+            let twin_lists = twin.lists();
+            let (missing, _) =
+                missing_lights(&grid, &scene, &samples, |c| twin_lists.list(c).to_vec());
+            assert!(
+                missing.is_empty(),
+                "{what}: twin bins miss {:?}",
+                &missing[..missing.len().min(5)]
+            );
+            // The GPU's order: by the f64 depth of each light's centre, to f32 rounding, for
+            // the lights that reach a tile (the others go last, in any order).
+            let zbins = r.zbins().unwrap().expect("z-binning");
+            let in_a_tile = |s: usize| {
+                zbins
+                    .masks
+                    .chunks_exact(zbins.words)
+                    .any(|m| m[s / 32] & (1 << (s % 32)) != 0)
+            };
+            let depth = |i: u32| -view_lights[i as usize].center.z;
+            let masked: Vec<u32> = (0..zbins.order.len())
+                .filter(|&s| in_a_tile(s))
+                .map(|s| zbins.order[s])
+                .collect();
+            assert!(
+                masked.len() > 10,
+                "{what}: {} lights in tiles",
+                masked.len()
+            );
+            for w in masked.windows(2) {
+                assert!(
+                    depth(w[0]) <= depth(w[1]) + 1e-5 * depth(w[1]).abs().max(1.0),
+                    "{what}: light {} (depth {}) sorted before {} ({})",
+                    w[0],
+                    depth(w[0]),
+                    w[1],
+                    depth(w[1])
+                );
+            }
+            // The break: each bin's range cut to its nearer half.
+            let mut broken = twin.clone();
+            for b in broken.bins.iter_mut() {
+                *b = b.map(|(first, last)| (first, first + (last - first) / 2));
+            }
+            let broken = broken.lists();
+            let (missing, _) = missing_lights(&grid, &scene, &samples, |c| broken.list(c).to_vec());
+            assert!(
+                !missing.is_empty(),
+                "{what}: the check missed the shortened bins"
+            );
         }
     }
 }

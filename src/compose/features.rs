@@ -57,6 +57,11 @@ pub fn feature_flags(v: &Variant) -> Vec<(&'static str, bool)> {
         ),
         ("active_clusters", clusters.active_clusters),
         ("sample_bounds", clusters.sample_bounds),
+        ("depth_mask", clusters.culling == Culling::DepthMask),
+        (
+            "zbinning",
+            p.is_clustered() && clusters.culling == Culling::ZBinning,
+        ),
         ("gbuffer_wide", deferred && layout == GBufferLayout::Wide),
         (
             "gbuffer_packed",

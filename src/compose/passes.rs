@@ -179,12 +179,17 @@ pub fn passes(v: &Variant) -> Vec<Pass> {
         if clusters.active_clusters {
             out.push(clustering(ClusterPass::MarkActive, "passes::mark_active"));
         }
-        out.push(clustering(
-            ClusterPass::ClusterBounds,
-            "passes::cluster_bounds",
-        ));
-        if clusters.assignment == Assignment::Gpu {
-            out.push(clustering(ClusterPass::LightAssign, "passes::light_assign"));
+        if clusters.culling == Culling::ZBinning {
+            // Bins and tile masks need no cluster boxes.
+            out.push(clustering(ClusterPass::LightAssign, "passes::zbin_assign"));
+        } else {
+            out.push(clustering(
+                ClusterPass::ClusterBounds,
+                "passes::cluster_bounds",
+            ));
+            if clusters.assignment == Assignment::Gpu {
+                out.push(clustering(ClusterPass::LightAssign, "passes::light_assign"));
+            }
         }
     }
     out.push(match v.pipeline {

@@ -142,9 +142,12 @@ pub fn sphere_touches_cluster(
     x: u32,
     y: u32,
 ) -> bool {
-    if !sphere_touches_box(center, radius, b) {
-        return false;
-    }
+    sphere_touches_box(center, radius, b) && sphere_touches_tile(grid, center, radius, x, y)
+}
+
+/// Whether a sphere reaches the inner side of the four side planes of tile (x, y)'s frustum
+/// (the tile test of z-binning; with the box test, the cluster test).
+pub fn sphere_touches_tile(grid: &Grid, center: DVec3, radius: f64, x: u32, y: u32) -> bool {
     let sx = grid.tan_half_fov_y * grid.aspect;
     let sy = grid.tan_half_fov_y;
     let step = (2.0 / grid.x as f64, 2.0 / grid.y as f64);
@@ -274,6 +277,99 @@ pub fn light_touches_cluster(
     }
 }
 
+/// Cells of a cluster's sample depth range in 2.5D culling (the bits of a u32).
+pub const DEPTH_CELLS: u32 = 32;
+
+/// The cell of view depth `z` in range [z0, z1], clamped to the first and last cell.
+pub fn depth_cell(z: f64, z0: f64, z1: f64) -> u32 {
+    let t = (z - z0) * DEPTH_CELLS as f64 / (z1 - z0).max(1e-30);
+    t.clamp(0.0, (DEPTH_CELLS - 1) as f64) as u32
+}
+
+/// The mask of the cells from the one of depth `a` to the one of depth `b` (a <= b).
+pub fn cell_span(a: f64, b: f64, z0: f64, z1: f64) -> u32 {
+    let (lo, hi) = (depth_cell(a, z0, z1), depth_cell(b, z0, z1));
+    let above_hi = if hi < 31 { u32::MAX << (hi + 1) } else { 0 };
+    (u32::MAX << lo) & !above_hi
+}
+
+/// A cluster's visible samples as 2.5D culling sees them: their depth range and the mask of
+/// the cells of that range that hold one.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DepthMask {
+    pub range: (f64, f64),
+    pub mask: u32,
+}
+
+impl DepthMask {
+    /// Whether the cells a light's depth range spans (its sphere's) hold a sample.
+    pub fn admits(&self, light: &ViewLight) -> bool {
+        let (z0, z1) = self.range;
+        let a = -(light.center.z + light.radius);
+        let b = -(light.center.z - light.radius);
+        self.mask & cell_span(a, b, z0, z1) != 0
+    }
+}
+
+/// Each cluster's samples (`None` where it holds none), from the view depth of every pixel
+/// of a `width` x `height` frame (`None`: background), each in the cluster of its tile and
+/// the slice of its depth.
+pub fn depth_masks(
+    grid: &Grid,
+    (width, height): (u32, u32),
+    depths: &[Option<f64>],
+) -> Vec<Option<DepthMask>> {
+    let slices = grid.slices();
+    // The tile of a pixel's centre, as shading finds it.
+    let tile = |p: u32, size: u32, tiles: u32| {
+        (((p as f64 + 0.5) * tiles as f64 / size as f64) as u32).min(tiles - 1)
+    };
+    let cluster = |i: usize, z: f64| {
+        let (px, py) = (i as u32 % width, i as u32 / width);
+        grid.index(
+            tile(px, width, grid.x),
+            tile(py, height, grid.y),
+            slices.slice(z),
+        )
+    };
+    let mut ranges = vec![None::<(f64, f64)>; grid.count()];
+    for (i, z) in depths.iter().enumerate() {
+        if let Some(z) = *z {
+            let r = &mut ranges[cluster(i, z)];
+            *r = Some(r.map_or((z, z), |(a, b)| (a.min(z), b.max(z))));
+        }
+    }
+    let mut out: Vec<Option<DepthMask>> = ranges
+        .iter()
+        .map(|r| r.map(|range| DepthMask { range, mask: 0 }))
+        .collect();
+    for (i, z) in depths.iter().enumerate() {
+        if let Some(z) = *z {
+            let m = out[cluster(i, z)].as_mut().expect("a range");
+            m.mask |= 1 << depth_cell(z, m.range.0, m.range.1);
+        }
+    }
+    out
+}
+
+/// Olsson's explicit bounds: each cluster's box shrunk to the depth range of its samples
+/// (within its slice), `None` where it holds none.
+pub fn sample_bounds(grid: &Grid, masks: &[Option<DepthMask>]) -> Vec<Option<Aabb>> {
+    (0..grid.count())
+        .map(|c| {
+            let m = masks[c]?;
+            let (x, y, k) = (
+                c as u32 % grid.x,
+                (c as u32 / grid.x) % grid.y,
+                c as u32 / (grid.x * grid.y),
+            );
+            let (s0, s1) = grid.slice_depths(k);
+            let (z0, z1) = (m.range.0.max(s0), m.range.1.min(s1));
+            Some(tile_box(grid, x, y, z0.min(z1), z0.max(z1)))
+        })
+        .collect()
+}
+
 /// Compacted light lists, as the GPU builds them.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct ClusterLists {
@@ -296,7 +392,8 @@ impl ClusterLists {
 
 /// Assign lights to clusters: each list holds, in ascending index order, the lights that
 /// touch the cluster (`light_touches_cluster`), up to `cap` if given. Clusters where `active`
-/// is false get empty lists.
+/// is false get empty lists; with `masks` (2.5D culling), so do clusters without samples,
+/// and a light must also pass its cluster's mask.
 pub fn assign(
     grid: &Grid,
     bounds: &[Option<Aabb>],
@@ -304,6 +401,7 @@ pub fn assign(
     spot_test: SpotTest,
     cap: Option<u32>,
     active: Option<&[bool]>,
+    masks: Option<&[Option<DepthMask>]>,
 ) -> ClusterLists {
     let mut out = ClusterLists {
         counts: Vec::with_capacity(bounds.len()),
@@ -314,12 +412,16 @@ pub fn assign(
         out.offsets.push(out.indices.len() as u32);
         let mut kept = 0u32;
         let mut touching = 0u64;
+        let mask = masks.map(|m| m[c]);
         if let Some(b) = b
             && active.is_none_or(|a| a[c])
+            && mask.is_none_or(|m| m.is_some())
         {
             let (x, y) = (c as u32 % grid.x, (c as u32 / grid.x) % grid.y);
             for (i, light) in lights.iter().enumerate() {
-                if light_touches_cluster(grid, light, spot_test, b, x, y) {
+                if light_touches_cluster(grid, light, spot_test, b, x, y)
+                    && mask.flatten().is_none_or(|m| m.admits(light))
+                {
                     touching += 1;
                     if cap.is_none_or(|cap| kept < cap) {
                         out.indices.push(i as u32);

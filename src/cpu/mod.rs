@@ -10,4 +10,5 @@ pub mod normals;
 pub mod post;
 pub mod shading;
 pub mod truth;
+pub mod zbin;
 pub mod zslice;

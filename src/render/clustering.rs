@@ -6,6 +6,7 @@ use super::clusters::{ClusterBuffers, SCAN_BLOCK, SORT_DISPATCH_BYTES};
 use super::passes::{ComputePipelines, set_compute_groups};
 use crate::compose::ClusterPass;
 use crate::gpu::TimestampSlot;
+use crate::variant::Culling;
 
 /// Lights per row of the per-light dispatches (`LIGHTS_PER_ROW` in light_assign.wesl).
 const LIGHTS_PER_ROW: u32 = 32768;
@@ -15,10 +16,19 @@ pub fn dispatch_size(n: u32, per_group: u32) -> u32 {
     n.div_ceil(per_group).max(1)
 }
 
-/// Compute entry points of a pass, in dispatch order (`mark_visible` runs only for the
-/// counters; see [`encode_visible_count`]).
-pub fn entries(pass: ClusterPass) -> &'static [&'static str] {
+/// Compute entry points of a pass of a variant culling with `culling`, in dispatch order
+/// (`mark_visible` runs only for the counters; see [`encode_visible_count`]).
+pub fn entries(pass: ClusterPass, culling: Culling) -> &'static [&'static str] {
     match pass {
+        ClusterPass::MarkActive if culling == Culling::DepthMask => {
+            &["mark_active", "mark_visible", "mark_cells"]
+        }
+        ClusterPass::LightAssign if culling == Culling::ZBinning => &[
+            "transform_lights",
+            "sort_lights",
+            "bin_lights",
+            "mask_tiles",
+        ],
         ClusterPass::ClusterBounds => &["build_bounds"],
         ClusterPass::LightAssign => &[
             "transform_lights",
@@ -55,6 +65,11 @@ pub fn encode(
         ClusterPass::MarkActive => {
             encoder.clear_buffer(&c.active, 0, None);
             encoder.clear_buffer(&c.sample_depths, 0, None);
+            encoder.clear_buffer(&c.depth_masks, 0, None);
+        }
+        ClusterPass::LightAssign if c.culling == Culling::ZBinning => {
+            encoder.clear_buffer(&c.bin_ranges, 0, None);
+            encoder.clear_buffer(&c.tile_masks, 0, None);
         }
         ClusterPass::LightAssign => {
             encoder.clear_buffer(&c.counts, 0, None);
@@ -65,7 +80,7 @@ pub fn encode(
     }
     // Light assignment ends with a second compute pass (the long-list sort, dispatched
     // indirectly); the first pass then writes the beginning timestamp, the second the end.
-    let sorts = pass == ClusterPass::LightAssign;
+    let sorts = pass == ClusterPass::LightAssign && c.culling != Culling::ZBinning;
     let mut cp = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
         label: Some(<&str>::from(pass)),
         timestamp_writes: if sorts {
@@ -90,8 +105,17 @@ pub fn encode(
     );
     let dispatches: Vec<(&str, (u32, u32, u32))> = match pass {
         ClusterPass::ClusterBounds => vec![("build_bounds", (clusters, 1, 1))],
+        ClusterPass::MarkActive if c.culling == Culling::DepthMask => {
+            vec![("mark_active", pixels), ("mark_cells", pixels)]
+        }
         ClusterPass::MarkActive => vec![("mark_active", pixels)],
         ClusterPass::DepthRange => vec![("reduce", pixels), ("finalize", (1, 1, 1))],
+        ClusterPass::LightAssign if c.culling == Culling::ZBinning => vec![
+            ("transform_lights", (dispatch_size(l, 64), 1, 1)),
+            ("sort_lights", (1, 1, 1)),
+            ("bin_lights", (dispatch_size(l, 64), 1, 1)),
+            ("mask_tiles", per_light),
+        ],
         ClusterPass::LightAssign => vec![
             ("transform_lights", (dispatch_size(l, 64), 1, 1)),
             ("count_lights", per_light),

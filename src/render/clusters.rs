@@ -5,7 +5,9 @@ use bytemuck::{Pod, Zeroable};
 use wgpu::util::DeviceExt;
 
 use crate::cpu::clusters::ClusterLists;
+use crate::cpu::zbin::ZBins;
 use crate::gpu::{Gpu, GpuError, read_buffer};
+use crate::variant::Culling;
 
 /// Mirrors `ClusterRange` in `shaders/clustering/clusters.wesl`.
 #[repr(C)]
@@ -56,6 +58,10 @@ mod binding {
     pub const FILL_CURSORS: u32 = 10;
     pub const SAMPLE_DEPTHS: u32 = 11;
     pub const SORT_JOBS: u32 = 12;
+    pub const DEPTH_MASKS: u32 = 13;
+    pub const LIGHT_ORDER: u32 = 14;
+    pub const BIN_RANGES: u32 = 15;
+    pub const TILE_MASKS: u32 = 16;
 }
 
 /// Bytes of an indirect dispatch's arguments (x, y, z).
@@ -86,6 +92,49 @@ pub struct ClusterBuffers {
     pub sort_dispatch: wgpu::Buffer,
     /// Entries the index buffer holds.
     pub index_capacity: u32,
+    /// 2.5D culling: each cluster's mask of depth cells that hold a sample.
+    pub depth_masks: wgpu::Buffer,
+    /// Z-binning: lights in depth order, each bin's range of them, each tile's mask.
+    pub light_order: wgpu::Buffer,
+    pub bin_ranges: wgpu::Buffer,
+    pub tile_masks: wgpu::Buffer,
+    /// The grid: tiles across, tiles down, slices (z-binning's bins).
+    pub grid: (u32, u32, u32),
+    pub lights: u32,
+    pub culling: Culling,
+}
+
+/// A cluster's samples on the GPU: their depth range [z0, z1] (z1 = 0 where it holds none)
+/// and the mask of depth cells that hold one (2.5D culling; zero without it).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct GpuDepthMask {
+    pub range: [f32; 2],
+    pub mask: u32,
+}
+
+/// Most lights z-binning sorts: its one-workgroup bitonic sort stays within a software
+/// rasteriser's loop budget up to here (`zbin_assign.wesl`).
+pub const ZBIN_MAX_LIGHTS: usize = 65536;
+
+/// Refuse a z-binning frame the sort or the tile masks cannot hold.
+pub fn check_zbinning(gpu: &Gpu, grid: (u32, u32, u32), lights: usize) -> Result<(), GpuError> {
+    if lights > ZBIN_MAX_LIGHTS {
+        return Err(GpuError::TooLarge(format!(
+            "z-binning sorts at most {ZBIN_MAX_LIGHTS} lights and the scene has {lights}; use fewer lights or another `clusters.culling`"
+        )));
+    }
+    let bytes = (grid.0 * grid.1) as u64 * (lights as u64).div_ceil(32) * 4;
+    let max = gpu
+        .limits
+        .max_buffer_size
+        .min(gpu.limits.max_storage_buffer_binding_size);
+    if bytes > max {
+        return Err(GpuError::TooLarge(format!(
+            "z-binning's tile masks for {}x{} tiles and {lights} lights take {bytes} bytes, more than the {max} bytes adapter `{}` allows in one buffer; use fewer tiles or lights",
+            grid.0, grid.1, gpu.adapter.name
+        )));
+    }
+    Ok(())
 }
 
 fn storage(gpu: &Gpu, label: &str, size: u64) -> wgpu::Buffer {
@@ -100,14 +149,24 @@ fn storage(gpu: &Gpu, label: &str, size: u64) -> wgpu::Buffer {
 }
 
 impl ClusterBuffers {
+    /// The buffers of `culling` on `grid` for `lights` lights; the buffers a method does not
+    /// use are 16-byte placeholders (every binding exists in every variant's layout).
     pub fn new(
         gpu: &Gpu,
-        clusters: u32,
+        grid: (u32, u32, u32),
         lights: u32,
         index_capacity: u32,
         range: ClusterRange,
+        culling: Culling,
     ) -> Self {
+        let clusters = grid.0 * grid.1 * grid.2;
         let n = clusters as u64;
+        let lists = culling != Culling::ZBinning;
+        let zbin = !lists;
+        // `bytes` where the method uses a buffer, a placeholder elsewhere.
+        let sized = |used: bool, bytes: u64| if used { bytes } else { 16 };
+        let index_capacity = if lists { index_capacity } else { 4 };
+        let words = (lights as u64).div_ceil(32);
         Self {
             clusters,
             range: gpu
@@ -119,11 +178,15 @@ impl ClusterBuffers {
                         | wgpu::BufferUsages::COPY_DST
                         | wgpu::BufferUsages::COPY_SRC,
                 }),
-            bounds: storage(gpu, "cluster bounds", n * 32),
+            bounds: storage(gpu, "cluster bounds", sized(lists, n * 32)),
             active: storage(gpu, "active clusters", n * 4),
-            counts: storage(gpu, "light counts", n * 4),
-            offsets: storage(gpu, "light offsets", n * 4),
-            block_sums: storage(gpu, "block sums", n.div_ceil(SCAN_BLOCK as u64) * 4),
+            counts: storage(gpu, "light counts", sized(lists, n * 4)),
+            offsets: storage(gpu, "light offsets", sized(lists, n * 4)),
+            block_sums: storage(
+                gpu,
+                "block sums",
+                sized(lists, n.div_ceil(SCAN_BLOCK as u64) * 4),
+            ),
             indices: storage(gpu, "light indices", index_capacity as u64 * 4),
             stats: storage(
                 gpu,
@@ -132,9 +195,9 @@ impl ClusterBuffers {
             ),
             light_view: storage(gpu, "view-space lights", lights.max(1) as u64 * 48),
             light_ranges: storage(gpu, "light cluster ranges", lights.max(1) as u64 * 16),
-            fill_cursors: storage(gpu, "fill cursors", n * 4),
-            sample_depths: storage(gpu, "cluster sample depths", n * 8),
-            sort_jobs: storage(gpu, "long-list sort jobs", 16 + n * 8),
+            fill_cursors: storage(gpu, "fill cursors", sized(lists, n * 4)),
+            sample_depths: storage(gpu, "cluster sample depths", sized(lists, n * 8)),
+            sort_jobs: storage(gpu, "long-list sort jobs", sized(lists, 16 + n * 8)),
             sort_dispatch: gpu.device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("long-list sort dispatch"),
                 size: SORT_DISPATCH_BYTES,
@@ -142,6 +205,21 @@ impl ClusterBuffers {
                 mapped_at_creation: false,
             }),
             index_capacity,
+            depth_masks: storage(
+                gpu,
+                "depth masks",
+                sized(culling == Culling::DepthMask, n * 4),
+            ),
+            light_order: storage(gpu, "light order", sized(zbin, lights as u64 * 4)),
+            bin_ranges: storage(gpu, "bin ranges", sized(zbin, grid.2 as u64 * 8)),
+            tile_masks: storage(
+                gpu,
+                "tile masks",
+                sized(zbin, (grid.0 * grid.1) as u64 * words * 4),
+            ),
+            grid,
+            lights,
+            culling,
         }
     }
 
@@ -162,6 +240,10 @@ impl ClusterBuffers {
             &self.sample_depths,
             &self.sort_jobs,
             &self.sort_dispatch,
+            &self.depth_masks,
+            &self.light_order,
+            &self.bin_ranges,
+            &self.tile_masks,
         ]
         .iter()
         .map(|b| b.size())
@@ -191,6 +273,10 @@ impl ClusterBuffers {
             binding::FILL_CURSORS => &self.fill_cursors,
             binding::SAMPLE_DEPTHS => &self.sample_depths,
             binding::SORT_JOBS => &self.sort_jobs,
+            binding::DEPTH_MASKS => &self.depth_masks,
+            binding::LIGHT_ORDER => &self.light_order,
+            binding::BIN_RANGES => &self.bin_ranges,
+            binding::TILE_MASKS => &self.tile_masks,
             _ => return None,
         })
     }
@@ -217,14 +303,65 @@ impl ClusterBuffers {
             .collect())
     }
 
-    /// Lights in each cluster's list.
+    /// Each cluster's samples as the GPU holds them (zero without sample bounds).
+    pub fn read_depth_masks(&self, gpu: &Gpu) -> Result<Vec<GpuDepthMask>, GpuError> {
+        let n = self.clusters as u64;
+        if self.culling == Culling::ZBinning {
+            return Ok(vec![GpuDepthMask::default(); n as usize]);
+        }
+        let depths = read_buffer(gpu, &self.sample_depths, 0, n * 8)?;
+        let depths: &[u32] = bytemuck::cast_slice(&depths);
+        let masks = if self.culling == Culling::DepthMask {
+            bytemuck::cast_slice(&read_buffer(gpu, &self.depth_masks, 0, n * 4)?).to_vec()
+        } else {
+            vec![0u32; n as usize]
+        };
+        Ok(depths
+            .chunks_exact(2)
+            .zip(masks)
+            .map(|(d, m)| {
+                let range = if d[1] == 0 {
+                    [0.0, 0.0]
+                } else {
+                    [f32::from_bits(!d[0]), f32::from_bits(d[1])]
+                };
+                GpuDepthMask { range, mask: m }
+            })
+            .collect())
+    }
+
+    /// Z-binning's sorted lights, bins and tile masks as the GPU holds them.
+    pub fn read_zbins(&self, gpu: &Gpu) -> Result<ZBins, GpuError> {
+        let read = |b: &wgpu::Buffer, bytes: u64| -> Result<Vec<u32>, GpuError> {
+            if bytes == 0 {
+                return Ok(Vec::new());
+            }
+            Ok(bytemuck::cast_slice(&read_buffer(gpu, b, 0, bytes)?).to_vec())
+        };
+        let (x, y, z) = self.grid;
+        let words = (self.lights as u64).div_ceil(32);
+        Ok(ZBins::from_gpu(
+            (x, y),
+            read(&self.light_order, self.lights as u64 * 4)?,
+            &read(&self.bin_ranges, z as u64 * 8)?,
+            read(&self.tile_masks, (x * y) as u64 * words * 4)?,
+        ))
+    }
+
+    /// Lights in each cluster's list (z-binning: lights a pixel of each tile and bin walks).
     pub fn read_counts(&self, gpu: &Gpu) -> Result<Vec<u32>, GpuError> {
+        if self.culling == Culling::ZBinning {
+            return Ok(self.read_zbins(gpu)?.counts());
+        }
         let n = self.clusters as u64 * 4;
         Ok(bytemuck::cast_slice(&read_buffer(gpu, &self.counts, 0, n)?).to_vec())
     }
 
-    /// The light lists as the GPU holds them.
+    /// The light lists as the GPU holds them (z-binning: each tile and bin's walk, sorted).
     pub fn read_lists(&self, gpu: &Gpu) -> Result<ClusterLists, GpuError> {
+        if self.culling == Culling::ZBinning {
+            return Ok(self.read_zbins(gpu)?.lists());
+        }
         let n = self.clusters as u64 * 4;
         let counts: Vec<u32> =
             bytemuck::cast_slice(&read_buffer(gpu, &self.counts, 0, n)?).to_vec();

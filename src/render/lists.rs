@@ -91,6 +91,7 @@ impl Renderer<'_> {
             cpu.spot_test,
             cpu.cap,
             None,
+            None,
         );
         let ms = start.elapsed().as_secs_f64() * 1e3;
         let c = self.res.clusters.as_mut().expect("clustered");

@@ -19,7 +19,7 @@ mod screen;
 mod stats;
 mod truth;
 
-pub use clusters::{ClusterBuffers, ClusterRange, ClusterStats};
+pub use clusters::{ClusterBuffers, ClusterRange, ClusterStats, GpuDepthMask};
 pub use passes::{PassRunner, shader_module};
 pub use resources::{DepthSetup, F32_BITS_FORMAT, LDR_FORMAT, SceneBuffers, ViewUniform};
 pub use stats::FrameStats;
@@ -194,6 +194,9 @@ impl<'g> Renderer<'g> {
         gpu.check_scene(scene)?;
         if variant.pipeline.is_clustered() {
             gpu.check_grid(variant.clusters().grid)?;
+            if variant.clusters().culling == crate::variant::Culling::ZBinning {
+                clusters::check_zbinning(gpu, variant.clusters().grid, scene.lights.len())?;
+            }
         }
         check_for_scene(variant, scene)?;
         // Every pipeline but scissor deferred loops over up to all the lights per pixel.
@@ -332,7 +335,7 @@ impl<'g> Renderer<'g> {
                 gpu,
                 composed,
                 l,
-                clustering::entries(p),
+                clustering::entries(p, self.variant.clusters().culling),
             )?),
             PassId::Post(_) => return Ok(None),
         };
@@ -608,6 +611,26 @@ impl<'g> Renderer<'g> {
         match &self.res.clusters {
             Some(c) => Ok(Some(c.read_bounds(self.gpu)?)),
             None => Ok(None),
+        }
+    }
+
+    /// Each cluster's sample depth range and 2.5D mask after the last frame (clustered
+    /// variants; see `ClusterBuffers::read_depth_masks`).
+    pub fn depth_masks(&self) -> Result<Option<Vec<GpuDepthMask>>, RenderError> {
+        match &self.res.clusters {
+            Some(c) => Ok(Some(c.read_depth_masks(self.gpu)?)),
+            None => Ok(None),
+        }
+    }
+
+    /// Z-binning's sorted lights, bins and tile masks after the last frame (None for other
+    /// pipelines and culling methods).
+    pub fn zbins(&self) -> Result<Option<crate::cpu::zbin::ZBins>, RenderError> {
+        match &self.res.clusters {
+            Some(c) if c.culling == crate::variant::Culling::ZBinning => {
+                Ok(Some(c.read_zbins(self.gpu)?))
+            }
+            _ => Ok(None),
         }
     }
 

@@ -164,6 +164,11 @@ impl<'g> Renderer<'g> {
             visible.sort_unstable();
             visible.dedup();
             let counts = c.read_counts(gpu)?;
+            if c.culling == crate::variant::Culling::ZBinning {
+                // No lists on the GPU: each tile and bin's walk stands for one.
+                stats.light_list_entries = counts.iter().map(|&n| n as u64).sum();
+                stats.max_lights_per_cluster = counts.iter().copied().max().unwrap_or(0);
+            }
             let lights: Vec<u32> = visible.iter().map(|&k| counts[k as usize]).collect();
             stats.max_lights_per_visible_cluster = lights.iter().copied().max().unwrap_or(0);
             stats.mean_lights_per_visible_cluster = if lights.is_empty() {

@@ -4,6 +4,7 @@
 
 pub mod codecs;
 pub mod cones;
+pub mod culling;
 pub mod depth;
 pub mod slicing;
 pub mod table;
@@ -31,6 +32,9 @@ pub enum StudyName {
     /// Spot lights culled by their bounding sphere against the cone test, at spot fractions
     /// 0, 0.5 and 1 on each built-in scene; lights missed (must be 0).
     Cones,
+    /// Every culling method (clusters, tiled, 2.5D, Olsson) on each built-in scene at 64 to
+    /// 16384 lights (or `--lights`), spot fractions 0 and 0.5.
+    Culling,
 }
 
 impl StudyName {
@@ -40,6 +44,7 @@ impl StudyName {
             StudyName::Depth => "depth",
             StudyName::Slicing => "slicing",
             StudyName::Cones => "cones",
+            StudyName::Culling => "culling",
         }
     }
 }
@@ -105,7 +110,8 @@ pub struct StudyOutput {
     pub plot: Option<Plot>,
     /// False when the study found a disagreement it exists to rule out (codecs: GPU and
     /// CPU differ at the printed precision; slicing: a run failed; cones: a run failed or
-    /// missed a light).
+    /// missed a light; culling: a run failed or its useful evaluations differ from the other
+    /// methods' on the same frame).
     pub ok: bool,
 }
 
@@ -191,6 +197,22 @@ pub fn run(
             )?;
             let ok = cones::all_exact(&rows);
             output(name, cones::table(&rows), &rows, None, ok)
+        }
+        StudyName::Culling => {
+            let counts = match options.lights {
+                Some(n) => vec![n],
+                None => culling::LIGHT_COUNTS.to_vec(),
+            };
+            let rows = culling::run(
+                gpu,
+                composer,
+                &scenes,
+                options.size,
+                &counts,
+                options.frames,
+            )?;
+            let ok = culling::all_exact(&rows);
+            output(name, culling::table(&rows), &rows, culling::plot(&rows), ok)
         }
     }
 }

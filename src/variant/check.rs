@@ -154,6 +154,38 @@ fn check_clusters(c: &Clusters, v: &Variant, out: &mut Vec<Problem>) {
             "bounds from samples come from active-cluster marking: set `active_clusters: true` too",
         ));
     }
+    if c.culling == Culling::ZBinning {
+        if c.active_clusters || c.sample_bounds {
+            out.push(problem(
+                "clusters.culling",
+                "ZBinning has no clusters to mark or shrink: set `active_clusters: false` and `sample_bounds: false`",
+            ));
+        }
+        if c.lists != LightLists::Exact {
+            out.push(problem(
+                "clusters.lists",
+                "ZBinning keeps every light in its bins and masks: use `lists: Exact`",
+            ));
+        }
+        if c.assignment != Assignment::Gpu {
+            out.push(problem(
+                "clusters.assignment",
+                "ZBinning sorts and bins lights on the GPU: use `assignment: Gpu`",
+            ));
+        }
+        if v.debug_view == DebugView::LightsPerCluster {
+            out.push(problem(
+                "debug_view",
+                "ZBinning keeps no per-cluster light counts: use ClusterIndex or ZSlice, or another culling",
+            ));
+        }
+    }
+    if c.culling == Culling::DepthMask && !c.sample_bounds {
+        out.push(problem(
+            "clusters.culling",
+            "DepthMask cuts each cluster's sample depth range into cells: set `active_clusters: true` and `sample_bounds: true`, or use `culling: Boxes`",
+        ));
+    }
     if c.active_clusters && v.pipeline == Pipeline::ClusteredForward && !v.depth_prepass {
         out.push(problem(
             "clusters.active_clusters",

@@ -127,6 +127,11 @@ pub struct Clusters {
     pub sample_bounds: bool,
     /// How a spot light is tested against a cluster (point lights always use their sphere).
     pub spot_test: SpotTest,
+    /// How a light is tested against a cluster beyond its box. Tiled shading with per-tile
+    /// depth bounds (Harada et al. 2012) is a grid of one slice, `(x, y, 1)`, with
+    /// `active_clusters` and `sample_bounds`; `DepthMask` on such a grid is Harada's 2.5D
+    /// culling.
+    pub culling: Culling,
 }
 
 impl Default for Clusters {
@@ -139,8 +144,30 @@ impl Default for Clusters {
             active_clusters: false,
             sample_bounds: false,
             spot_test: SpotTest::Cone,
+            culling: Culling::Boxes,
         }
     }
+}
+
+/// The test that decides whether a light goes into a cluster's list.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
+pub enum Culling {
+    /// The light's sphere against the cluster's box, tightened by its tile's four side
+    /// planes (and a spot's cone against the box's bounding sphere).
+    Boxes,
+    /// Harada 2012's 2.5D culling, on top of `Boxes`: each cluster's sample depth range is
+    /// cut into 32 equal cells and a 32-bit mask marks the cells that hold a visible sample;
+    /// a light is kept only where the cells its depth range spans hold one, so lights in
+    /// the empty space between a tile's near and far surfaces are left out. Needs
+    /// `active_clusters` and `sample_bounds`.
+    DepthMask,
+    /// Drobot 2017's z-binning (Call of Duty): no per-cluster lists. Lights are sorted by
+    /// view depth; each of the grid's z slices is a depth bin that stores the first and last
+    /// sorted light reaching it, and each of its x-by-y tiles a bitmask of the lights that
+    /// reach the tile; a pixel walks the lights of its bin's range that its tile's mask
+    /// holds. Memory is bins + tiles x lights / 32 words. Spots are binned by their bounding
+    /// sphere. Exact lists only, GPU assignment, no active clusters, at most 65536 lights.
+    ZBinning,
 }
 
 /// Where light lists are built.

@@ -1,0 +1,477 @@
+//! `clusterlab study culling`: every way clusterlab culls lights, on every built-in scene, at
+//! 64 to 16384 lights with none and half of them spots: light evaluations performed and
+//! useful, the worst tile or cluster, assignment and shading time, and list memory.
+
+use serde::Serialize;
+use strum::IntoEnumIterator;
+
+use super::StudyError;
+use super::table::{Table, sig};
+use crate::compose::{ClusterPass, Composer};
+use crate::gpu::Gpu;
+use crate::plot::Plot;
+use crate::render::Renderer;
+use crate::scene::{Scene, SceneParams};
+use crate::variant::{Clusters, Culling, Pipeline, Variant, ZSlicing};
+
+/// Light counts of the study.
+pub const LIGHT_COUNTS: [u32; 4] = [64, 1024, 4096, 16384];
+/// Spot fractions of the study.
+pub const SPOT_FRACTIONS: [f32; 2] = [0.0, 0.5];
+
+/// Harada 2012 and Olsson 2012 work with 32 x 32 pixel tiles.
+const TILE_PIXELS: u32 = 32;
+
+/// A culling method: its name, what it is, and its Forward+ variant at an image size.
+pub struct Method {
+    pub name: &'static str,
+    pub source: &'static str,
+    grid: fn(tiles: (u32, u32)) -> (u32, u32, u32),
+    slicing: ZSlicing,
+    /// Active clusters with boxes shrunk to their samples.
+    sample_bounds: bool,
+    culling: Culling,
+}
+
+impl Method {
+    /// The Forward+ variant (depth pre-pass) of this method for a `size` image.
+    pub fn variant(&self, size: (u32, u32)) -> Variant {
+        let tiles = (
+            size.0.div_ceil(TILE_PIXELS).clamp(1, 128),
+            size.1.div_ceil(TILE_PIXELS).clamp(1, 128),
+        );
+        Variant {
+            description: format!("culling study: {}", self.name),
+            pipeline: Pipeline::ClusteredForward,
+            depth_prepass: true,
+            clusters: Some(Clusters {
+                grid: (self.grid)(tiles),
+                slicing: self.slicing,
+                active_clusters: self.sample_bounds,
+                sample_bounds: self.sample_bounds,
+                culling: self.culling,
+                ..Clusters::default()
+            }),
+            ..Variant::default()
+        }
+    }
+}
+
+/// Every method the study compares.
+pub fn methods() -> Vec<Method> {
+    vec![
+        Method {
+            name: "clusters 16x9x24",
+            source: "the default grid: exponential slices, boxes (Olsson 2012 without bounds)",
+            grid: |_| (16, 9, 24),
+            slicing: ZSlicing::Exponential,
+            sample_bounds: false,
+            culling: Culling::Boxes,
+        },
+        Method {
+            name: "tiled, depth bounds",
+            source: "Harada 2012: 32-pixel tiles, each between its samples' min and max depth",
+            grid: |(x, y)| (x, y, 1),
+            slicing: ZSlicing::Exponential,
+            sample_bounds: true,
+            culling: Culling::Boxes,
+        },
+        Method {
+            name: "tiled 2.5D",
+            source: "Harada 2012: depth bounds and a 32-cell mask of the depths holding geometry",
+            grid: |(x, y)| (x, y, 1),
+            slicing: ZSlicing::Exponential,
+            sample_bounds: true,
+            culling: Culling::DepthMask,
+        },
+        Method {
+            name: "Olsson explicit bounds",
+            source: "Olsson 2012: 32-pixel tiles, cubic slices, active clusters, sample bounds",
+            grid: |(x, y)| (x, y, 256),
+            slicing: ZSlicing::OlssonCubic,
+            sample_bounds: true,
+            culling: Culling::Boxes,
+        },
+        Method {
+            name: "Olsson + 2.5D",
+            source: "Olsson's clusters, each with Harada's 32-cell depth mask",
+            grid: |(x, y)| (x, y, 256),
+            slicing: ZSlicing::OlssonCubic,
+            sample_bounds: true,
+            culling: Culling::DepthMask,
+        },
+    ]
+}
+
+/// One method on one scene, light count and spot fraction.
+#[derive(Clone, Debug, Serialize)]
+pub struct CullingRow {
+    pub scene: String,
+    pub width: u32,
+    pub height: u32,
+    pub lights: u32,
+    pub spot_fraction: f32,
+    pub method: String,
+    pub grid: String,
+    /// Light evaluations shading performed, and those within the light's reach.
+    pub evaluations: u64,
+    pub useful_evaluations: u64,
+    /// useful / performed.
+    pub efficiency: f64,
+    /// Longest list of a tile or cluster that holds a visible sample.
+    pub worst_list: u32,
+    /// Median GPU time of the passes that build the lists (depth range, marking, boxes,
+    /// assignment), ms.
+    pub assignment_ms: f64,
+    /// Median time of the shading pass (the light loop), ms.
+    pub shading_ms: f64,
+    /// Median time of the frame, ms.
+    pub frame_ms: f64,
+    /// Bytes of every culling buffer (boxes, counts, offsets, indices, masks, scratch).
+    pub list_bytes: u64,
+    pub timing_source: String,
+    /// Set when the run failed; the other figures are then zero.
+    pub error: Option<String>,
+}
+
+struct Measured {
+    stats: crate::render::FrameStats,
+    assignment_ms: f64,
+    shading_ms: f64,
+    frame_ms: f64,
+    timestamps: bool,
+}
+
+fn measure(
+    gpu: &Gpu,
+    composer: &Composer,
+    variant: &Variant,
+    scene: &Scene,
+    frames: u32,
+) -> Result<Measured, StudyError> {
+    let mut renderer = Renderer::new(gpu, composer, variant, scene)?;
+    renderer.render()?;
+    let (mut assignment, mut shading, mut frame) = (Vec::new(), Vec::new(), Vec::new());
+    let mut timestamps = false;
+    for _ in 0..frames.max(1) {
+        let f = renderer.render()?;
+        timestamps = f.timings.gpu_timestamps;
+        let building: f64 = ClusterPass::iter()
+            .map(|p| f.timings.get(<&str>::from(p)))
+            .sum();
+        assignment.push(building);
+        shading.push(f.timings.get("forward"));
+        frame.push(f.timings.total_ms());
+    }
+    Ok(Measured {
+        stats: renderer.stats()?,
+        assignment_ms: crate::run::median(assignment),
+        shading_ms: crate::run::median(shading),
+        frame_ms: crate::run::median(frame),
+        timestamps,
+    })
+}
+
+/// Run every method on each scene at `size`, at each of `light_counts` and both spot
+/// fractions. A failing run is reported in its row; the others go on.
+pub fn run(
+    gpu: &Gpu,
+    composer: &Composer,
+    scenes: &[&str],
+    size: (u32, u32),
+    light_counts: &[u32],
+    frames: u32,
+) -> Result<Vec<CullingRow>, StudyError> {
+    // Every scene's parameters first, so that a bad name or size fails before anything runs.
+    let defaults: Vec<(&str, SceneParams)> = scenes
+        .iter()
+        .map(|&name| {
+            crate::scene::defaults(name)
+                .map(|d| (name, d))
+                .map_err(|e| StudyError::Usage(e.to_string()))
+        })
+        .collect::<Result<_, _>>()?;
+    let mut rows = Vec::new();
+    for (name, defaults) in defaults {
+        for &lights in light_counts {
+            for spots in SPOT_FRACTIONS {
+                let params = SceneParams {
+                    width: size.0,
+                    height: size.1,
+                    lights,
+                    spots,
+                    ..defaults
+                };
+                let scene = crate::scene::generate(name, params)
+                    .map_err(|e| StudyError::Usage(e.to_string()))?;
+                for m in methods() {
+                    let v = m.variant(size);
+                    let g = v.clusters().grid;
+                    let mut row = CullingRow {
+                        scene: name.to_string(),
+                        width: size.0,
+                        height: size.1,
+                        lights,
+                        spot_fraction: spots,
+                        method: m.name.into(),
+                        grid: format!("{}x{}x{}", g.0, g.1, g.2),
+                        evaluations: 0,
+                        useful_evaluations: 0,
+                        efficiency: 0.0,
+                        worst_list: 0,
+                        assignment_ms: 0.0,
+                        shading_ms: 0.0,
+                        frame_ms: 0.0,
+                        list_bytes: 0,
+                        timing_source: String::new(),
+                        error: None,
+                    };
+                    match measure(gpu, composer, &v, &scene, frames) {
+                        Ok(r) => {
+                            let s = r.stats;
+                            row.evaluations = s.light_evals;
+                            row.useful_evaluations = s.useful_light_evals;
+                            row.efficiency = if s.light_evals > 0 {
+                                s.useful_light_evals as f64 / s.light_evals as f64
+                            } else {
+                                1.0
+                            };
+                            row.worst_list = s.max_lights_per_visible_cluster;
+                            row.assignment_ms = r.assignment_ms;
+                            row.shading_ms = r.shading_ms;
+                            row.frame_ms = r.frame_ms;
+                            row.list_bytes = s.cluster_bytes;
+                            row.timing_source = if r.timestamps {
+                                "timestamps"
+                            } else {
+                                "wall clock"
+                            }
+                            .into();
+                        }
+                        Err(e) => row.error = Some(e.to_string()),
+                    }
+                    rows.push(row);
+                }
+            }
+        }
+    }
+    Ok(rows)
+}
+
+/// Whether every run succeeded and every method found the same useful evaluations on the
+/// same frame: each is exact, so a method that left out a light would count fewer.
+pub fn all_exact(rows: &[CullingRow]) -> bool {
+    rows.iter().all(|r| {
+        r.error.is_none()
+            && rows
+                .iter()
+                .filter(|o| {
+                    o.scene == r.scene && o.lights == r.lights && o.spot_fraction == r.spot_fraction
+                })
+                .all(|o| o.useful_evaluations == r.useful_evaluations)
+    })
+}
+
+/// Harada 2012 (2.5D culling): the worst tiles of a deep scene held over 200 lights with
+/// depth bounds alone and at most 120 with the 2.5D mask.
+pub const HARADA_WORST_TILE: (u32, u32) = (200, 120);
+
+/// On one scene, light count and spot fraction: the worst tile list of tiled shading with
+/// depth bounds and with the 2.5D mask.
+pub fn worst_tiles(
+    rows: &[CullingRow],
+    scene: &str,
+    lights: u32,
+    spots: f32,
+) -> Option<(u32, u32)> {
+    let find = |m: &str| {
+        rows.iter().find(|r| {
+            r.scene == scene
+                && r.lights == lights
+                && r.spot_fraction == spots
+                && r.method == m
+                && r.error.is_none()
+        })
+    };
+    Some((
+        find("tiled, depth bounds")?.worst_list,
+        find("tiled 2.5D")?.worst_list,
+    ))
+}
+
+/// The table: each scene, light count and spot fraction, methods ranked by useful fraction.
+pub fn table(rows: &[CullingRow]) -> Table {
+    let mut t = Table::new(
+        "Culling: every method on every scene (Forward+, depth pre-pass)",
+        &[
+            "scene / lights / spots",
+            "method",
+            "grid",
+            "evaluations",
+            "useful",
+            "useful / performed",
+            "worst list",
+            "assignment ms",
+            "shading ms",
+            "frame ms",
+            "list bytes",
+        ],
+    );
+    let mut groups: Vec<(&str, u32, f32)> = Vec::new();
+    for r in rows {
+        let key = (r.scene.as_str(), r.lights, r.spot_fraction);
+        if !groups.contains(&key) {
+            groups.push(key);
+        }
+    }
+    for (scene, lights, spots) in &groups {
+        let label = format!("{scene} / {lights} / {spots}");
+        let mut ranked: Vec<&CullingRow> = rows
+            .iter()
+            .filter(|r| r.scene == *scene && r.lights == *lights && r.spot_fraction == *spots)
+            .collect();
+        ranked.sort_by(|a, b| b.efficiency.total_cmp(&a.efficiency));
+        for r in ranked {
+            if let Some(e) = &r.error {
+                t.failed_row(vec![label.clone(), r.method.clone(), r.grid.clone()], e);
+                continue;
+            }
+            t.row(vec![
+                label.clone(),
+                r.method.clone(),
+                r.grid.clone(),
+                r.evaluations.to_string(),
+                r.useful_evaluations.to_string(),
+                format!("{:.1}%", 100.0 * r.efficiency),
+                r.worst_list.to_string(),
+                sig(r.assignment_ms, 3),
+                sig(r.shading_ms, 3),
+                sig(r.frame_ms, 3),
+                r.list_bytes.to_string(),
+            ]);
+        }
+    }
+    for (scene, lights, spots) in &groups {
+        if let Some((bounds, mask)) = worst_tiles(rows, scene, *lights, *spots) {
+            t.notes.push(format!(
+                "{scene}, {lights} lights, spots {spots}: worst tile {bounds} lights with depth \
+                 bounds, {mask} with the 2.5D mask (Harada 2012: over {} down to at most {}).",
+                HARADA_WORST_TILE.0, HARADA_WORST_TILE.1
+            ));
+        }
+    }
+    if let Some(r) = rows.first() {
+        t.notes.push(format!(
+            "Built-in scenes at {}x{}; times are medians of the timed frames ({} on this \
+             adapter). Assignment: every pass that builds the lists (marking, boxes, \
+             assignment); shading: the light loop's pass. Worst list: the longest list of a \
+             tile or cluster holding a visible sample. Useful: evaluations where the surface \
+             is within the light's reach. Sources: {}.",
+            r.width,
+            r.height,
+            r.timing_source,
+            methods()
+                .iter()
+                .map(|m| format!("{}: {}", m.name, m.source))
+                .collect::<Vec<_>>()
+                .join("; ")
+        ));
+    }
+    t
+}
+
+/// A figure of a row that the plot draws.
+type Measure = fn(&CullingRow) -> f64;
+
+/// Evaluations performed (left) and shading time (right) against light count, log-log, one
+/// line per method (the mean over scenes and spot fractions).
+pub fn plot(rows: &[CullingRow]) -> Option<Plot> {
+    use plotters::prelude::*;
+    let ok: Vec<&CullingRow> = rows
+        .iter()
+        .filter(|r| r.error.is_none() && r.evaluations > 0)
+        .collect();
+    let mut counts: Vec<u32> = ok.iter().map(|r| r.lights).collect();
+    counts.sort_unstable();
+    counts.dedup();
+    if counts.len() < 2 {
+        return None;
+    }
+    // Mean of `value` over a method's rows at each light count.
+    let series = |method: &str, value: Measure| -> Vec<(f64, f64)> {
+        counts
+            .iter()
+            .filter_map(|&n| {
+                let v: Vec<f64> = ok
+                    .iter()
+                    .filter(|r| r.method == method && r.lights == n)
+                    .map(|r| value(r))
+                    .filter(|&v| v > 0.0)
+                    .collect();
+                (!v.is_empty()).then(|| (n as f64, v.iter().sum::<f64>() / v.len() as f64))
+            })
+            .collect()
+    };
+    let panels: [(&str, Measure); 2] = [
+        ("light evaluations per frame", |r| r.evaluations as f64),
+        ("shading + assignment, ms", |r| {
+            r.shading_ms + r.assignment_ms
+        }),
+    ];
+    let x = (counts[0] as f64 * 0.8)..(*counts.last()? as f64 * 1.25);
+    crate::plot::svg(
+        "culling.svg",
+        "Culling: evaluations and time against light count",
+        (1100, 480),
+        |area| {
+            let halves = area.split_evenly((1, 2));
+            for ((label, value), half) in panels.iter().zip(halves.iter()) {
+                let all: Vec<f64> = ok.iter().map(|r| value(r)).filter(|&v| v > 0.0).collect();
+                let lo = all.iter().copied().fold(f64::MAX, f64::min) * 0.8;
+                let hi = all.iter().copied().fold(0.0, f64::max) * 1.25;
+                let mut chart = ChartBuilder::on(half)
+                    .caption(*label, ("sans-serif", 18))
+                    .margin(12)
+                    .x_label_area_size(40)
+                    .y_label_area_size(70)
+                    .build_cartesian_2d(x.clone().log_scale(), (lo..hi).log_scale())
+                    .ok()?;
+                chart
+                    .configure_mesh()
+                    .x_desc("lights")
+                    .y_desc(*label)
+                    .draw()
+                    .ok()?;
+                for (i, m) in methods().iter().enumerate() {
+                    let color = crate::plot::series_color(i);
+                    let points = series(m.name, *value);
+                    chart
+                        .draw_series(LineSeries::new(points.clone(), color.stroke_width(2)))
+                        .ok()?
+                        .label(m.name)
+                        .legend(move |(x, y)| {
+                            PathElement::new(vec![(x, y), (x + 16, y)], color.stroke_width(2))
+                        });
+                    chart
+                        .draw_series(points.iter().map(|&p| Circle::new(p, 3, color.filled())))
+                        .ok()?;
+                }
+                crate::plot::legend(&mut chart, SeriesLabelPosition::UpperLeft)?;
+            }
+            Some(())
+        },
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_method_makes_a_valid_variant() {
+        for m in methods() {
+            let problems = crate::variant::check(&m.variant((640, 360)));
+            assert!(problems.is_empty(), "{}: {problems:?}", m.name);
+        }
+    }
+}
