@@ -95,6 +95,12 @@ fn exact_variants() -> Vec<LoadedVariant> {
             &format!("{pipeline:?} z-binning"),
             zbin_variant(pipeline, (16, 9, 24)),
         ));
+        let mut two_level = depth_mask_variant(pipeline, (16, 9, 24), ZSlicing::Exponential);
+        two_level.clusters.as_mut().unwrap().big_tiles = Some(2);
+        out.push(loaded(&format!("{pipeline:?} two-level 2.5D"), two_level));
+        let mut v = clustered(pipeline, ZSlicing::Exponential);
+        v.clusters.as_mut().unwrap().big_tiles = Some(3);
+        out.push(loaded(&format!("{pipeline:?} two-level"), v));
     }
     let mut cpu = clustered(Pipeline::ClusteredForward, ZSlicing::Exponential);
     cpu.clusters.as_mut().unwrap().assignment = Assignment::Cpu;
@@ -1014,6 +1020,94 @@ fn zbins_keep_every_light_that_reaches_a_sample() {
             assert!(
                 !missing.is_empty(),
                 "{what}: the check missed the shortened bins"
+            );
+        }
+    }
+}
+
+/// Two-level culling changes how lists are built, never what they hold: on the GPU, the lists
+/// with big tiles equal those without, cluster by cluster (with and without active clusters,
+/// whose big tiles also cull by depth); in f64, every light of a cluster's exact list passes
+/// the coarse test of the cluster's big tile. A coarse test on a big tile one tile too
+/// narrow (a deliberate break) must reject some listed light.
+#[test]
+fn two_level_lists_equal_one_level_lists() {
+    let gpu = gpu();
+    let composer = Composer::default();
+    for (scene_name, lights, spots) in [
+        ("atrium", 700, 0.0),
+        ("atrium", 700, 0.5),
+        ("stage", 256, 1.0),
+    ] {
+        let mut params = small(scene_name, 128, 72, Some(lights));
+        params.spots = spots;
+        let scene = scene::generate(scene_name, params).unwrap();
+        let mut active = depth_mask_variant(
+            Pipeline::ClusteredForward,
+            (24, 16, 32),
+            ZSlicing::Exponential,
+        );
+        active.clusters.as_mut().unwrap().culling = Culling::Boxes;
+        let plain = clustered(Pipeline::ClusteredDeferred, ZSlicing::Exponential);
+        for (one_level, big) in [(active, 2), (plain, 3)] {
+            let mut two_level = one_level.clone();
+            two_level.clusters.as_mut().unwrap().big_tiles = Some(big);
+            let what = format!(
+                "{:?} big tiles {big} on {scene_name} ({spots} spots)",
+                one_level.clusters().grid
+            );
+            let lists = |v: &Variant| {
+                let mut r = Renderer::new(&gpu, &composer, v, &scene).unwrap();
+                r.render().unwrap();
+                r.cluster_lists().unwrap().unwrap()
+            };
+            let (one, two) = (lists(&one_level), lists(&two_level));
+            assert!(
+                one.indices.len() > 1000,
+                "{what}: {} entries",
+                one.indices.len()
+            );
+            for c in 0..one.counts.len() {
+                assert_eq!(one.list(c), two.list(c), "{what}: cluster {c}");
+            }
+            // f64: the lights of each cluster's exact list pass its big tile's coarse test.
+            let grid = Grid::of(&one_level, &scene);
+            let view_lights = cpu::view_lights(&scene.lights, scene.camera.view());
+            let want = cpu::assign(
+                &grid,
+                &cpu::cluster_bounds(&grid),
+                &view_lights,
+                SpotTest::Cone,
+                None,
+                None,
+                None,
+            );
+            let rejected = |narrower: u32| {
+                let mut rejected = 0;
+                for c in 0..want.counts.len() {
+                    let (x, y) = (c as u32 % grid.x, (c as u32 / grid.x) % grid.y);
+                    let (lo, hi) = cpu::big_tile(&grid, big, x, y);
+                    let hi = (
+                        hi.0.saturating_sub(narrower).max(lo.0),
+                        hi.1.saturating_sub(narrower).max(lo.1),
+                    );
+                    for &i in want.list(c) {
+                        let l = &view_lights[i as usize];
+                        if !cpu::sphere_touches_tiles(&grid, l.center, l.radius, lo, hi) {
+                            rejected += 1;
+                        }
+                    }
+                }
+                rejected
+            };
+            assert_eq!(
+                rejected(0),
+                0,
+                "{what}: the coarse test rejects listed lights"
+            );
+            assert!(
+                rejected(1) > 0,
+                "{what}: the check missed a big tile one tile too narrow"
             );
         }
     }

@@ -62,6 +62,10 @@ pub fn feature_flags(v: &Variant) -> Vec<(&'static str, bool)> {
             "zbinning",
             p.is_clustered() && clusters.culling == Culling::ZBinning,
         ),
+        (
+            "two_level",
+            p.is_clustered() && clusters.big_tiles.is_some(),
+        ),
         ("gbuffer_wide", deferred && layout == GBufferLayout::Wide),
         (
             "gbuffer_packed",
@@ -154,6 +158,7 @@ pub fn constants_module(v: &Variant) -> String {
         ("GRID_Y", clusters.grid.1),
         ("GRID_Z", clusters.grid.2),
         ("LIGHT_CAP", cap),
+        ("BIG_TILE", clusters.big_tiles.unwrap_or(1)),
         ("NORMAL_BITS", v.normal_codec().bits() / 2),
         ("TOON_BANDS", toon.bands),
         ("BLOOM_RADIUS", bloom.radius),

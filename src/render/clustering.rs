@@ -16,10 +16,21 @@ pub fn dispatch_size(n: u32, per_group: u32) -> u32 {
     n.div_ceil(per_group).max(1)
 }
 
-/// Compute entry points of a pass of a variant culling with `culling`, in dispatch order
-/// (`mark_visible` runs only for the counters; see [`encode_visible_count`]).
-pub fn entries(pass: ClusterPass, culling: Culling) -> &'static [&'static str] {
+/// Compute entry points of a pass of a variant culling with `culling` (and two levels or
+/// not), in dispatch order (`mark_visible` runs only for the counters; see
+/// [`encode_visible_count`]).
+pub fn entries(pass: ClusterPass, culling: Culling, two_level: bool) -> &'static [&'static str] {
     match pass {
+        ClusterPass::LightAssign if two_level => &[
+            "transform_lights",
+            "coarse_cull",
+            "count_clusters",
+            "scan_local",
+            "scan_blocks",
+            "fill_clusters",
+            "finish_lists",
+            "sort_long_lists",
+        ],
         ClusterPass::MarkActive if culling == Culling::DepthMask => {
             &["mark_active", "mark_visible", "mark_cells"]
         }
@@ -66,10 +77,15 @@ pub fn encode(
             encoder.clear_buffer(&c.active, 0, None);
             encoder.clear_buffer(&c.sample_depths, 0, None);
             encoder.clear_buffer(&c.depth_masks, 0, None);
+            encoder.clear_buffer(&c.big_tile_depths, 0, None);
         }
         ClusterPass::LightAssign if c.culling == Culling::ZBinning => {
             encoder.clear_buffer(&c.bin_ranges, 0, None);
             encoder.clear_buffer(&c.tile_masks, 0, None);
+        }
+        ClusterPass::LightAssign if c.big_tiles.is_some() => {
+            encoder.clear_buffer(&c.coarse_masks, 0, None);
+            encoder.clear_buffer(&c.sort_jobs, 0, Some(16));
         }
         ClusterPass::LightAssign => {
             encoder.clear_buffer(&c.counts, 0, None);
@@ -115,6 +131,15 @@ pub fn encode(
             ("sort_lights", (1, 1, 1)),
             ("bin_lights", (dispatch_size(l, 64), 1, 1)),
             ("mask_tiles", per_light),
+        ],
+        ClusterPass::LightAssign if c.big_tiles.is_some() => vec![
+            ("transform_lights", (dispatch_size(l, 64), 1, 1)),
+            ("coarse_cull", per_light),
+            ("count_clusters", (clusters, 1, 1)),
+            ("scan_local", (dispatch_size(c.clusters, SCAN_BLOCK), 1, 1)),
+            ("scan_blocks", (1, 1, 1)),
+            ("fill_clusters", (clusters, 1, 1)),
+            ("finish_lists", (clusters, 1, 1)),
         ],
         ClusterPass::LightAssign => vec![
             ("transform_lights", (dispatch_size(l, 64), 1, 1)),

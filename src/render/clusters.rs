@@ -62,13 +62,15 @@ mod binding {
     pub const LIGHT_ORDER: u32 = 14;
     pub const BIN_RANGES: u32 = 15;
     pub const TILE_MASKS: u32 = 16;
+    pub const COARSE_MASKS: u32 = 17;
+    pub const BIG_TILE_DEPTHS: u32 = 18;
 }
 
 /// Bytes of an indirect dispatch's arguments (x, y, z).
 pub const SORT_DISPATCH_BYTES: u64 = 12;
 
 /// Clusters of one scan workgroup (`SCAN_BLOCK` in light_assign.wesl).
-pub const SCAN_BLOCK: u32 = 256;
+pub const SCAN_BLOCK: u32 = 1024;
 
 pub struct ClusterBuffers {
     pub clusters: u32,
@@ -98,6 +100,12 @@ pub struct ClusterBuffers {
     pub light_order: wgpu::Buffer,
     pub bin_ranges: wgpu::Buffer,
     pub tile_masks: wgpu::Buffer,
+    /// Two-level culling: per big tile, a mask of the lights that survive its coarse test.
+    pub coarse_masks: wgpu::Buffer,
+    /// Two-level culling with active clusters: each big tile's sample depth range.
+    pub big_tile_depths: wgpu::Buffer,
+    /// Tiles per big tile side with two-level culling.
+    pub big_tiles: Option<u32>,
     /// The grid: tiles across, tiles down, slices (z-binning's bins).
     pub grid: (u32, u32, u32),
     pub lights: u32,
@@ -149,8 +157,9 @@ fn storage(gpu: &Gpu, label: &str, size: u64) -> wgpu::Buffer {
 }
 
 impl ClusterBuffers {
-    /// The buffers of `culling` on `grid` for `lights` lights; the buffers a method does not
-    /// use are 16-byte placeholders (every binding exists in every variant's layout).
+    /// The buffers of `culling` on `grid` for `lights` lights (with two-level culling over
+    /// big tiles of `big_tiles` tiles a side); the buffers a method does not use are 16-byte
+    /// placeholders (every binding exists in every variant's layout).
     pub fn new(
         gpu: &Gpu,
         grid: (u32, u32, u32),
@@ -158,6 +167,7 @@ impl ClusterBuffers {
         index_capacity: u32,
         range: ClusterRange,
         culling: Culling,
+        big_tiles: Option<u32>,
     ) -> Self {
         let clusters = grid.0 * grid.1 * grid.2;
         let n = clusters as u64;
@@ -217,6 +227,19 @@ impl ClusterBuffers {
                 "tile masks",
                 sized(zbin, (grid.0 * grid.1) as u64 * words * 4),
             ),
+            coarse_masks: storage(
+                gpu,
+                "coarse masks",
+                big_tiles.map_or(16, |b| {
+                    (grid.0.div_ceil(b) * grid.1.div_ceil(b)) as u64 * words * 4
+                }),
+            ),
+            big_tile_depths: storage(
+                gpu,
+                "big tile depths",
+                big_tiles.map_or(16, |b| (grid.0.div_ceil(b) * grid.1.div_ceil(b)) as u64 * 8),
+            ),
+            big_tiles,
             grid,
             lights,
             culling,
@@ -244,6 +267,8 @@ impl ClusterBuffers {
             &self.light_order,
             &self.bin_ranges,
             &self.tile_masks,
+            &self.coarse_masks,
+            &self.big_tile_depths,
         ]
         .iter()
         .map(|b| b.size())
@@ -277,6 +302,8 @@ impl ClusterBuffers {
             binding::LIGHT_ORDER => &self.light_order,
             binding::BIN_RANGES => &self.bin_ranges,
             binding::TILE_MASKS => &self.tile_masks,
+            binding::COARSE_MASKS => &self.coarse_masks,
+            binding::BIG_TILE_DEPTHS => &self.big_tile_depths,
             _ => return None,
         })
     }

@@ -335,7 +335,11 @@ impl<'g> Renderer<'g> {
                 gpu,
                 composed,
                 l,
-                clustering::entries(p, self.variant.clusters().culling),
+                clustering::entries(
+                    p,
+                    self.variant.clusters().culling,
+                    self.variant.clusters().big_tiles.is_some(),
+                ),
             )?),
             PassId::Post(_) => return Ok(None),
         };

@@ -20,7 +20,11 @@ pub const LIGHT_COUNTS: [u32; 4] = [64, 1024, 4096, 16384];
 pub const SPOT_FRACTIONS: [f32; 2] = [0.0, 0.5];
 
 /// Harada 2012 and Olsson 2012 work with 32 x 32 pixel tiles.
-const TILE_PIXELS: u32 = 32;
+const OLSSON_TILE: u32 = 32;
+/// The fine grids' tiles: 10 pixels (64 x 36 at 640 x 360).
+const FINE_TILE: u32 = 10;
+/// Z-binning's tiles: 16 pixels.
+const ZBIN_TILE: u32 = 16;
 
 /// A culling method: its name, what it is, and its Forward+ variant at an image size.
 pub struct Method {
@@ -31,14 +35,19 @@ pub struct Method {
     /// Active clusters with boxes shrunk to their samples.
     sample_bounds: bool,
     culling: Culling,
+    /// Two-level culling's big tiles, in tiles a side.
+    big_tiles: Option<u32>,
+    /// Tile size in pixels (None: the grid is fixed).
+    tile_pixels: Option<u32>,
 }
 
 impl Method {
     /// The Forward+ variant (depth pre-pass) of this method for a `size` image.
     pub fn variant(&self, size: (u32, u32)) -> Variant {
+        let px = self.tile_pixels.unwrap_or(OLSSON_TILE);
         let tiles = (
-            size.0.div_ceil(TILE_PIXELS).clamp(1, 128),
-            size.1.div_ceil(TILE_PIXELS).clamp(1, 128),
+            size.0.div_ceil(px).clamp(1, 128),
+            size.1.div_ceil(px).clamp(1, 128),
         );
         Variant {
             description: format!("culling study: {}", self.name),
@@ -50,6 +59,7 @@ impl Method {
                 active_clusters: self.sample_bounds,
                 sample_bounds: self.sample_bounds,
                 culling: self.culling,
+                big_tiles: self.big_tiles,
                 ..Clusters::default()
             }),
             ..Variant::default()
@@ -59,30 +69,38 @@ impl Method {
 
 /// Every method the study compares.
 pub fn methods() -> Vec<Method> {
+    let base = Method {
+        name: "",
+        source: "",
+        grid: |_| (16, 9, 24),
+        slicing: ZSlicing::Exponential,
+        sample_bounds: false,
+        culling: Culling::Boxes,
+        big_tiles: None,
+        tile_pixels: None,
+    };
     vec![
         Method {
             name: "clusters 16x9x24",
-            source: "the default grid: exponential slices, boxes (Olsson 2012 without bounds)",
-            grid: |_| (16, 9, 24),
-            slicing: ZSlicing::Exponential,
-            sample_bounds: false,
-            culling: Culling::Boxes,
+            source: "the default grid: exponential slices, boxes",
+            ..base
         },
         Method {
             name: "tiled, depth bounds",
             source: "Harada 2012: 32-pixel tiles, each between its samples' min and max depth",
             grid: |(x, y)| (x, y, 1),
-            slicing: ZSlicing::Exponential,
             sample_bounds: true,
-            culling: Culling::Boxes,
+            tile_pixels: Some(OLSSON_TILE),
+            ..base
         },
         Method {
             name: "tiled 2.5D",
             source: "Harada 2012: depth bounds and a 32-cell mask of the depths holding geometry",
             grid: |(x, y)| (x, y, 1),
-            slicing: ZSlicing::Exponential,
             sample_bounds: true,
             culling: Culling::DepthMask,
+            tile_pixels: Some(OLSSON_TILE),
+            ..base
         },
         Method {
             name: "Olsson explicit bounds",
@@ -90,7 +108,8 @@ pub fn methods() -> Vec<Method> {
             grid: |(x, y)| (x, y, 256),
             slicing: ZSlicing::OlssonCubic,
             sample_bounds: true,
-            culling: Culling::Boxes,
+            tile_pixels: Some(OLSSON_TILE),
+            ..base
         },
         Method {
             name: "Olsson + 2.5D",
@@ -99,6 +118,33 @@ pub fn methods() -> Vec<Method> {
             slicing: ZSlicing::OlssonCubic,
             sample_bounds: true,
             culling: Culling::DepthMask,
+            tile_pixels: Some(OLSSON_TILE),
+            ..base
+        },
+        Method {
+            name: "z-binning",
+            source: "Drobot 2017: 16-pixel tiles of light bitmasks, 128 exponential depth bins",
+            grid: |(x, y)| (x, y, 128),
+            culling: Culling::ZBinning,
+            tile_pixels: Some(ZBIN_TILE),
+            ..base
+        },
+        Method {
+            name: "fine clusters",
+            source: "10-pixel tiles, 24 exponential slices, active clusters, sample bounds",
+            grid: |(x, y)| (x, y, 24),
+            sample_bounds: true,
+            tile_pixels: Some(FINE_TILE),
+            ..base
+        },
+        Method {
+            name: "fine clusters, two-level",
+            source: "the same with HDRP's two-level culling: big tiles of 2x2 tiles first",
+            grid: |(x, y)| (x, y, 24),
+            sample_bounds: true,
+            big_tiles: Some(2),
+            tile_pixels: Some(FINE_TILE),
+            ..base
         },
     ]
 }

@@ -23,6 +23,8 @@ pub const NORMAL_BITS: [u32; 4] = [16, 20, 24, 32];
 pub const MAX_GRID_XY: u32 = 128;
 pub const MAX_GRID_Z: u32 = 256;
 pub const MAX_CLUSTERS: u32 = 1 << 18;
+/// Most tiles per big tile side in two-level culling.
+pub const MAX_BIG_TILES: u32 = 32;
 pub const MAX_CAP: u32 = 1024;
 
 /// Every problem of a parsed variant, in field order; empty when the variant is valid.
@@ -177,6 +179,20 @@ fn check_clusters(c: &Clusters, v: &Variant, out: &mut Vec<Problem>) {
             out.push(problem(
                 "debug_view",
                 "ZBinning keeps no per-cluster light counts: use ClusterIndex or ZSlice, or another culling",
+            ));
+        }
+    }
+    if let Some(n) = c.big_tiles {
+        if !(1..=MAX_BIG_TILES).contains(&n) {
+            out.push(problem(
+                "clusters.big_tiles",
+                format!("is {n}; it must be in 1..={MAX_BIG_TILES} (tiles per big tile side)"),
+            ));
+        }
+        if c.culling == Culling::ZBinning || c.assignment == Assignment::Cpu {
+            out.push(problem(
+                "clusters.big_tiles",
+                "two-level culling builds per-cluster lists on the GPU: remove `big_tiles`, or use Boxes or DepthMask culling with Gpu assignment",
             ));
         }
     }

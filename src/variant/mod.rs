@@ -3,7 +3,9 @@
 mod check;
 mod schema;
 
-pub use check::{MAX_CAP, MAX_CLUSTERS, MAX_GRID_XY, MAX_GRID_Z, NORMAL_BITS, Problem, check};
+pub use check::{
+    MAX_BIG_TILES, MAX_CAP, MAX_CLUSTERS, MAX_GRID_XY, MAX_GRID_Z, NORMAL_BITS, Problem, check,
+};
 pub use schema::*;
 
 use std::path::{Path, PathBuf};

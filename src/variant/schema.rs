@@ -132,6 +132,13 @@ pub struct Clusters {
     /// `active_clusters` and `sample_bounds`; `DepthMask` on such a grid is Harada's 2.5D
     /// culling.
     pub culling: Culling,
+    /// Two-level culling (as HDRP does): a coarse pass first culls the lights per big tile of
+    /// n x n tiles; each cluster then tests only its big tile's survivors, one invocation per
+    /// cluster, skipping inactive clusters at once, and its list comes out in index order
+    /// with no sort. HDRP: 64-pixel big tiles over 16-pixel tiles, n = 4. n in 1..=32;
+    /// left out, each light tests every cluster of its range. Not with `ZBinning` or `Cpu`
+    /// assignment.
+    pub big_tiles: Option<u32>,
 }
 
 impl Default for Clusters {
@@ -145,6 +152,7 @@ impl Default for Clusters {
             sample_bounds: false,
             spot_test: SpotTest::Cone,
             culling: Culling::Boxes,
+            big_tiles: None,
         }
     }
 }
