@@ -1028,8 +1028,8 @@ fn zbins_keep_every_light_that_reaches_a_sample() {
 /// Two-level culling changes how lists are built, never what they hold: on the GPU, the lists
 /// with big tiles equal those without, cluster by cluster (with and without active clusters,
 /// whose big tiles also cull by depth); in f64, every light of a cluster's exact list passes
-/// the coarse test of the cluster's big tile. A coarse test on a big tile one tile too
-/// narrow (a deliberate break) must reject some listed light.
+/// the coarse test of the big tile `cpu::clusters::big_tile` puts the cluster in. A coarse
+/// test on a big tile one tile too narrow (a deliberate break) must reject some listed light.
 #[test]
 fn two_level_lists_equal_one_level_lists() {
     let gpu = gpu();
@@ -1093,7 +1093,7 @@ fn two_level_lists_equal_one_level_lists() {
                     );
                     for &i in want.list(c) {
                         let l = &view_lights[i as usize];
-                        if !cpu::sphere_touches_tiles(&grid, l.center, l.radius, lo, hi) {
+                        if !cpu::coarse_keeps(&grid, l.center, l.radius, lo, hi) {
                             rejected += 1;
                         }
                     }

@@ -9,7 +9,7 @@ use clusterlab::cpu::normals as codec;
 use clusterlab::cpu::zslice::Slices;
 use clusterlab::scene::Light;
 use clusterlab::twins::{gpu_codecs, gpu_zslices};
-use clusterlab::variant::{NormalCodec, SpotTest, ZSlicing};
+use clusterlab::variant::{Culling, NormalCodec, SpotTest, ZSlicing};
 use glam::DVec3;
 use proptest::prelude::*;
 use proptest::strategy::ValueTree;
@@ -516,7 +516,8 @@ fn the_round_trip_bound_rejects_the_old_acos_polar_encoder() {
 
 /// The GPU's light assignment never leaves a light out of a cluster it touches, for any
 /// set of lights (positions anywhere around and inside the frustum, any radius), camera,
-/// grid and slicing scheme.
+/// grid, slicing scheme and culling method that lists every cluster (boxes, z-binning, and
+/// two-level culling over big tiles of any size).
 #[test]
 fn gpu_light_assignment_keeps_every_touching_light() {
     use clusterlab::scene::Light;
@@ -554,12 +555,13 @@ fn gpu_light_assignment_keeps_every_touching_light() {
         1u32..=32,
         1u32..=48,
         any::<proptest::sample::Index>(),
+        (0u32..3, 1u32..=6),
     );
     let mut runner = TestRunner::new(Config::with_cases(16));
     runner
         .run(
             &(proptest::collection::vec(light, 1..200), camera, grid),
-            |(lights, (eye, target, fov), (gx, gy, gz, pick))| {
+            |(lights, (eye, target, fov), (gx, gy, gz, pick, (method, big)))| {
                 let mut scene = base.clone();
                 scene.params.lights = lights.len() as u32;
                 scene.lights = lights;
@@ -578,13 +580,20 @@ fn gpu_light_assignment_keeps_every_touching_light() {
                         1
                     };
                     c.grid = (gx, gy, gz.max(min_z));
+                    match method {
+                        0 => {}
+                        1 => c.culling = Culling::ZBinning,
+                        _ => c.big_tiles = Some(big),
+                    }
                     let v = &v;
                     let (count, first) =
                         clusterlab::stress::missing_lights(&gpu, &composer, v, &scene)
                             .map_err(TestCaseError::fail)?;
                     prop_assert!(
                         count == 0,
-                        "{name}: {count} missing, first {}",
+                        "{name} ({:?}, big tiles {:?}): {count} missing, first {}",
+                        v.clusters().culling,
+                        v.clusters().big_tiles,
                         first.unwrap_or_default()
                     );
                 }

@@ -177,6 +177,19 @@ pub fn sphere_touches_tiles(
         && reaches(center.y, top, -1.0)
 }
 
+/// Two-level culling's coarse test of a sphere on the big tile of tiles `lo` to `hi`: the
+/// side-plane test of some tile of it (the union of the fine tests, so it never culls a light
+/// a cluster's test keeps).
+pub fn coarse_keeps(
+    grid: &Grid,
+    center: DVec3,
+    radius: f64,
+    lo: (u32, u32),
+    hi: (u32, u32),
+) -> bool {
+    (lo.1..=hi.1).any(|y| (lo.0..=hi.0).any(|x| sphere_touches_tile(grid, center, radius, x, y)))
+}
+
 /// Two-level culling's big tile of tile (x, y), `n` tiles a side: its first and last tile.
 pub fn big_tile(grid: &Grid, n: u32, x: u32, y: u32) -> ((u32, u32), (u32, u32)) {
     let lo = (x / n * n, y / n * n);

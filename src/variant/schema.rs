@@ -133,7 +133,8 @@ pub struct Clusters {
     /// culling.
     pub culling: Culling,
     /// Two-level culling (as HDRP does): a coarse pass first culls the lights per big tile of
-    /// n x n tiles; each cluster then tests only its big tile's survivors, one invocation per
+    /// n x n tiles (by its tiles' side planes and, with sample bounds, its samples' depth
+    /// range); each cluster then tests only its big tile's survivors, one invocation per
     /// cluster, skipping inactive clusters at once, and its list comes out in index order
     /// with no sort. HDRP: 64-pixel big tiles over 16-pixel tiles, n = 4. n in 1..=32;
     /// left out, each light tests every cluster of its range. Not with `ZBinning` or `Cpu`
