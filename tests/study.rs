@@ -8,7 +8,7 @@ use std::process::Command;
 
 use clusterlab::compose::Composer;
 use clusterlab::gpu::expect::{self, Allowance, Check};
-use clusterlab::study::{codecs, depth, slicing};
+use clusterlab::study::{codecs, culling, depth, slicing};
 
 fn rel(a: f64, b: f64) -> f64 {
     (a - b).abs() / b.abs().max(1e-30)
@@ -219,6 +219,63 @@ fn slicing_counts_what_shading_does() {
     // The culling differs: finer grids and schemes perform different numbers of evaluations.
     let performed: std::collections::BTreeSet<u64> = rows.iter().map(|r| r.evaluations).collect();
     assert!(performed.len() > rows.len() / 2, "{performed:?}");
+}
+
+/// The culling study: every method at each light count and spot fraction, exact (each finds
+/// naive forward's useful evaluations on the same frame), with its own list memory; the
+/// exactness verdict fails when one method counts one useful evaluation less.
+#[test]
+fn culling_counts_what_shading_does() {
+    let gpu = common::gpu();
+    let composer = Composer::default();
+    let size = (96, 54);
+    let counts = [64, 256];
+    let rows = culling::run(&gpu, &composer, &["atrium"], size, &counts, 1).expect("culling study");
+    let methods = culling::methods();
+    assert_eq!(
+        rows.len(),
+        counts.len() * culling::SPOT_FRACTIONS.len() * methods.len()
+    );
+    for &lights in &counts {
+        for spots in culling::SPOT_FRACTIONS {
+            let mut params = common::small("atrium", size.0, size.1, Some(lights));
+            params.spots = spots;
+            let scene = clusterlab::scene::generate("atrium", params).expect("atrium");
+            let naive = clusterlab::variant::Variant {
+                depth_prepass: true,
+                ..Default::default()
+            };
+            let mut r = clusterlab::render::Renderer::new(&gpu, &composer, &naive, &scene)
+                .expect("naive forward");
+            r.render().expect("frame");
+            let useful = r.stats().expect("counters").useful_light_evals;
+            assert!(useful > 0);
+            let group: Vec<&culling::CullingRow> = rows
+                .iter()
+                .filter(|r| r.lights == lights && r.spot_fraction == spots)
+                .collect();
+            assert_eq!(group.len(), methods.len());
+            for r in group {
+                let what = format!("{} at {lights} lights, spots {spots}", r.method);
+                assert!(r.error.is_none(), "{what}: {:?}", r.error);
+                assert_eq!(r.useful_evaluations, useful, "{what}");
+                assert!(r.evaluations >= r.useful_evaluations, "{what}");
+                assert!(r.worst_list > 0 && r.worst_list <= lights, "{what}");
+                assert!(r.list_bytes > 0 && r.shading_ms > 0.0, "{what}");
+            }
+        }
+    }
+    assert!(culling::all_exact(&rows));
+    let mut short = rows.clone();
+    short[3].useful_evaluations -= 1;
+    assert!(
+        !culling::all_exact(&short),
+        "a method that lost one useful evaluation passed"
+    );
+    // Z-binning keeps bins and one bit per light and tile, not per-cluster lists.
+    let bytes = |m: &str| rows.iter().find(|r| r.method == m).expect(m).list_bytes;
+    assert!(bytes("z-binning") < bytes("fine clusters"));
+    assert!(culling::plot(&rows).is_some());
 }
 
 #[test]

@@ -199,16 +199,37 @@ impl<'g> Renderer<'g> {
             }
         }
         check_for_scene(variant, scene)?;
-        // Every pipeline but scissor deferred loops over up to all the lights per pixel.
+        // Every pipeline but scissor deferred loops over up to all the lights per pixel; a
+        // walk through light bitmasks (z-binning's light loop, two-level culling's clusters)
+        // also loops once per 32-bit word of them.
+        let c = variant.clusters();
+        let mask_words = if variant.pipeline.is_clustered()
+            && (c.culling == crate::variant::Culling::ZBinning || c.big_tiles.is_some())
+        {
+            scene.lights.len().div_ceil(32) + 1
+        } else {
+            0
+        };
         if let Some(limit) = crate::gpu::expect::max_lights_per_pixel(gpu)
             && variant.pipeline != Pipeline::DeferredScissor
-            && scene.lights.len() > limit as usize
+            && scene.lights.len() + mask_words > limit as usize
         {
+            // The most lights n that fit: n + ceil(n / 32) + 1 <= limit with bitmasks.
+            let most = if mask_words > 0 {
+                (limit as usize - 1) * 32 / 33
+            } else {
+                limit as usize
+            };
             return Err(RenderError::Gpu(GpuError::TooLarge(format!(
-                "{} lights: adapter `{}` ends a shader's loops after {} iterations in all, so a light loop over more than {limit} lights would leave lights out without a word; use at most {limit} lights on this adapter, or scissor deferred",
+                "{} lights: adapter `{}` ends a shader's loops after {} iterations in all, so a light loop over more than {most} lights{} would leave lights out without a word; use at most {most} lights on this adapter, or scissor deferred",
                 scene.lights.len(),
                 gpu.adapter.name,
-                crate::gpu::expect::LLVMPIPE_LOOP_ITERATIONS
+                crate::gpu::expect::LLVMPIPE_LOOP_ITERATIONS,
+                if mask_words > 0 {
+                    " and their bitmask words"
+                } else {
+                    ""
+                }
             ))));
         }
         let still_camera = scene.camera == scene.prev_camera;

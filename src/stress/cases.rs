@@ -38,11 +38,19 @@ fn variant(description: &str, pipeline: Pipeline) -> Variant {
     }
 }
 
-/// Every pipeline, exact (full-precision G-buffer, exact lists).
+/// Every pipeline, exact (full-precision G-buffer, exact lists), and Forward+ with each
+/// culling method that lists every cluster: z-binning, and two-level culling.
 pub fn pipelines() -> Vec<(String, Variant)> {
-    Pipeline::iter()
+    let mut out: Vec<(String, Variant)> = Pipeline::iter()
         .map(|p| (p.short_name().to_string(), variant(p.short_name(), p)))
-        .collect()
+        .collect();
+    let mut zbin = variant("forward_plus_zbinning", Pipeline::ClusteredForward);
+    zbin.clusters.as_mut().expect("clustered").culling = Culling::ZBinning;
+    out.push(("forward_plus_zbinning".into(), zbin));
+    let mut two_level = variant("forward_plus_two_level", Pipeline::ClusteredForward);
+    two_level.clusters.as_mut().expect("clustered").big_tiles = Some(2);
+    out.push(("forward_plus_two_level".into(), two_level));
+    out
 }
 
 /// The clustered pipelines only.
