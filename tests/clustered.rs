@@ -744,6 +744,24 @@ fn long_lists_are_sorted_and_complete() {
     }
 }
 
+/// The scenes the culling tests run on, 128x72, with a label: the atrium with 700 lights,
+/// none and half of them spots, and the stage's 256 spots.
+fn culling_scenes() -> Vec<(String, Scene)> {
+    [
+        ("atrium", 700, 0.0),
+        ("atrium", 700, 0.5),
+        ("stage", 256, 1.0),
+    ]
+    .into_iter()
+    .map(|(name, lights, spots)| {
+        let mut params = small(name, 128, 72, Some(lights));
+        params.spots = spots;
+        let scene = scene::generate(name, params).unwrap();
+        (format!("{name} ({spots} spots)"), scene)
+    })
+    .collect()
+}
+
 /// Whether `light` clearly reaches world point `p`: closer than its radius by a relative
 /// 1e-4 and inside its outer cone by 2e-6 in cosine, so no rounding of the GPU's can decide
 /// it otherwise.
@@ -820,14 +838,7 @@ fn missing_lights(
 fn depth_masks_keep_every_light_that_reaches_a_sample() {
     let gpu = gpu();
     let composer = Composer::default();
-    for (scene_name, lights, spots) in [
-        ("atrium", 512, 0.0),
-        ("atrium", 512, 0.5),
-        ("stage", 256, 1.0),
-    ] {
-        let mut params = small(scene_name, 128, 72, Some(lights));
-        params.spots = spots;
-        let scene = scene::generate(scene_name, params).unwrap();
+    for (label, scene) in culling_scenes() {
         for v in [
             depth_mask_variant(
                 Pipeline::ClusteredForward,
@@ -840,11 +851,7 @@ fn depth_masks_keep_every_light_that_reaches_a_sample() {
                 ZSlicing::Exponential,
             ),
         ] {
-            let what = format!(
-                "{:?} {:?} on {scene_name} ({spots} spots)",
-                v.pipeline,
-                v.clusters().grid
-            );
+            let what = format!("{:?} {:?} on {label}", v.pipeline, v.clusters().grid);
             let mut r = Renderer::new(&gpu, &composer, &v, &scene).unwrap();
             r.render().unwrap();
             let gpu_lists = r.cluster_lists().unwrap().unwrap();
@@ -940,23 +947,12 @@ fn depth_masks_keep_every_light_that_reaches_a_sample() {
 fn zbins_keep_every_light_that_reaches_a_sample() {
     let gpu = gpu();
     let composer = Composer::default();
-    for (scene_name, lights, spots) in [
-        ("atrium", 700, 0.0),
-        ("atrium", 700, 0.5),
-        ("stage", 256, 1.0),
-    ] {
-        let mut params = small(scene_name, 128, 72, Some(lights));
-        params.spots = spots;
-        let scene = scene::generate(scene_name, params).unwrap();
+    for (label, scene) in culling_scenes() {
         for v in [
             zbin_variant(Pipeline::ClusteredForward, (16, 9, 24)),
             zbin_variant(Pipeline::ClusteredDeferred, (8, 8, 64)),
         ] {
-            let what = format!(
-                "{:?} {:?} on {scene_name} ({spots} spots)",
-                v.pipeline,
-                v.clusters().grid
-            );
+            let what = format!("{:?} {:?} on {label}", v.pipeline, v.clusters().grid);
             let mut r = Renderer::new(&gpu, &composer, &v, &scene).unwrap();
             r.render().unwrap();
             let gpu_lists = r.cluster_lists().unwrap().unwrap();
@@ -1034,14 +1030,7 @@ fn zbins_keep_every_light_that_reaches_a_sample() {
 fn two_level_lists_equal_one_level_lists() {
     let gpu = gpu();
     let composer = Composer::default();
-    for (scene_name, lights, spots) in [
-        ("atrium", 700, 0.0),
-        ("atrium", 700, 0.5),
-        ("stage", 256, 1.0),
-    ] {
-        let mut params = small(scene_name, 128, 72, Some(lights));
-        params.spots = spots;
-        let scene = scene::generate(scene_name, params).unwrap();
+    for (label, scene) in culling_scenes() {
         let mut active = depth_mask_variant(
             Pipeline::ClusteredForward,
             (24, 16, 32),
@@ -1052,10 +1041,7 @@ fn two_level_lists_equal_one_level_lists() {
         for (one_level, big) in [(active, 2), (plain, 3)] {
             let mut two_level = one_level.clone();
             two_level.clusters.as_mut().unwrap().big_tiles = Some(big);
-            let what = format!(
-                "{:?} big tiles {big} on {scene_name} ({spots} spots)",
-                one_level.clusters().grid
-            );
+            let what = format!("{:?} big tiles {big} on {label}", one_level.clusters().grid);
             let lists = |v: &Variant| {
                 let mut r = Renderer::new(&gpu, &composer, v, &scene).unwrap();
                 r.render().unwrap();

@@ -146,27 +146,15 @@ pub fn sphere_touches_cluster(
 }
 
 /// Whether a sphere reaches the inner side of the four side planes of tile (x, y)'s frustum
-/// (the tile test of z-binning; with the box test, the cluster test).
+/// (the tile test of z-binning and two-level culling; with the box test, the cluster test).
 pub fn sphere_touches_tile(grid: &Grid, center: DVec3, radius: f64, x: u32, y: u32) -> bool {
-    sphere_touches_tiles(grid, center, radius, (x, y), (x, y))
-}
-
-/// Whether a sphere reaches the inner side of the four side planes around tiles `lo` to
-/// `hi` (inclusive): the frustum of that rectangle of tiles (two-level culling's big tiles).
-pub fn sphere_touches_tiles(
-    grid: &Grid,
-    center: DVec3,
-    radius: f64,
-    lo: (u32, u32),
-    hi: (u32, u32),
-) -> bool {
     let sx = grid.tan_half_fov_y * grid.aspect;
     let sy = grid.tan_half_fov_y;
     let step = (2.0 / grid.x as f64, 2.0 / grid.y as f64);
-    let left = (-1.0 + lo.0 as f64 * step.0) * sx;
-    let right = (-1.0 + (hi.0 + 1) as f64 * step.0) * sx;
-    let top = (1.0 - lo.1 as f64 * step.1) * sy;
-    let bottom = (1.0 - (hi.1 + 1) as f64 * step.1) * sy;
+    let left = (-1.0 + x as f64 * step.0) * sx;
+    let right = (-1.0 + (x + 1) as f64 * step.0) * sx;
+    let top = (1.0 - y as f64 * step.1) * sy;
+    let bottom = (1.0 - (y + 1) as f64 * step.1) * sy;
     // Signed distance to the plane through the eye holding the rays coord = s (-z).
     let reaches = |coord: f64, s: f64, sign: f64| {
         sign * (coord + s * center.z) / (1.0 + s * s).sqrt() >= -radius * (1.0 + PLANE_SLACK) - 1e-6

@@ -3,15 +3,13 @@
 //! useful, the worst tile or cluster, assignment and shading time, and list memory.
 
 use serde::Serialize;
-use strum::IntoEnumIterator;
 
-use super::StudyError;
 use super::table::{Table, sig};
-use crate::compose::{ClusterPass, Composer};
+use super::{StudyError, measure};
+use crate::compose::Composer;
 use crate::gpu::Gpu;
 use crate::plot::Plot;
-use crate::render::Renderer;
-use crate::scene::{Scene, SceneParams};
+use crate::scene::SceneParams;
 use crate::variant::{Clusters, Culling, Pipeline, Variant, ZSlicing};
 
 /// Light counts of the study.
@@ -180,44 +178,6 @@ pub struct CullingRow {
     pub error: Option<String>,
 }
 
-struct Measured {
-    stats: crate::render::FrameStats,
-    assignment_ms: f64,
-    shading_ms: f64,
-    frame_ms: f64,
-    timestamps: bool,
-}
-
-fn measure(
-    gpu: &Gpu,
-    composer: &Composer,
-    variant: &Variant,
-    scene: &Scene,
-    frames: u32,
-) -> Result<Measured, StudyError> {
-    let mut renderer = Renderer::new(gpu, composer, variant, scene)?;
-    renderer.render()?;
-    let (mut assignment, mut shading, mut frame) = (Vec::new(), Vec::new(), Vec::new());
-    let mut timestamps = false;
-    for _ in 0..frames.max(1) {
-        let f = renderer.render()?;
-        timestamps = f.timings.gpu_timestamps;
-        let building: f64 = ClusterPass::iter()
-            .map(|p| f.timings.get(<&str>::from(p)))
-            .sum();
-        assignment.push(building);
-        shading.push(f.timings.get("forward"));
-        frame.push(f.timings.total_ms());
-    }
-    Ok(Measured {
-        stats: renderer.stats()?,
-        assignment_ms: crate::run::median(assignment),
-        shading_ms: crate::run::median(shading),
-        frame_ms: crate::run::median(frame),
-        timestamps,
-    })
-}
-
 /// Run every method on each scene at `size`, at each of `light_counts` and both spot
 /// fractions. A failing run is reported in its row; the others go on.
 pub fn run(
@@ -287,12 +247,7 @@ pub fn run(
                             row.shading_ms = r.shading_ms;
                             row.frame_ms = r.frame_ms;
                             row.list_bytes = s.cluster_bytes;
-                            row.timing_source = if r.timestamps {
-                                "timestamps"
-                            } else {
-                                "wall clock"
-                            }
-                            .into();
+                            row.timing_source = r.timing_source.into();
                         }
                         Err(e) => row.error = Some(e.to_string()),
                     }

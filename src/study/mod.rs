@@ -20,6 +20,57 @@ pub use table::Table;
 
 use crate::plot::Plot;
 
+/// A Forward+ variant measured on a scene: its counters and the medians of its timed frames.
+pub(crate) struct Measured {
+    pub stats: crate::render::FrameStats,
+    /// The whole frame, ms.
+    pub frame_ms: f64,
+    /// The shading pass (the light loop), ms.
+    pub shading_ms: f64,
+    /// Every pass that builds the light lists (depth range, marking, boxes, assignment), ms.
+    pub assignment_ms: f64,
+    /// "timestamps" or "wall clock".
+    pub timing_source: &'static str,
+}
+
+/// Render `variant` on `scene`: one untimed frame, `frames` timed ones (at least one), then
+/// the instrumented frame's counters.
+pub(crate) fn measure(
+    gpu: &Gpu,
+    composer: &Composer,
+    variant: &crate::variant::Variant,
+    scene: &crate::scene::Scene,
+    frames: u32,
+) -> Result<Measured, StudyError> {
+    use strum::IntoEnumIterator;
+    let mut renderer = crate::render::Renderer::new(gpu, composer, variant, scene)?;
+    renderer.render()?;
+    let (mut frame, mut shading, mut assignment) = (Vec::new(), Vec::new(), Vec::new());
+    let mut timestamps = false;
+    for _ in 0..frames.max(1) {
+        let f = renderer.render()?;
+        timestamps = f.timings.gpu_timestamps;
+        frame.push(f.timings.total_ms());
+        shading.push(f.timings.get("forward"));
+        assignment.push(
+            crate::compose::ClusterPass::iter()
+                .map(|p| f.timings.get(<&str>::from(p)))
+                .sum(),
+        );
+    }
+    Ok(Measured {
+        stats: renderer.stats()?,
+        frame_ms: crate::run::median(frame),
+        shading_ms: crate::run::median(shading),
+        assignment_ms: crate::run::median(assignment),
+        timing_source: if timestamps {
+            "timestamps"
+        } else {
+            "wall clock"
+        },
+    })
+}
+
 /// The studies.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 pub enum StudyName {

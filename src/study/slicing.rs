@@ -3,12 +3,11 @@
 
 use serde::Serialize;
 
-use super::StudyError;
 use super::table::{Table, sig};
+use super::{Measured, StudyError, measure};
 use crate::compose::Composer;
 use crate::gpu::Gpu;
 use crate::plot::Plot;
-use crate::render::Renderer;
 use crate::scene::{Scene, SceneParams};
 use crate::variant::{Clusters, Pipeline, Variant, ZSlicing};
 
@@ -114,38 +113,6 @@ fn configs(size: (u32, u32), near: f64, far: f64) -> Vec<Config> {
     out
 }
 
-fn measure(
-    gpu: &Gpu,
-    composer: &Composer,
-    variant: &Variant,
-    scene: &Scene,
-    frames: u32,
-) -> Result<Measured, StudyError> {
-    let mut renderer = Renderer::new(gpu, composer, variant, scene)?;
-    renderer.render()?;
-    let (mut frame, mut shading) = (Vec::new(), Vec::new());
-    let mut timestamps = false;
-    for _ in 0..frames.max(1) {
-        let f = renderer.render()?;
-        timestamps = f.timings.gpu_timestamps;
-        frame.push(f.timings.total_ms());
-        shading.push(f.timings.get("forward"));
-    }
-    Ok(Measured {
-        stats: renderer.stats()?,
-        frame_ms: crate::run::median(frame),
-        shading_ms: crate::run::median(shading),
-        timestamps,
-    })
-}
-
-struct Measured {
-    stats: crate::render::FrameStats,
-    frame_ms: f64,
-    shading_ms: f64,
-    timestamps: bool,
-}
-
 /// Run every scheme and grid on each scene (built-in scenes at `size`, with `lights` or
 /// their default lights).
 pub fn run(
@@ -208,7 +175,8 @@ pub fn run(
                     stats: s,
                     frame_ms,
                     shading_ms,
-                    timestamps,
+                    timing_source,
+                    ..
                 }) => {
                     row.occupied_clusters = s.active_clusters;
                     row.mean_lights_per_occupied = s.mean_lights_per_visible_cluster;
@@ -222,12 +190,7 @@ pub fn run(
                     };
                     row.gpu_ms = frame_ms;
                     row.shading_ms = shading_ms;
-                    row.timing_source = if timestamps {
-                        "timestamps"
-                    } else {
-                        "wall clock"
-                    }
-                    .into();
+                    row.timing_source = timing_source.into();
                 }
                 Err(e) => row.error = Some(e.to_string()),
             }
