@@ -58,6 +58,17 @@ pub struct FrameStats {
     pub first_out_of_grid: Option<[u32; 3]>,
 }
 
+impl FrameStats {
+    /// Useful evaluations over those performed (1 when none was performed).
+    pub fn useful_fraction(&self) -> f64 {
+        if self.light_evals > 0 {
+            self.useful_light_evals as f64 / self.light_evals as f64
+        } else {
+            1.0
+        }
+    }
+}
+
 /// What the shading pass counted: evaluations, useful ones, most useful at one pixel.
 struct ShadingCounts {
     evals: u64,

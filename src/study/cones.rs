@@ -121,11 +121,7 @@ pub fn run(
                     Ok((s, shading_ms, missed)) => {
                         row.evaluations = s.light_evals;
                         row.useful_evaluations = s.useful_light_evals;
-                        row.efficiency = if s.light_evals > 0 {
-                            s.useful_light_evals as f64 / s.light_evals as f64
-                        } else {
-                            1.0
-                        };
+                        row.efficiency = s.useful_fraction();
                         row.shading_ms = shading_ms;
                         row.missed = missed;
                         if test == SpotTest::Sphere {

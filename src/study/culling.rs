@@ -237,11 +237,7 @@ pub fn run(
                             let s = r.stats;
                             row.evaluations = s.light_evals;
                             row.useful_evaluations = s.useful_light_evals;
-                            row.efficiency = if s.light_evals > 0 {
-                                s.useful_light_evals as f64 / s.light_evals as f64
-                            } else {
-                                1.0
-                            };
+                            row.efficiency = s.useful_fraction();
                             row.worst_list = s.max_lights_per_visible_cluster;
                             row.assignment_ms = r.assignment_ms;
                             row.shading_ms = r.shading_ms;

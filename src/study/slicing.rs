@@ -183,11 +183,7 @@ pub fn run(
                     row.max_lights_per_occupied = s.max_lights_per_visible_cluster;
                     row.evaluations = s.light_evals;
                     row.useful_evaluations = s.useful_light_evals;
-                    row.efficiency = if s.light_evals > 0 {
-                        s.useful_light_evals as f64 / s.light_evals as f64
-                    } else {
-                        1.0
-                    };
+                    row.efficiency = s.useful_fraction();
                     row.gpu_ms = frame_ms;
                     row.shading_ms = shading_ms;
                     row.timing_source = timing_source.into();
