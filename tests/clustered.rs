@@ -101,6 +101,12 @@ fn exact_variants() -> Vec<LoadedVariant> {
         let mut v = clustered(pipeline, ZSlicing::Exponential);
         v.clusters.as_mut().unwrap().big_tiles = Some(3);
         out.push(loaded(&format!("{pipeline:?} two-level"), v));
+        for active in [false, true] {
+            out.push(loaded(
+                &format!("{pipeline:?} rasterised, active clusters {active}"),
+                raster_variant(pipeline, (16, 9, 24), active),
+            ));
+        }
     }
     let mut cpu = clustered(Pipeline::ClusteredForward, ZSlicing::Exponential);
     cpu.clusters.as_mut().unwrap().assignment = Assignment::Cpu;
@@ -133,6 +139,17 @@ fn zbin_variant(pipeline: Pipeline, grid: (u32, u32, u32)) -> Variant {
     let c = v.clusters.as_mut().unwrap();
     c.grid = grid;
     c.culling = Culling::ZBinning;
+    v
+}
+
+/// Rasterised binning on `grid`, with active clusters and sample bounds or without.
+fn raster_variant(pipeline: Pipeline, grid: (u32, u32, u32), active: bool) -> Variant {
+    let mut v = clustered(pipeline, ZSlicing::Exponential);
+    let c = v.clusters.as_mut().unwrap();
+    c.grid = grid;
+    c.active_clusters = active;
+    c.sample_bounds = active;
+    c.culling = Culling::Rasterised;
     v
 }
 
@@ -1094,6 +1111,96 @@ fn two_level_lists_equal_one_level_lists() {
             assert!(
                 rejected(1) > 0,
                 "{what}: the check missed a big tile one tile too narrow"
+            );
+        }
+    }
+}
+
+/// Rasterised binning never leaves out a light that reaches a visible sample, on the GPU and
+/// in its f64 twin (`cpu::proxy_tiles` over the box test's lists); each GPU list holds the
+/// twin's and lies within the compute method's list of the same cluster, and without
+/// sample bounds the proxies cull some of those. A twin whose proxies are one tile too narrow on their right (a
+/// deliberate break) must miss lights.
+#[test]
+fn rasterised_binning_keeps_every_light_that_reaches_a_sample() {
+    let gpu = gpu();
+    let composer = Composer::default();
+    for (label, scene) in culling_scenes() {
+        for v in [
+            raster_variant(Pipeline::ClusteredForward, (16, 9, 24), false),
+            raster_variant(Pipeline::ClusteredDeferred, (24, 12, 64), true),
+        ] {
+            let what = format!("{:?} {:?} on {label}", v.pipeline, v.clusters().grid);
+            let lists = |v: &Variant| {
+                let mut r = Renderer::new(&gpu, &composer, v, &scene).unwrap();
+                r.render().unwrap();
+                r.cluster_lists().unwrap().unwrap()
+            };
+            let gpu_lists = lists(&v);
+            let mut boxes = v.clone();
+            boxes.clusters.as_mut().unwrap().culling = Culling::Boxes;
+            let gpu_boxes = lists(&boxes);
+            let grid = Grid::of(&v, &scene);
+            let truth = raster_truth(&gpu, &composer, &v, &scene).unwrap();
+            let samples = visible_samples(&truth, &scene);
+            let (missing, checked) =
+                missing_lights(&grid, &scene, &samples, |c| gpu_lists.list(c).to_vec());
+            assert!(
+                missing.is_empty(),
+                "{what}: GPU lists miss (pixel, light) {:?}",
+                &missing[..missing.len().min(5)]
+            );
+            assert!(checked > 1000, "{what}: only {checked} pairs checked");
+            // The twin: the box test's lists (all clusters: a twin of active clusters would
+            // need the GPU's samples), each kept where the light's proxy holds the tile.
+            let view_lights = cpu::view_lights(&scene.lights, scene.camera.view());
+            let all = cpu::assign(
+                &grid,
+                &cpu::cluster_bounds(&grid),
+                &view_lights,
+                SpotTest::Cone,
+                None,
+                None,
+                None,
+            );
+            let proxy = |l: &cpu::ViewLight, k| cpu::proxy_tiles(&grid, l.center, l.radius, k);
+            let twin = cpu::binned(&grid, &all, &view_lights, proxy);
+            let (missing, _) = missing_lights(&grid, &scene, &samples, |c| twin.list(c).to_vec());
+            assert!(
+                missing.is_empty(),
+                "{what}: twin lists miss {:?}",
+                &missing[..missing.len().min(5)]
+            );
+            let active = v.clusters().active_clusters;
+            let mut culled = 0;
+            for c in 0..gpu_lists.counts.len() {
+                let (got, compute) = (gpu_lists.list(c), gpu_boxes.list(c));
+                assert!(
+                    got.iter().all(|i| compute.contains(i)),
+                    "{what}: cluster {c}: {got:?} not within the compute list {compute:?}"
+                );
+                culled += compute.len() - got.len();
+                // Without active clusters the GPU tests every cluster as the twin does.
+                if !active {
+                    assert!(
+                        twin.list(c).iter().all(|i| got.contains(i)),
+                        "{what}: cluster {c}: GPU {got:?} misses some of the twin's {:?}",
+                        twin.list(c)
+                    );
+                }
+            }
+            // Sample-bounded boxes seldom leave the proxies anything to cut.
+            assert!(active || culled > 0, "{what}: the proxies culled nothing");
+            // The break: every proxy one tile narrower on its right.
+            let narrow = |l: &cpu::ViewLight, k| {
+                proxy(l, k)
+                    .map(|(lo, hi): cpu::TileRect| (lo, (hi.0.saturating_sub(1).max(lo.0), hi.1)))
+            };
+            let broken = cpu::binned(&grid, &all, &view_lights, narrow);
+            let (missing, _) = missing_lights(&grid, &scene, &samples, |c| broken.list(c).to_vec());
+            assert!(
+                !missing.is_empty(),
+                "{what}: the check missed proxies one tile too narrow"
             );
         }
     }

@@ -66,6 +66,10 @@ pub fn feature_flags(v: &Variant) -> Vec<(&'static str, bool)> {
             "two_level",
             p.is_clustered() && clusters.big_tiles.is_some(),
         ),
+        (
+            "raster_binning",
+            p.is_clustered() && clusters.culling == Culling::Rasterised,
+        ),
         ("gbuffer_wide", deferred && layout == GBufferLayout::Wide),
         (
             "gbuffer_packed",

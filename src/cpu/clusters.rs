@@ -190,6 +190,82 @@ pub fn big_tile(grid: &Grid, n: u32, x: u32, y: u32) -> ((u32, u32), (u32, u32))
     )
 }
 
+/// Tiles ((x0, y0), (x1, y1)) of a rectangle.
+pub type TileRect = ((u32, u32), (u32, u32));
+
+/// Rasterised binning's proxy of sphere (center, radius) in slice `k`: the tiles onto which
+/// the part of the sphere within the slice's view depths projects (slice 0 from the eye, the
+/// last without end; nothing nearer than the camera's near plane), or None where no part of
+/// it lies there or on screen. That part lies in the box of the sphere's widest
+/// cross-section within those depths (radius sqrt(r^2 - e^2), e the distance from the
+/// centre's depth to the nearest of them) between the nearest and farthest of them, and
+/// the box's corners project to the rectangle. Twin of `proxy_tiles` in raster_bin.wesl,
+/// without its widening.
+pub fn proxy_tiles(grid: &Grid, center: DVec3, radius: f64, k: u32) -> Option<TileRect> {
+    let (mut s0, mut s1) = grid.slice_depths(k);
+    if k == 0 {
+        s0 = 0.0;
+    }
+    if k + 1 == grid.z {
+        s1 = f64::INFINITY;
+    }
+    let d = -center.z;
+    let z0 = s0.max(d - radius).max(grid.near);
+    let z1 = s1.min(d + radius);
+    if z0 > z1 {
+        return None;
+    }
+    let e = (z0 - d).max(d - z1).max(0.0);
+    let across = ((radius - e) * (radius + e)).max(0.0).sqrt();
+    let scale = DVec2::new(grid.tan_half_fov_y * grid.aspect, grid.tan_half_fov_y);
+    let (lo_xy, hi_xy) = (center.truncate() - across, center.truncate() + across);
+    let lo = (lo_xy / (z0 * scale)).min(lo_xy / (z1 * scale));
+    let hi = (hi_xy / (z0 * scale)).max(hi_xy / (z1 * scale));
+    if hi.x < -1.0 || lo.x > 1.0 || hi.y < -1.0 || lo.y > 1.0 {
+        return None;
+    }
+    let tile = |v: f64, tiles: u32| {
+        ((v * 0.5 + 0.5) * tiles as f64)
+            .floor()
+            .clamp(0.0, tiles as f64 - 1.0) as u32
+    };
+    // Tile rows count from the top, NDC y from the bottom.
+    Some((
+        (tile(lo.x, grid.x), tile(-hi.y, grid.y)),
+        (tile(hi.x, grid.x), tile(-lo.y, grid.y)),
+    ))
+}
+
+/// Rasterised binning's lists from a cluster test's `lists`: each cluster keeps the lights
+/// whose proxy in its slice (`proxy`, [`proxy_tiles`] or a deliberate break of it) holds
+/// its tile.
+pub fn binned(
+    grid: &Grid,
+    lists: &ClusterLists,
+    lights: &[ViewLight],
+    proxy: impl Fn(&ViewLight, u32) -> Option<TileRect>,
+) -> ClusterLists {
+    let mut out = ClusterLists::default();
+    for c in 0..lists.counts.len() {
+        let (x, y, k) = (
+            c as u32 % grid.x,
+            (c as u32 / grid.x) % grid.y,
+            c as u32 / (grid.x * grid.y),
+        );
+        out.offsets.push(out.indices.len() as u32);
+        let before = out.indices.len();
+        out.indices.extend(lists.list(c).iter().filter(|&&i| {
+            proxy(&lights[i as usize], k).is_some_and(|((x0, y0), (x1, y1))| {
+                (x0..=x1).contains(&x) && (y0..=y1).contains(&y)
+            })
+        }));
+        let n = (out.indices.len() - before) as u32;
+        out.counts.push(n);
+        out.max_per_cluster = out.max_per_cluster.max(n);
+    }
+    out
+}
+
 /// Widening of a spot's outer cone, in cosine, before it is tested (the shading compares
 /// an f32 cosine with rounding near 1e-7 against the cone's).
 pub const CONE_COS_SLACK: f64 = 1e-6;

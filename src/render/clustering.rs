@@ -2,11 +2,54 @@
 //! build cluster boxes and assign lights (count, prefix sum, fill). Their entry points, the
 //! buffers they clear and their dispatches.
 
-use super::clusters::{ClusterBuffers, SCAN_BLOCK, SORT_DISPATCH_BYTES};
-use super::passes::{ComputePipelines, set_compute_groups};
-use crate::compose::ClusterPass;
-use crate::gpu::TimestampSlot;
+use super::clusters::{BIN_TARGET_FORMAT, ClusterBuffers, SCAN_BLOCK, SORT_DISPATCH_BYTES};
+use super::passes::{
+    ComputePipelines, begin_render, color_target, render_pipeline, set_compute_groups,
+};
+use crate::compose::{ClusterPass, ComposedPass};
+use crate::gpu::{Gpu, GpuError, TimestampSlot};
 use crate::variant::Culling;
+
+/// Rasterised binning's two draws of the light proxies: counting, then filling the lists.
+pub struct BinningPipelines {
+    count: wgpu::RenderPipeline,
+    fill: wgpu::RenderPipeline,
+}
+
+impl BinningPipelines {
+    /// The draws of light assignment pass `pass` (composed with `raster_binning`).
+    pub fn new(
+        gpu: &Gpu,
+        pass: &ComposedPass,
+        layout: &wgpu::PipelineLayout,
+    ) -> Result<Self, GpuError> {
+        // One instance per proxy: (light, slice, x0 | x1 << 16, y0 | y1 << 16).
+        let instances = wgpu::VertexBufferLayout {
+            array_stride: 16,
+            step_mode: wgpu::VertexStepMode::Instance,
+            attributes: &[wgpu::VertexAttribute {
+                format: wgpu::VertexFormat::Uint32x4,
+                offset: 0,
+                shader_location: 0,
+            }],
+        };
+        let draw = |fs| {
+            render_pipeline(
+                gpu,
+                pass,
+                layout,
+                ("bin_vertex", Some(fs)),
+                &[Some(instances.clone())],
+                &[color_target(BIN_TARGET_FORMAT)],
+                None,
+            )
+        };
+        Ok(Self {
+            count: draw("bin_count")?,
+            fill: draw("bin_fill")?,
+        })
+    }
+}
 
 /// Lights per row of the per-light dispatches (`LIGHTS_PER_ROW` in light_assign.wesl).
 const LIGHTS_PER_ROW: u32 = 32768;
@@ -40,6 +83,14 @@ pub fn entries(pass: ClusterPass, culling: Culling, two_level: bool) -> &'static
             "bin_lights",
             "mask_tiles",
         ],
+        ClusterPass::LightAssign if culling == Culling::Rasterised => &[
+            "transform_lights",
+            "split_lights",
+            "scan_local",
+            "scan_blocks",
+            "finish_lists",
+            "sort_long_lists",
+        ],
         ClusterPass::ClusterBounds => &["build_bounds"],
         ClusterPass::LightAssign => &[
             "transform_lights",
@@ -63,9 +114,11 @@ pub struct Extent {
 }
 
 /// Encode one clustering pass: clear what it accumulates into, then its dispatches.
+#[allow(clippy::too_many_arguments)]
 pub fn encode(
     pass: ClusterPass,
     p: &ComputePipelines,
+    binning: Option<&BinningPipelines>,
     groups: &[Option<wgpu::BindGroup>],
     encoder: &mut wgpu::CommandEncoder,
     slot: Option<TimestampSlot<'_>>,
@@ -87,12 +140,21 @@ pub fn encode(
             encoder.clear_buffer(&c.coarse_masks, 0, None);
             encoder.clear_buffer(&c.sort_jobs, 0, Some(16));
         }
+        ClusterPass::LightAssign if c.culling == Culling::Rasterised => {
+            encoder.clear_buffer(&c.counts, 0, None);
+            encoder.clear_buffer(&c.fill_cursors, 0, None);
+            encoder.clear_buffer(&c.sort_jobs, 0, Some(16));
+            encoder.clear_buffer(&c.proxy_draw, 0, None);
+        }
         ClusterPass::LightAssign => {
             encoder.clear_buffer(&c.counts, 0, None);
             encoder.clear_buffer(&c.fill_cursors, 0, None);
             encoder.clear_buffer(&c.sort_jobs, 0, Some(16));
         }
         ClusterPass::DepthRange | ClusterPass::ClusterBounds => {}
+    }
+    if pass == ClusterPass::LightAssign && c.culling == Culling::Rasterised {
+        return encode_binning(p, binning, groups, encoder, slot, c, extent.lights);
     }
     // Light assignment ends with a second compute pass (the long-list sort, dispatched
     // indirectly); the first pass then writes the beginning timestamp, the second the end.
@@ -156,16 +218,100 @@ pub fn encode(
     }
     drop(cp);
     if sorts {
-        // As many workgroups as finish_lists found lists too long to sort alone.
-        encoder.copy_buffer_to_buffer(&c.sort_jobs, 0, &c.sort_dispatch, 0, SORT_DISPATCH_BYTES);
+        encode_sort(p, groups, encoder, slot, c);
+    }
+}
+
+/// The long-list sort: as many workgroups as finish_lists found lists too long to sort
+/// alone, in a compute pass that ends light assignment's timing.
+fn encode_sort(
+    p: &ComputePipelines,
+    groups: &[Option<wgpu::BindGroup>],
+    encoder: &mut wgpu::CommandEncoder,
+    slot: Option<TimestampSlot<'_>>,
+    c: &ClusterBuffers,
+) {
+    encoder.copy_buffer_to_buffer(&c.sort_jobs, 0, &c.sort_dispatch, 0, SORT_DISPATCH_BYTES);
+    let mut cp = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+        label: Some("sort long lists"),
+        timestamp_writes: TimestampSlot::compute_part(slot, true),
+    });
+    set_compute_groups(&mut cp, groups);
+    cp.set_pipeline(p.get("sort_long_lists"));
+    cp.dispatch_workgroups_indirect(&c.sort_dispatch, 0);
+}
+
+/// Rasterised binning's light assignment: view-space lights and their proxies (compute),
+/// the count draw, the prefix sum (compute), the fill draw, then lists finished and sorted
+/// as the compute method's.
+fn encode_binning(
+    p: &ComputePipelines,
+    binning: Option<&BinningPipelines>,
+    groups: &[Option<wgpu::BindGroup>],
+    encoder: &mut wgpu::CommandEncoder,
+    slot: Option<TimestampSlot<'_>>,
+    c: &ClusterBuffers,
+    lights: u32,
+) {
+    let (Some(binning), Some(target)) = (binning, &c.bin_target) else {
+        panic!("rasterised binning without its draws or target");
+    };
+    let compute = |encoder: &mut wgpu::CommandEncoder, timestamps, steps: &[(&str, u32)]| {
         let mut cp = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some("sort long lists"),
-            timestamp_writes: TimestampSlot::compute_part(slot, true),
+            label: Some("light assignment"),
+            timestamp_writes: timestamps,
         });
         set_compute_groups(&mut cp, groups);
-        cp.set_pipeline(p.get("sort_long_lists"));
-        cp.dispatch_workgroups_indirect(&c.sort_dispatch, 0);
-    }
+        for &(entry, x) in steps {
+            cp.set_pipeline(p.get(entry));
+            cp.dispatch_workgroups(x, 1, 1);
+        }
+    };
+    let draw = |encoder: &mut wgpu::CommandEncoder, pipeline: &wgpu::RenderPipeline| {
+        let mut rp = begin_render(
+            encoder,
+            "light binning",
+            &[Some(wgpu::RenderPassColorAttachment {
+                view: target,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                    store: wgpu::StoreOp::Discard,
+                },
+            })],
+            None,
+            None,
+            groups,
+        );
+        rp.set_pipeline(pipeline);
+        rp.set_vertex_buffer(0, c.proxy_instances.slice(..));
+        rp.draw_indirect(&c.proxy_draw_args, 0);
+    };
+    let per_light = dispatch_size(lights, 64);
+    compute(
+        encoder,
+        TimestampSlot::compute_part(slot, false),
+        &[("transform_lights", per_light), ("split_lights", per_light)],
+    );
+    encoder.copy_buffer_to_buffer(&c.proxy_draw, 0, &c.proxy_draw_args, 0, 16);
+    encoder.copy_buffer_to_buffer(&c.light_proxies, 0, &c.proxy_instances, 0, None);
+    draw(encoder, &binning.count);
+    compute(
+        encoder,
+        None,
+        &[
+            ("scan_local", dispatch_size(c.clusters, SCAN_BLOCK)),
+            ("scan_blocks", 1),
+        ],
+    );
+    draw(encoder, &binning.fill);
+    compute(
+        encoder,
+        None,
+        &[("finish_lists", dispatch_size(c.clusters, 64))],
+    );
+    encode_sort(p, groups, encoder, slot, c);
 }
 
 /// Encode the marking of clusters that hold a visible sample of the last frame's depth

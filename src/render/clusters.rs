@@ -64,6 +64,8 @@ mod binding {
     pub const TILE_MASKS: u32 = 16;
     pub const COARSE_MASKS: u32 = 17;
     pub const BIG_TILE_DEPTHS: u32 = 18;
+    pub const LIGHT_PROXIES: u32 = 19;
+    pub const PROXY_DRAW: u32 = 20;
 }
 
 /// Bytes of an indirect dispatch's arguments (x, y, z).
@@ -104,6 +106,16 @@ pub struct ClusterBuffers {
     pub coarse_masks: wgpu::Buffer,
     /// Two-level culling with active clusters: each big tile's sample depth range.
     pub big_tile_depths: wgpu::Buffer,
+    /// Rasterised binning: each light's proxies as the compute pass appends them, and their
+    /// indirect draw (`ProxyDraw` in build_bindings.wesl).
+    pub light_proxies: wgpu::Buffer,
+    pub proxy_draw: wgpu::Buffer,
+    /// Copies of those the draws read as instances and indirect arguments (a buffer bound
+    /// for storage in a pass cannot also be its vertex or indirect buffer).
+    pub proxy_instances: wgpu::Buffer,
+    pub proxy_draw_args: wgpu::Buffer,
+    /// Rasterised binning: the one-pixel-per-tile target the proxies are drawn into.
+    pub bin_target: Option<wgpu::TextureView>,
     /// Tiles per big tile side with two-level culling.
     pub big_tiles: Option<u32>,
     /// The grid: tiles across, tiles down, slices (z-binning's bins).
@@ -145,6 +157,31 @@ pub fn check_zbinning(gpu: &Gpu, grid: (u32, u32, u32), lights: usize) -> Result
     Ok(())
 }
 
+/// Format of rasterised binning's target (its colour is never read).
+pub const BIN_TARGET_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R8Unorm;
+
+/// Bytes of rasterised binning's proxies for `lights` lights on `grid`: at most one per
+/// light and slice, 16 bytes each.
+fn proxy_bytes(grid: (u32, u32, u32), lights: u32) -> u64 {
+    lights.max(1) as u64 * grid.2 as u64 * 16
+}
+
+/// Refuse a rasterised-binning frame whose proxies one buffer cannot hold.
+pub fn check_rasterised(gpu: &Gpu, grid: (u32, u32, u32), lights: usize) -> Result<(), GpuError> {
+    let bytes = proxy_bytes(grid, lights as u32);
+    let max = gpu
+        .limits
+        .max_buffer_size
+        .min(gpu.limits.max_storage_buffer_binding_size);
+    if bytes > max {
+        return Err(GpuError::TooLarge(format!(
+            "rasterised binning's proxies for {lights} lights over {} slices take {bytes} bytes, more than the {max} bytes adapter `{}` allows in one buffer; use fewer slices or lights",
+            grid.2, gpu.adapter.name
+        )));
+    }
+    Ok(())
+}
+
 fn storage(gpu: &Gpu, label: &str, size: u64) -> wgpu::Buffer {
     gpu.device.create_buffer(&wgpu::BufferDescriptor {
         label: Some(label),
@@ -177,6 +214,16 @@ impl ClusterBuffers {
         let sized = |used: bool, bytes: u64| if used { bytes } else { 16 };
         let index_capacity = if lists { index_capacity } else { 4 };
         let words = (lights as u64).div_ceil(32);
+        let raster = culling == Culling::Rasterised;
+        let proxy_bytes = sized(raster, proxy_bytes(grid, lights));
+        let copy_of = |label: &str, size: u64, usage: wgpu::BufferUsages| {
+            gpu.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size,
+                usage: usage | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            })
+        };
         Self {
             clusters,
             range: gpu
@@ -239,6 +286,28 @@ impl ClusterBuffers {
                 "big tile depths",
                 big_tiles.map_or(16, |b| (grid.0.div_ceil(b) * grid.1.div_ceil(b)) as u64 * 8),
             ),
+            light_proxies: storage(gpu, "light proxies", proxy_bytes),
+            proxy_draw: storage(gpu, "proxy draw", 16),
+            proxy_instances: copy_of("proxy instances", proxy_bytes, wgpu::BufferUsages::VERTEX),
+            proxy_draw_args: copy_of("proxy draw arguments", 16, wgpu::BufferUsages::INDIRECT),
+            bin_target: raster.then(|| {
+                gpu.device
+                    .create_texture(&wgpu::TextureDescriptor {
+                        label: Some("binning target"),
+                        size: wgpu::Extent3d {
+                            width: grid.0,
+                            height: grid.1,
+                            depth_or_array_layers: 1,
+                        },
+                        mip_level_count: 1,
+                        sample_count: 1,
+                        dimension: wgpu::TextureDimension::D2,
+                        format: BIN_TARGET_FORMAT,
+                        usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
+                        view_formats: &[],
+                    })
+                    .create_view(&Default::default())
+            }),
             big_tiles,
             grid,
             lights,
@@ -269,6 +338,10 @@ impl ClusterBuffers {
             &self.tile_masks,
             &self.coarse_masks,
             &self.big_tile_depths,
+            &self.light_proxies,
+            &self.proxy_draw,
+            &self.proxy_instances,
+            &self.proxy_draw_args,
         ]
         .iter()
         .map(|b| b.size())
@@ -304,6 +377,8 @@ impl ClusterBuffers {
             binding::TILE_MASKS => &self.tile_masks,
             binding::COARSE_MASKS => &self.coarse_masks,
             binding::BIG_TILE_DEPTHS => &self.big_tile_depths,
+            binding::LIGHT_PROXIES => &self.light_proxies,
+            binding::PROXY_DRAW => &self.proxy_draw,
             _ => return None,
         })
     }

@@ -78,6 +78,8 @@ enum Pipelines {
     /// Render pipelines, drawn in order.
     Render(Vec<wgpu::RenderPipeline>),
     Compute(ComputePipelines),
+    /// Light assignment by rasterised binning: compute passes and the two draws.
+    Binning(ComputePipelines, clustering::BinningPipelines),
 }
 
 /// A pass ready to encode: its layout (read off its module), pipelines and bind groups.
@@ -194,8 +196,14 @@ impl<'g> Renderer<'g> {
         gpu.check_scene(scene)?;
         if variant.pipeline.is_clustered() {
             gpu.check_grid(variant.clusters().grid)?;
-            if variant.clusters().culling == crate::variant::Culling::ZBinning {
-                clusters::check_zbinning(gpu, variant.clusters().grid, scene.lights.len())?;
+            match variant.clusters().culling {
+                crate::variant::Culling::ZBinning => {
+                    clusters::check_zbinning(gpu, variant.clusters().grid, scene.lights.len())?
+                }
+                crate::variant::Culling::Rasterised => {
+                    clusters::check_rasterised(gpu, variant.clusters().grid, scene.lights.len())?
+                }
+                _ => {}
             }
         }
         check_for_scene(variant, scene)?;
@@ -352,16 +360,25 @@ impl<'g> Renderer<'g> {
                 instrumented,
             )?),
             PassId::Screen(p) => Pipelines::Render(screen::pipelines(gpu, p, composed, l)?),
-            PassId::Clustering(p) => Pipelines::Compute(ComputePipelines::new(
-                gpu,
-                composed,
-                l,
-                clustering::entries(
-                    p,
-                    self.variant.clusters().culling,
-                    self.variant.clusters().big_tiles.is_some(),
-                ),
-            )?),
+            PassId::Clustering(p) => {
+                let culling = self.variant.clusters().culling;
+                let compute = ComputePipelines::new(
+                    gpu,
+                    composed,
+                    l,
+                    clustering::entries(p, culling, self.variant.clusters().big_tiles.is_some()),
+                )?;
+                if p == compose::ClusterPass::LightAssign
+                    && culling == crate::variant::Culling::Rasterised
+                {
+                    Pipelines::Binning(
+                        compute,
+                        clustering::BinningPipelines::new(gpu, composed, l)?,
+                    )
+                } else {
+                    Pipelines::Compute(compute)
+                }
+            }
             PassId::Post(_) => return Ok(None),
         };
         let groups = self.bind(pass.id, &layout)?;
@@ -567,7 +584,13 @@ impl<'g> Renderer<'g> {
             }
             (PassId::Clustering(p), Pipelines::Compute(pl)) => {
                 if let Some(c) = &res.clusters {
-                    clustering::encode(p, pl, groups, encoder, slot, c, &self.extent());
+                    clustering::encode(p, pl, None, groups, encoder, slot, c, &self.extent());
+                }
+            }
+            (PassId::Clustering(p), Pipelines::Binning(pl, binning)) => {
+                if let Some(c) = &res.clusters {
+                    let extent = self.extent();
+                    clustering::encode(p, pl, Some(binning), groups, encoder, slot, c, &extent);
                 }
             }
             _ => {}

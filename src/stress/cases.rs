@@ -39,7 +39,8 @@ fn variant(description: &str, pipeline: Pipeline) -> Variant {
 }
 
 /// Every pipeline, exact (full-precision G-buffer, exact lists), and Forward+ with each
-/// culling method that lists every cluster: z-binning, and two-level culling.
+/// culling method that builds lists otherwise: z-binning, two-level culling and rasterised
+/// binning.
 pub fn pipelines() -> Vec<(String, Variant)> {
     let mut out: Vec<(String, Variant)> = Pipeline::iter()
         .map(|p| (p.short_name().to_string(), variant(p.short_name(), p)))
@@ -50,6 +51,9 @@ pub fn pipelines() -> Vec<(String, Variant)> {
     let mut two_level = variant("forward_plus_two_level", Pipeline::ClusteredForward);
     two_level.clusters.as_mut().expect("clustered").big_tiles = Some(2);
     out.push(("forward_plus_two_level".into(), two_level));
+    let mut raster = variant("forward_plus_rasterised", Pipeline::ClusteredForward);
+    raster.clusters.as_mut().expect("clustered").culling = Culling::Rasterised;
+    out.push(("forward_plus_rasterised".into(), raster));
     out
 }
 

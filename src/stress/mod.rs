@@ -227,8 +227,8 @@ pub fn run_case(gpu: &Gpu, composer: &Composer, case: &Case, name: &str, v: &Var
 }
 
 /// Light-cluster pairs where the light clearly lights part of the cluster (see
-/// `clearly_touches`) but is not in the GPU's list for it: their count, and the first named
-/// with its cluster. Renders two frames of its own (see [`missing_lights_of`]).
+/// `clearly_touches`; with rasterised binning, also within its proxy there) but is not in
+/// the GPU's list for it: their count, and the first named with its cluster. Renders two frames of its own (see [`missing_lights_of`]).
 pub fn missing_lights(
     gpu: &Gpu,
     composer: &Composer,
@@ -266,6 +266,7 @@ pub fn missing_lights_of(
     // Identical lights touch identical clusters: decide each distinct light once (a stress
     // case may stack thousands at one point).
     let mut decided: HashMap<(usize, &[u8]), bool> = HashMap::new();
+    let rasterised = v.clusters().culling == crate::variant::Culling::Rasterised;
     let (mut missing, mut first) = (0u64, None);
     for (c, b) in bounds.iter().enumerate() {
         let Some(b) = b else { continue };
@@ -290,6 +291,7 @@ pub fn missing_lights_of(
             let key = (c, bytemuck::bytes_of(&scene.lights[i]));
             let touches = *decided.entry(key).or_insert_with(|| {
                 clearly_touches(&grid, &scene.lights[i], light, view, b, (x, y, k))
+                    && (!rasterised || in_proxy(&grid, light, (x, y, k)))
             });
             if touches {
                 missing += 1;
@@ -330,6 +332,15 @@ fn clearly_touches(
     // The bounding sphere, unshrunk, only skips clusters no sample could be lit in.
     cpu::sphere_touches_cluster(grid, view_light.center, r, b, x, y)
         && cpu::spot_point_in_piece(grid, light, view, x, y, grid.slice_depths(k), 6).is_some()
+}
+
+/// Rasterised binning: whether the light's proxy in slice k, its sphere shrunk as in
+/// `clearly_touches`, holds tile (x, y) (the proxy leaves out clusters whose box the sphere
+/// meets where the slice's frustum piece is not; `tests/clustered.rs` checks against the
+/// raster truth that no light reaching a sample is among them).
+fn in_proxy(grid: &Grid, light: &cpu::ViewLight, (x, y, k): (u32, u32, u32)) -> bool {
+    cpu::proxy_tiles(grid, light.center, light.radius * (1.0 - 1e-4), k)
+        .is_some_and(|((x0, y0), (x1, y1))| (x0..=x1).contains(&x) && (y0..=y1).contains(&y))
 }
 
 /// Run every case whose name contains `filter` (all without one) on each of its variants.

@@ -128,6 +128,21 @@ pub fn methods() -> Vec<Method> {
             ..base
         },
         Method {
+            name: "deep clusters",
+            source: "32-pixel tiles, 128 exponential slices, boxes",
+            grid: |(x, y)| (x, y, 128),
+            tile_pixels: Some(OLSSON_TILE),
+            ..base
+        },
+        Method {
+            name: "deep clusters, rasterised",
+            source: "Ortegren and Persson 2016: the same grid, each light drawn as one proxy per slice",
+            grid: |(x, y)| (x, y, 128),
+            culling: Culling::Rasterised,
+            tile_pixels: Some(OLSSON_TILE),
+            ..base
+        },
+        Method {
             name: "fine clusters",
             source: "10-pixel tiles, 24 exponential slices, active clusters, sample bounds",
             grid: |(x, y)| (x, y, 24),

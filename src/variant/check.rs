@@ -189,12 +189,20 @@ fn check_clusters(c: &Clusters, v: &Variant, out: &mut Vec<Problem>) {
                 format!("is {n}; it must be in 1..={MAX_BIG_TILES} (tiles per big tile side)"),
             ));
         }
-        if c.culling == Culling::ZBinning || c.assignment == Assignment::Cpu {
+        if matches!(c.culling, Culling::ZBinning | Culling::Rasterised)
+            || c.assignment == Assignment::Cpu
+        {
             out.push(problem(
                 "clusters.big_tiles",
                 "two-level culling builds per-cluster lists on the GPU: remove `big_tiles`, or use Boxes or DepthMask culling with Gpu assignment",
             ));
         }
+    }
+    if c.culling == Culling::Rasterised && c.assignment != Assignment::Gpu {
+        out.push(problem(
+            "clusters.assignment",
+            "Rasterised draws each light's proxies on the GPU: use `assignment: Gpu`",
+        ));
     }
     if c.culling == Culling::DepthMask && !c.sample_bounds {
         out.push(problem(

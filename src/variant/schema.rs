@@ -137,8 +137,8 @@ pub struct Clusters {
     /// range); each cluster then tests only its big tile's survivors, one invocation per
     /// cluster, skipping inactive clusters at once, and its list comes out in index order
     /// with no sort. HDRP: 64-pixel big tiles over 16-pixel tiles, n = 4. n in 1..=32;
-    /// left out, each light tests every cluster of its range. Not with `ZBinning` or `Cpu`
-    /// assignment.
+    /// left out, each light tests every cluster of its range. Not with `ZBinning`,
+    /// `Rasterised` or `Cpu` assignment.
     pub big_tiles: Option<u32>,
 }
 
@@ -177,6 +177,15 @@ pub enum Culling {
     /// holds. Memory is bins + tiles x lights / 32 words. Spots are binned by their bounding
     /// sphere. Exact lists only, GPU assignment, no active clusters, at most 65536 lights.
     ZBinning,
+    /// Ortegren and Persson 2016's rasterised binning (Bevy's GPU clustering): a compute pass
+    /// splits each light into one proxy per z slice its sphere reaches, the rectangle of
+    /// tiles that the sphere's part within that slice's depths projects onto; a raster pass
+    /// draws the proxies into a one-pixel-per-tile target, each fragment testing its cluster
+    /// as `Boxes` does and counting the light there, and a second draw fills the lists.
+    /// Coverage is conservative by construction: each proxy's corners lie on tile
+    /// boundaries, so a tile is drawn exactly when the rectangle holds it (no conservative
+    /// rasterisation needed). Works with active clusters and sample bounds; GPU assignment.
+    Rasterised,
 }
 
 /// Where light lists are built.
