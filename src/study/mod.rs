@@ -83,8 +83,9 @@ pub enum StudyName {
     /// Spot lights culled by their bounding sphere against the cone test, at spot fractions
     /// 0, 0.5 and 1 on each built-in scene; lights missed (must be 0).
     Cones,
-    /// Every culling method (clusters, tiled, 2.5D, Olsson) on each built-in scene at 64 to
-    /// 16384 lights (or `--lights`), spot fractions 0 and 0.5.
+    /// Every culling method (clusters, tiled, 2.5D, Olsson, z-binning, rasterised binning,
+    /// two-level) on each built-in scene at 64 to 16384 lights (or `--lights`), spot
+    /// fractions 0 and 0.5.
     Culling,
 }
 
