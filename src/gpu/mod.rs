@@ -217,7 +217,7 @@ impl Gpu {
                 "lights",
                 scene.lights.len(),
                 std::mem::size_of::<crate::common::Light>(),
-                l.max_buffer_size.min(l.max_storage_buffer_binding_size),
+                self.max_storage_bytes(),
             ),
         ];
         for (what, count, size, max) in buffers {
@@ -245,11 +245,16 @@ impl Gpu {
         Ok(())
     }
 
+    /// The most bytes one buffer bound whole as storage may hold on this adapter.
+    pub fn max_storage_bytes(&self) -> u64 {
+        let l = &self.limits;
+        l.max_buffer_size.min(l.max_storage_buffer_binding_size)
+    }
+
     /// Check that a cluster grid of `grid` fits the adapter's buffers: its largest per-cluster
     /// buffer is the boxes, 32 bytes a cluster, bound whole as storage.
     pub fn check_grid(&self, grid: (u32, u32, u32)) -> Result<(), GpuError> {
-        let l = &self.limits;
-        let max = l.max_buffer_size.min(l.max_storage_buffer_binding_size);
+        let max = self.max_storage_bytes();
         let clusters = grid.0 as u64 * grid.1 as u64 * grid.2 as u64;
         let bytes = clusters * 32;
         if bytes > max {

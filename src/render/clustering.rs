@@ -140,16 +140,13 @@ pub fn encode(
             encoder.clear_buffer(&c.coarse_masks, 0, None);
             encoder.clear_buffer(&c.sort_jobs, 0, Some(16));
         }
-        ClusterPass::LightAssign if c.culling == Culling::Rasterised => {
-            encoder.clear_buffer(&c.counts, 0, None);
-            encoder.clear_buffer(&c.fill_cursors, 0, None);
-            encoder.clear_buffer(&c.sort_jobs, 0, Some(16));
-            encoder.clear_buffer(&c.proxy_draw, 0, None);
-        }
         ClusterPass::LightAssign => {
             encoder.clear_buffer(&c.counts, 0, None);
             encoder.clear_buffer(&c.fill_cursors, 0, None);
             encoder.clear_buffer(&c.sort_jobs, 0, Some(16));
+            if c.culling == Culling::Rasterised {
+                encoder.clear_buffer(&c.proxy_draw, 0, None);
+            }
         }
         ClusterPass::DepthRange | ClusterPass::ClusterBounds => {}
     }
@@ -253,8 +250,9 @@ fn encode_binning(
     c: &ClusterBuffers,
     lights: u32,
 ) {
+    // Both are made with the pass whenever its variant culls by rasterised binning.
     let (Some(binning), Some(target)) = (binning, &c.bin_target) else {
-        panic!("rasterised binning without its draws or target");
+        unreachable!("rasterised binning without its draws or target");
     };
     let compute = |encoder: &mut wgpu::CommandEncoder, timestamps, steps: &[(&str, u32)]| {
         let mut cp = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {

@@ -144,10 +144,7 @@ pub fn check_zbinning(gpu: &Gpu, grid: (u32, u32, u32), lights: usize) -> Result
         )));
     }
     let bytes = (grid.0 * grid.1) as u64 * (lights as u64).div_ceil(32) * 4;
-    let max = gpu
-        .limits
-        .max_buffer_size
-        .min(gpu.limits.max_storage_buffer_binding_size);
+    let max = gpu.max_storage_bytes();
     if bytes > max {
         return Err(GpuError::TooLarge(format!(
             "z-binning's tile masks for {}x{} tiles and {lights} lights take {bytes} bytes, more than the {max} bytes adapter `{}` allows in one buffer; use fewer tiles or lights",
@@ -169,10 +166,7 @@ fn proxy_bytes(grid: (u32, u32, u32), lights: u32) -> u64 {
 /// Refuse a rasterised-binning frame whose proxies one buffer cannot hold.
 pub fn check_rasterised(gpu: &Gpu, grid: (u32, u32, u32), lights: usize) -> Result<(), GpuError> {
     let bytes = proxy_bytes(grid, lights as u32);
-    let max = gpu
-        .limits
-        .max_buffer_size
-        .min(gpu.limits.max_storage_buffer_binding_size);
+    let max = gpu.max_storage_bytes();
     if bytes > max {
         return Err(GpuError::TooLarge(format!(
             "rasterised binning's proxies for {lights} lights over {} slices take {bytes} bytes, more than the {max} bytes adapter `{}` allows in one buffer; use fewer slices or lights",

@@ -228,7 +228,8 @@ pub fn run_case(gpu: &Gpu, composer: &Composer, case: &Case, name: &str, v: &Var
 
 /// Light-cluster pairs where the light clearly lights part of the cluster (see
 /// `clearly_touches`; with rasterised binning, also within its proxy there) but is not in
-/// the GPU's list for it: their count, and the first named with its cluster. Renders two frames of its own (see [`missing_lights_of`]).
+/// the GPU's list for it: their count, and the first named with its cluster. Renders two
+/// frames of its own (see [`missing_lights_of`]).
 pub fn missing_lights(
     gpu: &Gpu,
     composer: &Composer,
