@@ -366,15 +366,8 @@ fn capped_lists_drop_lights_exactly_when_the_cap_bites() {
     let scene = scene::generate("atrium", small("atrium", 96, 54, Some(1024))).unwrap();
     let exact = clustered(Pipeline::ClusteredForward, ZSlicing::Exponential);
     let grid = Grid::of(&exact, &scene);
-    let lists = cpu::assign(
-        &grid,
-        &cpu::cluster_bounds(&grid),
-        &cpu::view_lights(&scene.lights, scene.camera.view()),
-        SpotTest::Cone,
-        None,
-        None,
-        None,
-    );
+    let lights = cpu::view_lights(&scene.lights, scene.camera.view());
+    let lists = exact_lists(&grid, &lights, SpotTest::Cone);
     let longest = lists.max_per_cluster;
     assert!(
         longest > 8,
@@ -684,15 +677,7 @@ fn lists_that_outgrow_their_buffer_grow_it_and_stay_exact() {
     );
     let grid = Grid::of(&v.variant, &scene);
     let lights = cpu::view_lights(&scene.lights, scene.camera.view());
-    let want = cpu::assign(
-        &grid,
-        &cpu::cluster_bounds(&grid),
-        &lights,
-        SpotTest::Cone,
-        None,
-        None,
-        None,
-    );
+    let want = exact_lists(&grid, &lights, SpotTest::Cone);
     let total = want.indices.len() as u64;
     // f32 and f64 may decide a borderline light differently (see assert_lists_match).
     assert!(
@@ -728,15 +713,7 @@ fn long_lists_are_sorted_and_complete() {
         let got = r.cluster_lists().unwrap().expect("clustered");
         let grid = Grid::of(v, scene);
         let lights = cpu::view_lights(&scene.lights, scene.camera.view());
-        let want = cpu::assign(
-            &grid,
-            &cpu::cluster_bounds(&grid),
-            &lights,
-            v.clusters().spot_test,
-            None,
-            None,
-            None,
-        );
+        let want = exact_lists(&grid, &lights, v.clusters().spot_test);
         let longest = (0..got.counts.len()).map(|c| got.list(c).len()).max();
         assert!(
             longest > Some(300),
@@ -759,6 +736,26 @@ fn long_lists_are_sorted_and_complete() {
             assert_eq!(listed, expected, "{name}: cluster {c}");
         }
     }
+}
+
+/// Every cluster's exact list by the box test, in f64 (every cluster assigned, no masks).
+fn exact_lists(grid: &Grid, lights: &[cpu::ViewLight], spot_test: SpotTest) -> cpu::ClusterLists {
+    cpu::assign(
+        grid,
+        &cpu::cluster_bounds(grid),
+        lights,
+        spot_test,
+        None,
+        None,
+        None,
+    )
+}
+
+/// The GPU's lists of one frame of `v` on `scene`.
+fn gpu_lists(gpu: &Gpu, composer: &Composer, v: &Variant, scene: &Scene) -> cpu::ClusterLists {
+    let mut r = Renderer::new(gpu, composer, v, scene).unwrap();
+    r.render().unwrap();
+    r.cluster_lists().unwrap().unwrap()
 }
 
 /// The scenes the culling tests run on, 128x72, with a label: the atrium with 700 lights,
@@ -1059,11 +1056,7 @@ fn two_level_lists_equal_one_level_lists() {
             let mut two_level = one_level.clone();
             two_level.clusters.as_mut().unwrap().big_tiles = Some(big);
             let what = format!("{:?} big tiles {big} on {label}", one_level.clusters().grid);
-            let lists = |v: &Variant| {
-                let mut r = Renderer::new(&gpu, &composer, v, &scene).unwrap();
-                r.render().unwrap();
-                r.cluster_lists().unwrap().unwrap()
-            };
+            let lists = |v: &Variant| gpu_lists(&gpu, &composer, v, &scene);
             let (one, two) = (lists(&one_level), lists(&two_level));
             assert!(
                 one.indices.len() > 1000,
@@ -1076,15 +1069,7 @@ fn two_level_lists_equal_one_level_lists() {
             // f64: the lights of each cluster's exact list pass its big tile's coarse test.
             let grid = Grid::of(&one_level, &scene);
             let view_lights = cpu::view_lights(&scene.lights, scene.camera.view());
-            let want = cpu::assign(
-                &grid,
-                &cpu::cluster_bounds(&grid),
-                &view_lights,
-                SpotTest::Cone,
-                None,
-                None,
-                None,
-            );
+            let want = exact_lists(&grid, &view_lights, SpotTest::Cone);
             let rejected = |narrower: u32| {
                 let mut rejected = 0;
                 for c in 0..want.counts.len() {
@@ -1131,11 +1116,7 @@ fn rasterised_binning_keeps_every_light_that_reaches_a_sample() {
             raster_variant(Pipeline::ClusteredDeferred, (24, 12, 64), true),
         ] {
             let what = format!("{:?} {:?} on {label}", v.pipeline, v.clusters().grid);
-            let lists = |v: &Variant| {
-                let mut r = Renderer::new(&gpu, &composer, v, &scene).unwrap();
-                r.render().unwrap();
-                r.cluster_lists().unwrap().unwrap()
-            };
+            let lists = |v: &Variant| gpu_lists(&gpu, &composer, v, &scene);
             let gpu_lists = lists(&v);
             let mut boxes = v.clone();
             boxes.clusters.as_mut().unwrap().culling = Culling::Boxes;
@@ -1154,15 +1135,7 @@ fn rasterised_binning_keeps_every_light_that_reaches_a_sample() {
             // The twin: the box test's lists (all clusters: a twin of active clusters would
             // need the GPU's samples), each kept where the light's proxy holds the tile.
             let view_lights = cpu::view_lights(&scene.lights, scene.camera.view());
-            let all = cpu::assign(
-                &grid,
-                &cpu::cluster_bounds(&grid),
-                &view_lights,
-                SpotTest::Cone,
-                None,
-                None,
-                None,
-            );
+            let all = exact_lists(&grid, &view_lights, SpotTest::Cone);
             let proxy = |l: &cpu::ViewLight, k| cpu::proxy_tiles(&grid, l.center, l.radius, k);
             let twin = cpu::binned(&grid, &all, &view_lights, proxy);
             let (missing, _) = missing_lights(&grid, &scene, &samples, |c| twin.list(c).to_vec());
