@@ -1037,14 +1037,23 @@ fn zbins_keep_every_light_that_reaches_a_sample() {
 
 /// Two-level culling changes how lists are built, never what they hold: on the GPU, the lists
 /// with big tiles equal those without, cluster by cluster (with and without active clusters,
-/// whose big tiles also cull by depth); in f64, every light of a cluster's exact list passes
-/// the coarse test of the big tile `cpu::clusters::big_tile` puts the cluster in. A coarse
-/// test on a big tile one tile too narrow (a deliberate break) must reject some listed light.
+/// whose big tiles also cull by depth; on a scene whose lists pass the 256 entries the fine
+/// pass holds, which it writes in a second walk); in f64, every light of a cluster's exact
+/// list passes the coarse test of the big tile `cpu::clusters::big_tile` puts the cluster in.
+/// A coarse test on a big tile one tile too narrow (a deliberate break) must reject some
+/// listed light.
 #[test]
 fn two_level_lists_equal_one_level_lists() {
     let gpu = gpu();
     let composer = Composer::default();
-    for (label, scene) in culling_scenes() {
+    let mut long = small("atrium", 128, 72, Some(700));
+    long.radius_range = (6.0, 9.0);
+    let long_lists = (
+        "atrium (long lists)".to_string(),
+        scene::generate("atrium", long).unwrap(),
+    );
+    let mut longest = 0;
+    for (label, scene) in culling_scenes().into_iter().chain([long_lists]) {
         let mut active = depth_mask_variant(
             Pipeline::ClusteredForward,
             (24, 16, 32),
@@ -1066,6 +1075,7 @@ fn two_level_lists_equal_one_level_lists() {
             for c in 0..one.counts.len() {
                 assert_eq!(one.list(c), two.list(c), "{what}: cluster {c}");
             }
+            longest = longest.max(two.max_per_cluster);
             // f64: the lights of each cluster's exact list pass its big tile's coarse test.
             let grid = Grid::of(&one_level, &scene);
             let view_lights = cpu::view_lights(&scene.lights, scene.camera.view());
@@ -1099,6 +1109,10 @@ fn two_level_lists_equal_one_level_lists() {
             );
         }
     }
+    assert!(
+        longest > 256,
+        "no list passed what the fine pass holds (longest {longest})"
+    );
 }
 
 /// Rasterised binning never leaves out a light that reaches a visible sample, on the GPU and

