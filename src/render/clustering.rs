@@ -211,11 +211,7 @@ pub fn encode(
             ("finish_lists", (clusters, 1, 1)),
         ],
     };
-    let skip = std::env::var("HACK_SKIP").unwrap_or_default();
     for (entry, (x, y, z)) in dispatches {
-        if skip.split(',').any(|e| e == entry) {
-            continue;
-        }
         cp.set_pipeline(p.get(entry));
         cp.dispatch_workgroups(x, y, z);
     }
