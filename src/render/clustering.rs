@@ -138,12 +138,12 @@ pub fn encode(
             encoder.clear_buffer(&c.counts, 0, None);
             encoder.clear_buffer(&c.offsets, 0, None);
             encoder.clear_buffer(&c.coarse_masks, 0, None);
-            encoder.clear_buffer(&c.sort_jobs, 0, Some(16));
+            c.clear_long_lists(encoder);
         }
         ClusterPass::LightAssign => {
             encoder.clear_buffer(&c.counts, 0, None);
             encoder.clear_buffer(&c.fill_cursors, 0, None);
-            encoder.clear_buffer(&c.sort_jobs, 0, Some(16));
+            c.clear_long_lists(encoder);
             if c.culling == Culling::Rasterised {
                 encoder.clear_buffer(&c.proxy_draw, 0, None);
             }

@@ -88,8 +88,8 @@ pub struct ClusterBuffers {
     pub light_ranges: wgpu::Buffer,
     pub fill_cursors: wgpu::Buffer,
     pub sample_depths: wgpu::Buffer,
-    /// The long lists to sort (`SortJobs` in build_bindings.wesl): a 16-byte header, then
-    /// (cluster, entries) each.
+    /// The long lists to sort, or with two-level culling to write (`SortJobs` in
+    /// build_bindings.wesl): a 16-byte header, then (cluster, entries) each.
     pub sort_jobs: wgpu::Buffer,
     /// The indirect dispatch of the long-list sort, copied from `sort_jobs`' header (a
     /// buffer cannot be bound for storage and read as indirect arguments in one dispatch).
@@ -183,6 +183,16 @@ fn coarse_bytes(grid: (u32, u32, u32), big: u32, words: u64) -> u64 {
     big_tiles * (words + words.div_ceil(32)) * 4
 }
 
+/// The long lists' buffer (`SortJobs` in build_bindings.wesl), its dispatch header
+/// (x, y, z, jobs) made (0, 1, 1, 0): frames reset only x and jobs
+/// ([`ClusterBuffers::clear_long_lists`]).
+fn sort_jobs(gpu: &Gpu, size: u64) -> wgpu::Buffer {
+    let buffer = storage(gpu, "long lists", size);
+    gpu.queue
+        .write_buffer(&buffer, 4, bytemuck::cast_slice(&[1u32, 1u32]));
+    buffer
+}
+
 fn storage(gpu: &Gpu, label: &str, size: u64) -> wgpu::Buffer {
     gpu.device.create_buffer(&wgpu::BufferDescriptor {
         label: Some(label),
@@ -255,7 +265,7 @@ impl ClusterBuffers {
             light_ranges: storage(gpu, "light cluster ranges", lights.max(1) as u64 * 16),
             fill_cursors: storage(gpu, "fill cursors", sized(lists, n * 4)),
             sample_depths: storage(gpu, "cluster sample depths", sized(lists, n * 8)),
-            sort_jobs: storage(gpu, "long-list sort jobs", sized(lists, 16 + n * 8)),
+            sort_jobs: sort_jobs(gpu, sized(lists, 16 + n * 8)),
             sort_dispatch: gpu.device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("long-list sort dispatch"),
                 size: SORT_DISPATCH_BYTES,
@@ -345,6 +355,12 @@ impl ClusterBuffers {
         .iter()
         .map(|b| b.size())
         .sum()
+    }
+
+    /// Clear the long lists' workgroup and job counts (the header's x and fourth word).
+    pub fn clear_long_lists(&self, encoder: &mut wgpu::CommandEncoder) {
+        encoder.clear_buffer(&self.sort_jobs, 0, Some(4));
+        encoder.clear_buffer(&self.sort_jobs, 12, Some(4));
     }
 
     /// Replace the index buffer with one of `capacity` entries (bind groups must be remade).
