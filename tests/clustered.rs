@@ -1192,3 +1192,62 @@ fn rasterised_binning_keeps_every_light_that_reaches_a_sample() {
         }
     }
 }
+
+/// Rasterised binning's lists come out of its draw in the order the draw meets the lights,
+/// which is index order only where the rasteriser keeps primitive order; `find_unsorted`
+/// marks every list that is not, and `finish_lists` sorts those. The break that exercises
+/// it: shaders whose `split_lights` lays the proxies out in reverse, so that the draw meets
+/// each cluster's lights in descending order. The lists must still come back ascending and
+/// equal to those of the shipped shaders.
+#[test]
+fn rasterised_lists_are_sorted_whatever_order_the_draw_meets_lights_in() {
+    let gpu = gpu();
+    let shipped = Composer::default();
+    let reversed_root = std::env::temp_dir().join(format!(
+        "clusterlab-reversed-proxies-{}",
+        std::process::id()
+    ));
+    copy_dir(shipped.shader_root(), &reversed_root);
+    let split = reversed_root.join("passes/light_assign.wesl");
+    let source = std::fs::read_to_string(&split).unwrap();
+    let write = "light_proxies[at] = vec4<u32>(i, s, p.x, p.y);";
+    assert!(
+        source.contains(write),
+        "split_lights no longer writes `{write}`"
+    );
+    let reversed = source.replace(
+        write,
+        "light_proxies[atomicLoad(&proxy_draw.instances) - 1u - at] = vec4<u32>(i, s, p.x, p.y);",
+    );
+    std::fs::write(&split, reversed).unwrap();
+    let reversed = Composer::new(&reversed_root);
+    let (_, scene) = culling_scenes().remove(0);
+    let v = raster_variant(Pipeline::ClusteredForward, (16, 9, 24), false);
+    let want = gpu_lists(&gpu, &shipped, &v, &scene);
+    let got = gpu_lists(&gpu, &reversed, &v, &scene);
+    std::fs::remove_dir_all(&reversed_root).unwrap();
+    let mut long = 0;
+    for c in 0..want.counts.len() {
+        let list = got.list(c);
+        assert!(
+            list.windows(2).all(|w| w[0] < w[1]),
+            "cluster {c}'s list {list:?} is not ascending"
+        );
+        assert_eq!(list, want.list(c), "cluster {c}");
+        long += usize::from(list.len() > 1);
+    }
+    assert!(long > 100, "only {long} lists of two lights or more");
+}
+
+fn copy_dir(from: &std::path::Path, to: &std::path::Path) {
+    std::fs::create_dir_all(to).unwrap();
+    for entry in std::fs::read_dir(from).unwrap() {
+        let entry = entry.unwrap();
+        let target = to.join(entry.file_name());
+        if entry.file_type().unwrap().is_dir() {
+            copy_dir(&entry.path(), &target);
+        } else {
+            std::fs::copy(entry.path(), target).unwrap();
+        }
+    }
+}

@@ -2,7 +2,9 @@
 //! build cluster boxes and assign lights (count, prefix sum, fill). Their entry points, the
 //! buffers they clear and their dispatches.
 
-use super::clusters::{BIN_TARGET_FORMAT, ClusterBuffers, SCAN_BLOCK, SORT_DISPATCH_BYTES};
+use super::clusters::{
+    BIN_TARGET_FORMAT, ClusterBuffers, SCAN_BLOCK, SCATTER_DISPATCH_AT, SORT_DISPATCH_BYTES,
+};
 use super::passes::{
     ComputePipelines, begin_render, color_target, render_pipeline, set_compute_groups,
 };
@@ -10,14 +12,13 @@ use crate::compose::{ClusterPass, ComposedPass};
 use crate::gpu::{Gpu, GpuError, TimestampSlot};
 use crate::variant::Culling;
 
-/// Rasterised binning's two draws of the light proxies: counting, then filling the lists.
+/// Rasterised binning's draw of the light proxies, which counts and records the pairs.
 pub struct BinningPipelines {
-    count: wgpu::RenderPipeline,
-    fill: wgpu::RenderPipeline,
+    draw: wgpu::RenderPipeline,
 }
 
 impl BinningPipelines {
-    /// The draws of light assignment pass `pass` (composed with `raster_binning`).
+    /// The draw of light assignment pass `pass` (composed with `raster_binning`).
     pub fn new(
         gpu: &Gpu,
         pass: &ComposedPass,
@@ -33,20 +34,16 @@ impl BinningPipelines {
                 shader_location: 0,
             }],
         };
-        let draw = |fs| {
-            render_pipeline(
+        Ok(Self {
+            draw: render_pipeline(
                 gpu,
                 pass,
                 layout,
-                ("bin_vertex", Some(fs)),
-                &[Some(instances.clone())],
+                ("bin_vertex", Some("bin_lights")),
+                &[Some(instances)],
                 &[color_target(BIN_TARGET_FORMAT)],
                 None,
-            )
-        };
-        Ok(Self {
-            count: draw("bin_count")?,
-            fill: draw("bin_fill")?,
+            )?,
         })
     }
 }
@@ -81,9 +78,13 @@ pub fn entries(pass: ClusterPass, culling: Culling, two_level: bool) -> &'static
         ],
         ClusterPass::LightAssign if culling == Culling::Rasterised => &[
             "transform_lights",
+            "count_proxies",
+            "place_proxies",
             "split_lights",
             "scan_local",
             "scan_blocks",
+            "scatter_pairs",
+            "find_unsorted",
             "finish_lists",
             "sort_long_lists",
         ],
@@ -245,9 +246,25 @@ fn encode_long_lists(
     cp.dispatch_workgroups_indirect(&c.sort_dispatch, 0);
 }
 
-/// Rasterised binning's light assignment: view-space lights and their proxies (compute),
-/// the count draw, the prefix sum (compute), the fill draw, then lists finished and sorted
-/// as the compute method's.
+/// A compute pass of rasterised binning's light assignment, its bind groups set.
+fn begin_assignment<'e>(
+    encoder: &'e mut wgpu::CommandEncoder,
+    groups: &[Option<wgpu::BindGroup>],
+    timestamps: Option<wgpu::ComputePassTimestampWrites<'e>>,
+) -> wgpu::ComputePass<'e> {
+    let mut cp = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+        label: Some("light assignment"),
+        timestamp_writes: timestamps,
+    });
+    set_compute_groups(&mut cp, groups);
+    cp
+}
+
+/// Rasterised binning's light assignment: view-space lights and their proxies in light
+/// order (compute: count, place, write), the draw that counts and records the pairs, the
+/// prefix sum (compute), the pairs scattered into the lists and the lists left out of order
+/// marked (indirect dispatches), then lists finished, and the marked ones sorted, as the
+/// compute method's.
 fn encode_binning(
     p: &ComputePipelines,
     binning: Option<&BinningPipelines>,
@@ -259,20 +276,23 @@ fn encode_binning(
 ) {
     // Both are made with the pass whenever its variant culls by rasterised binning.
     let (Some(binning), Some(target)) = (binning, &c.bin_target) else {
-        unreachable!("rasterised binning without its draws or target");
+        unreachable!("rasterised binning without its draw or target");
     };
-    let compute = |encoder: &mut wgpu::CommandEncoder, timestamps, steps: &[(&str, u32)]| {
-        let mut cp = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some("light assignment"),
-            timestamp_writes: timestamps,
-        });
-        set_compute_groups(&mut cp, groups);
-        for &(entry, x) in steps {
+    {
+        let mut cp = begin_assignment(encoder, groups, TimestampSlot::compute_part(slot, false));
+        for (entry, workgroups) in [
+            ("transform_lights", dispatch_size(lights, 64)),
+            ("count_proxies", dispatch_size(lights, 64)),
+            ("place_proxies", 1),
+            ("split_lights", dispatch_size(lights, 64)),
+        ] {
             cp.set_pipeline(p.get(entry));
-            cp.dispatch_workgroups(x, 1, 1);
+            cp.dispatch_workgroups(workgroups, 1, 1);
         }
-    };
-    let draw = |encoder: &mut wgpu::CommandEncoder, pipeline: &wgpu::RenderPipeline| {
+    }
+    encoder.copy_buffer_to_buffer(&c.proxy_draw, 0, &c.proxy_draw_args, 0, 16);
+    encoder.copy_buffer_to_buffer(&c.light_proxies, 0, &c.proxy_instances, 0, None);
+    {
         let mut rp = begin_render(
             encoder,
             "light binning",
@@ -289,33 +309,33 @@ fn encode_binning(
             None,
             groups,
         );
-        rp.set_pipeline(pipeline);
+        rp.set_pipeline(&binning.draw);
         rp.set_vertex_buffer(0, c.proxy_instances.slice(..));
         rp.draw_indirect(&c.proxy_draw_args, 0);
-    };
-    let per_light = dispatch_size(lights, 64);
-    compute(
-        encoder,
-        TimestampSlot::compute_part(slot, false),
-        &[("transform_lights", per_light), ("split_lights", per_light)],
+    }
+    {
+        let mut cp = begin_assignment(encoder, groups, None);
+        cp.set_pipeline(p.get("scan_local"));
+        cp.dispatch_workgroups(dispatch_size(c.clusters, SCAN_BLOCK), 1, 1);
+        cp.set_pipeline(p.get("scan_blocks"));
+        cp.dispatch_workgroups(1, 1, 1);
+    }
+    encoder.copy_buffer_to_buffer(
+        &c.proxy_draw,
+        SCATTER_DISPATCH_AT,
+        &c.scatter_dispatch,
+        0,
+        SORT_DISPATCH_BYTES,
     );
-    encoder.copy_buffer_to_buffer(&c.proxy_draw, 0, &c.proxy_draw_args, 0, 16);
-    encoder.copy_buffer_to_buffer(&c.light_proxies, 0, &c.proxy_instances, 0, None);
-    draw(encoder, &binning.count);
-    compute(
-        encoder,
-        None,
-        &[
-            ("scan_local", dispatch_size(c.clusters, SCAN_BLOCK)),
-            ("scan_blocks", 1),
-        ],
-    );
-    draw(encoder, &binning.fill);
-    compute(
-        encoder,
-        None,
-        &[("finish_lists", dispatch_size(c.clusters, 64))],
-    );
+    {
+        let mut cp = begin_assignment(encoder, groups, None);
+        for entry in ["scatter_pairs", "find_unsorted"] {
+            cp.set_pipeline(p.get(entry));
+            cp.dispatch_workgroups_indirect(&c.scatter_dispatch, 0);
+        }
+        cp.set_pipeline(p.get("finish_lists"));
+        cp.dispatch_workgroups(dispatch_size(c.clusters, 64), 1, 1);
+    }
     encode_long_lists(p, groups, encoder, slot, c);
 }
 

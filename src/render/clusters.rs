@@ -66,6 +66,8 @@ mod binding {
     pub const BIG_TILE_DEPTHS: u32 = 18;
     pub const LIGHT_PROXIES: u32 = 19;
     pub const PROXY_DRAW: u32 = 20;
+    pub const BIN_PAIRS: u32 = 21;
+    pub const PROXY_PLACES: u32 = 22;
 }
 
 /// Bytes of an indirect dispatch's arguments (x, y, z).
@@ -73,6 +75,14 @@ pub const SORT_DISPATCH_BYTES: u64 = 12;
 
 /// Clusters of one scan workgroup (`SCAN_BLOCK` in light_assign.wesl).
 pub const SCAN_BLOCK: u32 = 1024;
+
+/// Bytes of rasterised binning's `ProxyDraw` (build_bindings.wesl): the indirect draw, the
+/// pair count, then the scatter's indirect dispatch from this offset.
+const PROXY_DRAW_BYTES: u64 = 32;
+pub const SCATTER_DISPATCH_AT: u64 = 20;
+
+/// Bytes of one of rasterised binning's recorded pairs: cluster, light, place in the list.
+const PAIR_BYTES: u64 = 12;
 
 pub struct ClusterBuffers {
     pub clusters: u32,
@@ -106,14 +116,21 @@ pub struct ClusterBuffers {
     pub coarse_masks: wgpu::Buffer,
     /// Two-level culling with active clusters: each big tile's sample depth range.
     pub big_tile_depths: wgpu::Buffer,
-    /// Rasterised binning: each light's proxies as the compute pass appends them, and their
-    /// indirect draw (`ProxyDraw` in build_bindings.wesl).
+    /// Rasterised binning: the lights' proxies in light order (`split_lights`), their
+    /// indirect draw with the pair count and the scatter's dispatch (`ProxyDraw` in
+    /// build_bindings.wesl), and the (cluster, light) pairs the draw records, as many as
+    /// the index buffer has entries.
     pub light_proxies: wgpu::Buffer,
     pub proxy_draw: wgpu::Buffer,
-    /// Copies of those the draws read as instances and indirect arguments (a buffer bound
-    /// for storage in a pass cannot also be its vertex or indirect buffer).
+    pub bin_pairs: wgpu::Buffer,
+    /// Rasterised binning: each light's proxy count, then its first proxy's place.
+    pub proxy_places: wgpu::Buffer,
+    /// Copies of those the draw reads as instances and indirect arguments, and of the
+    /// scatter's dispatch (a buffer bound for storage in a pass cannot also be its vertex
+    /// or indirect buffer).
     pub proxy_instances: wgpu::Buffer,
     pub proxy_draw_args: wgpu::Buffer,
+    pub scatter_dispatch: wgpu::Buffer,
     /// Rasterised binning: the one-pixel-per-tile target the proxies are drawn into.
     pub bin_target: Option<wgpu::TextureView>,
     /// Tiles per big tile side with two-level culling.
@@ -156,6 +173,14 @@ pub fn check_zbinning(gpu: &Gpu, grid: (u32, u32, u32), lights: usize) -> Result
 
 /// Format of rasterised binning's target (its colour is never read).
 pub const BIN_TARGET_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R8Unorm;
+
+/// Size of rasterised binning's target: an atlas of a pixel per tile for each slice, at
+/// most 8 slices across (`atlas_columns` in raster_bin.wesl). At most 1024 x 4096 pixels
+/// (`variant::MAX_GRID_XY`, `MAX_GRID_Z`).
+fn bin_target_size(grid: (u32, u32, u32)) -> (u32, u32) {
+    let columns = grid.2.min(8);
+    (grid.0 * columns, grid.1 * grid.2.div_ceil(columns))
+}
 
 /// Bytes of rasterised binning's proxies for `lights` lights on `grid`: at most one per
 /// light and slice, 16 bytes each.
@@ -296,16 +321,27 @@ impl ClusterBuffers {
                 big_tiles.map_or(16, |b| (grid.0.div_ceil(b) * grid.1.div_ceil(b)) as u64 * 8),
             ),
             light_proxies: storage(gpu, "light proxies", proxy_bytes),
-            proxy_draw: storage(gpu, "proxy draw", 16),
+            proxy_draw: storage(gpu, "proxy draw", sized(raster, PROXY_DRAW_BYTES)),
+            bin_pairs: storage(
+                gpu,
+                "binned pairs",
+                sized(raster, index_capacity as u64 * PAIR_BYTES),
+            ),
+            proxy_places: storage(gpu, "proxy places", sized(raster, lights as u64 * 4)),
             proxy_instances: copy_of("proxy instances", proxy_bytes, wgpu::BufferUsages::VERTEX),
             proxy_draw_args: copy_of("proxy draw arguments", 16, wgpu::BufferUsages::INDIRECT),
+            scatter_dispatch: copy_of(
+                "pair scatter dispatch",
+                SORT_DISPATCH_BYTES,
+                wgpu::BufferUsages::INDIRECT,
+            ),
             bin_target: raster.then(|| {
                 gpu.device
                     .create_texture(&wgpu::TextureDescriptor {
                         label: Some("binning target"),
                         size: wgpu::Extent3d {
-                            width: grid.0,
-                            height: grid.1,
+                            width: bin_target_size(grid).0,
+                            height: bin_target_size(grid).1,
                             depth_or_array_layers: 1,
                         },
                         mip_level_count: 1,
@@ -349,8 +385,11 @@ impl ClusterBuffers {
             &self.big_tile_depths,
             &self.light_proxies,
             &self.proxy_draw,
+            &self.bin_pairs,
+            &self.proxy_places,
             &self.proxy_instances,
             &self.proxy_draw_args,
+            &self.scatter_dispatch,
         ]
         .iter()
         .map(|b| b.size())
@@ -366,6 +405,9 @@ impl ClusterBuffers {
     /// Replace the index buffer with one of `capacity` entries (bind groups must be remade).
     pub fn grow_indices(&mut self, gpu: &Gpu, capacity: u32) {
         self.indices = storage(gpu, "light indices", capacity as u64 * 4);
+        if self.culling == Culling::Rasterised {
+            self.bin_pairs = storage(gpu, "binned pairs", capacity as u64 * PAIR_BYTES);
+        }
         self.index_capacity = capacity;
     }
 
@@ -394,6 +436,8 @@ impl ClusterBuffers {
             binding::BIG_TILE_DEPTHS => &self.big_tile_depths,
             binding::LIGHT_PROXIES => &self.light_proxies,
             binding::PROXY_DRAW => &self.proxy_draw,
+            binding::BIN_PAIRS => &self.bin_pairs,
+            binding::PROXY_PLACES => &self.proxy_places,
             _ => return None,
         })
     }

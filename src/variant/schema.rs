@@ -179,9 +179,10 @@ pub enum Culling {
     ZBinning,
     /// Ortegren and Persson 2016's rasterised binning (Bevy's GPU clustering): a compute pass
     /// splits each light into one proxy per z slice its sphere reaches, the rectangle of
-    /// tiles that the sphere's part within that slice's depths projects onto; a raster pass
-    /// draws the proxies into a one-pixel-per-tile target, each fragment testing its cluster
-    /// as `Boxes` does and counting the light there, and a second draw fills the lists.
+    /// tiles that the sphere's part within that slice's depths projects onto; one draw of
+    /// the proxies into a one-pixel-per-tile target (a cell per slice), each fragment
+    /// testing its cluster as `Boxes` does, counting the light there and recording the pair,
+    /// then a compute pass writes the recorded pairs into the lists.
     /// Coverage is conservative by construction: each proxy's corners lie on tile
     /// boundaries, so a tile is drawn exactly when the rectangle holds it (no conservative
     /// rasterisation needed). Works with active clusters and sample bounds; GPU assignment.
