@@ -83,6 +83,7 @@ pub fn entries(pass: ClusterPass, culling: Culling, two_level: bool) -> &'static
             "split_lights",
             "scan_local",
             "scan_blocks",
+            "size_pair_passes",
             "scatter_pairs",
             "find_unsorted",
             "finish_lists",
@@ -318,6 +319,8 @@ fn encode_binning(
         cp.set_pipeline(p.get("scan_local"));
         cp.dispatch_workgroups(dispatch_size(c.clusters, SCAN_BLOCK), 1, 1);
         cp.set_pipeline(p.get("scan_blocks"));
+        cp.dispatch_workgroups(1, 1, 1);
+        cp.set_pipeline(p.get("size_pair_passes"));
         cp.dispatch_workgroups(1, 1, 1);
     }
     encoder.copy_buffer_to_buffer(
