@@ -1202,41 +1202,109 @@ fn rasterised_binning_keeps_every_light_that_reaches_a_sample() {
 #[test]
 fn rasterised_lists_are_sorted_whatever_order_the_draw_meets_lights_in() {
     let gpu = gpu();
-    let shipped = Composer::default();
-    let reversed_root = std::env::temp_dir().join(format!(
-        "clusterlab-reversed-proxies-{}",
-        std::process::id()
-    ));
-    copy_dir(shipped.shader_root(), &reversed_root);
-    let split = reversed_root.join("passes/light_assign.wesl");
-    let source = std::fs::read_to_string(&split).unwrap();
-    let write = "light_proxies[at] = vec4<u32>(i, s, p.x, p.y);";
-    assert!(
-        source.contains(write),
-        "split_lights no longer writes `{write}`"
+    let reversed = EditedShaders::new(
+        "reversed-proxies",
+        &[(
+            "light_proxies[at] = vec4<u32>(i, s, p.x, p.y);",
+            "light_proxies[atomicLoad(&proxy_draw.instances) - 1u - at] = vec4<u32>(i, s, p.x, p.y);",
+        )],
     );
-    let reversed = source.replace(
-        write,
-        "light_proxies[atomicLoad(&proxy_draw.instances) - 1u - at] = vec4<u32>(i, s, p.x, p.y);",
-    );
-    std::fs::write(&split, reversed).unwrap();
-    let reversed = Composer::new(&reversed_root);
     let (_, scene) = culling_scenes().remove(0);
     let v = raster_variant(Pipeline::ClusteredForward, (16, 9, 24), false);
-    let want = gpu_lists(&gpu, &shipped, &v, &scene);
-    let got = gpu_lists(&gpu, &reversed, &v, &scene);
-    std::fs::remove_dir_all(&reversed_root).unwrap();
+    let want = gpu_lists(&gpu, &Composer::default(), &v, &scene);
+    assert_sorted_and_equal(
+        &gpu_lists(&gpu, &reversed.composer, &v, &scene),
+        &want,
+        "reversed proxies",
+    );
+}
+
+/// One-level assignment fills each list band by band (`band_unit` in light_assign.wesl),
+/// each band in the order the dispatch runs its lights: index order on a software GPU whose
+/// threads take contiguous chunks of workgroups, so `finish_lists` finds nothing to move
+/// there, and tests on such an adapter would not see its sort fail. The breaks that exercise
+/// it: shaders whose per-light passes take the lights in reverse, so that every band fills
+/// in descending order, and shaders with one band, as from 65536 lights on. The lists must
+/// still come back ascending and equal to those of the shipped shaders.
+#[test]
+fn one_level_lists_are_sorted_whatever_order_lights_fill_them_in() {
+    let gpu = gpu();
+    let (_, scene) = culling_scenes().remove(0);
+    let v = clustered(Pipeline::ClusteredForward, Clusters::default().slicing);
+    let want = gpu_lists(&gpu, &Composer::default(), &v, &scene);
+    let light_of = "return group.x + group.y * LIGHTS_PER_ROW;";
+    let reversed = EditedShaders::new(
+        "reversed-lights",
+        &[(
+            light_of,
+            "return view.light_count - 1u - (group.x + group.y * LIGHTS_PER_ROW);",
+        )],
+    );
+    assert_sorted_and_equal(
+        &gpu_lists(&gpu, &reversed.composer, &v, &scene),
+        &want,
+        "lights in reverse",
+    );
+    let one_band = EditedShaders::new(
+        "one-band",
+        &[("return view.light_count < 65536u;", "return false;")],
+    );
+    assert_sorted_and_equal(
+        &gpu_lists(&gpu, &one_band.composer, &v, &scene),
+        &want,
+        "one band",
+    );
+}
+
+/// Every list of `got` ascending and equal to `want`'s, and more than 100 of them with two
+/// lights or more (so that order could be wrong).
+fn assert_sorted_and_equal(got: &cpu::ClusterLists, want: &cpu::ClusterLists, what: &str) {
     let mut long = 0;
     for c in 0..want.counts.len() {
         let list = got.list(c);
         assert!(
             list.windows(2).all(|w| w[0] < w[1]),
-            "cluster {c}'s list {list:?} is not ascending"
+            "{what}: cluster {c}'s list {list:?} is not ascending"
         );
-        assert_eq!(list, want.list(c), "cluster {c}");
+        assert_eq!(list, want.list(c), "{what}: cluster {c}");
         long += usize::from(list.len() > 1);
     }
-    assert!(long > 100, "only {long} lists of two lights or more");
+    assert!(
+        long > 100,
+        "{what}: only {long} lists of two lights or more"
+    );
+}
+
+/// A copy of the shipped shaders with edits to `passes/light_assign.wesl`, each replacing
+/// text that must be there; removed when dropped.
+struct EditedShaders {
+    root: std::path::PathBuf,
+    composer: Composer,
+}
+
+impl EditedShaders {
+    fn new(name: &str, edits: &[(&str, &str)]) -> Self {
+        let root = std::env::temp_dir().join(format!("clusterlab-{name}-{}", std::process::id()));
+        copy_dir(Composer::default().shader_root(), &root);
+        let file = root.join("passes/light_assign.wesl");
+        let mut source = std::fs::read_to_string(&file).unwrap();
+        for (from, to) in edits {
+            assert!(
+                source.contains(from),
+                "light_assign.wesl no longer has `{from}`"
+            );
+            source = source.replace(from, to);
+        }
+        std::fs::write(&file, source).unwrap();
+        let composer = Composer::new(&root);
+        EditedShaders { root, composer }
+    }
+}
+
+impl Drop for EditedShaders {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.root);
+    }
 }
 
 fn copy_dir(from: &std::path::Path, to: &std::path::Path) {
