@@ -1232,11 +1232,10 @@ fn one_level_lists_are_sorted_whatever_order_lights_fill_them_in() {
     let (_, scene) = culling_scenes().remove(0);
     let v = clustered(Pipeline::ClusteredForward, Clusters::default().slicing);
     let want = gpu_lists(&gpu, &Composer::default(), &v, &scene);
-    let light_of = "return group.x + group.y * LIGHTS_PER_ROW;";
     let reversed = EditedShaders::new(
         "reversed-lights",
         &[(
-            light_of,
+            "return group.x + group.y * LIGHTS_PER_ROW;",
             "return view.light_count - 1u - (group.x + group.y * LIGHTS_PER_ROW);",
         )],
     );

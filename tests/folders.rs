@@ -22,10 +22,21 @@ fn start(dir: &Path, size: &str, out: &str) -> Child {
     start_timing(dir, size, out, "1")
 }
 
-/// A run with `frames` timed frames per cell (more: a longer run to interrupt).
+/// A run with `frames` timed frames per cell (more: a longer run to interrupt). SIGINT
+/// stops it whatever the test inherited: a shell starts a background job with SIGINT
+/// ignored, and its children would ignore it too.
 fn start_timing(dir: &Path, size: &str, out: &str, frames: &str) -> Child {
+    use std::os::unix::process::CommandExt;
     let variants = std::fs::canonicalize("variants").unwrap();
-    Command::new(env!("CARGO_BIN_EXE_clusterlab"))
+    let mut command = Command::new(env!("CARGO_BIN_EXE_clusterlab"));
+    // SAFETY: signal() is async-signal-safe, as pre_exec requires.
+    unsafe {
+        command.pre_exec(|| {
+            libc::signal(libc::SIGINT, libc::SIG_DFL);
+            Ok(())
+        });
+    }
+    command
         .current_dir(dir)
         .args([
             "matrix",
@@ -110,10 +121,12 @@ fn interrupted_runs_leave_the_previous_run_whole() {
             .args([&format!("-{signal}"), &child.id().to_string()])
             .status()
             .unwrap();
-        let status = child.wait().unwrap();
+        let output = child.wait_with_output().unwrap();
         assert!(
-            !finished && !status.success(),
-            "SIGINT after {after_ms} ms: the run ended first; make it longer"
+            !finished && !output.status.success(),
+            "SIG{signal} after {after_ms} ms: the run ended first ({}); stderr: {}",
+            output.status,
+            String::from_utf8_lossy(&output.stderr)
         );
         assert_eq!(
             check_complete(&out, (16, 9)),
