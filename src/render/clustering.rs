@@ -3,7 +3,7 @@
 //! buffers they clear and their dispatches.
 
 use super::clusters::{
-    BIN_TARGET_FORMAT, ClusterBuffers, SCAN_BLOCK, SCATTER_DISPATCH_AT, SORT_DISPATCH_BYTES,
+    BIN_TARGET_FORMAT, ClusterBuffers, DISPATCH_ARGS_BYTES, SCAN_BLOCK, SCATTER_DISPATCH_AT,
 };
 use super::passes::{
     ComputePipelines, begin_render, color_target, render_pipeline, set_compute_groups,
@@ -233,7 +233,7 @@ fn encode_long_lists(
     slot: Option<TimestampSlot<'_>>,
     c: &ClusterBuffers,
 ) {
-    encoder.copy_buffer_to_buffer(&c.sort_jobs, 0, &c.sort_dispatch, 0, SORT_DISPATCH_BYTES);
+    encoder.copy_buffer_to_buffer(&c.sort_jobs, 0, &c.sort_dispatch, 0, DISPATCH_ARGS_BYTES);
     let mut cp = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
         label: Some("long lists"),
         timestamp_writes: TimestampSlot::compute_part(slot, true),
@@ -328,7 +328,7 @@ fn encode_binning(
         SCATTER_DISPATCH_AT,
         &c.scatter_dispatch,
         0,
-        SORT_DISPATCH_BYTES,
+        DISPATCH_ARGS_BYTES,
     );
     {
         let mut cp = begin_assignment(encoder, groups, None);

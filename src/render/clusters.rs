@@ -71,7 +71,7 @@ mod binding {
 }
 
 /// Bytes of an indirect dispatch's arguments (x, y, z).
-pub const SORT_DISPATCH_BYTES: u64 = 12;
+pub const DISPATCH_ARGS_BYTES: u64 = 12;
 
 /// Clusters of one scan workgroup (`SCAN_BLOCK` in light_assign.wesl).
 pub const SCAN_BLOCK: u32 = 1024;
@@ -293,7 +293,7 @@ impl ClusterBuffers {
             sort_jobs: sort_jobs(gpu, sized(lists, 16 + n * 8)),
             sort_dispatch: gpu.device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("long-list sort dispatch"),
-                size: SORT_DISPATCH_BYTES,
+                size: DISPATCH_ARGS_BYTES,
                 usage: wgpu::BufferUsages::INDIRECT | wgpu::BufferUsages::COPY_DST,
                 mapped_at_creation: false,
             }),
@@ -332,16 +332,17 @@ impl ClusterBuffers {
             proxy_draw_args: copy_of("proxy draw arguments", 16, wgpu::BufferUsages::INDIRECT),
             scatter_dispatch: copy_of(
                 "pair scatter dispatch",
-                SORT_DISPATCH_BYTES,
+                DISPATCH_ARGS_BYTES,
                 wgpu::BufferUsages::INDIRECT,
             ),
             bin_target: raster.then(|| {
+                let atlas = bin_target_size(grid);
                 gpu.device
                     .create_texture(&wgpu::TextureDescriptor {
                         label: Some("binning target"),
                         size: wgpu::Extent3d {
-                            width: bin_target_size(grid).0,
-                            height: bin_target_size(grid).1,
+                            width: atlas.0,
+                            height: atlas.1,
                             depth_or_array_layers: 1,
                         },
                         mip_level_count: 1,
