@@ -9,6 +9,7 @@ use std::path::Path;
 use clusterlab::compose::{self, Composer};
 use clusterlab::cpu::post::{self, CameraPair, Geometry, Image, PostParams};
 use clusterlab::gpu::Gpu;
+use clusterlab::reference::{ReferenceCache, reference_frame};
 use clusterlab::render::Renderer;
 use clusterlab::scene::{self, Scene};
 use clusterlab::twins;
@@ -368,4 +369,38 @@ fn gpu_times_name_exactly_the_passes_that_ran() {
             .collect();
         assert_eq!(present, expected, "{name}");
     }
+}
+
+/// The matrix's reference cache shares the f64 shading between variants that rasterise and
+/// shade alike, whatever their post effects: each frame it gives must be the one computed on
+/// its own.
+#[test]
+fn cached_references_equal_references_computed_alone() {
+    let gpu = gpu();
+    let composer = Composer::default();
+    let scene = atrium();
+    let cache = ReferenceCache::default();
+    // The same rasterisation and shading under three post chains; then a depth pre-pass.
+    let names = [
+        "clustered_deferred_16x16x24",
+        "clustered_deferred_toon_post",
+        "clustered_deferred_bloom_separable",
+        "forward_plus",
+    ];
+    for name in names {
+        let v = load(name);
+        let (cached, _) = cache.get_or_compute(&gpu, &composer, &v, &scene).unwrap();
+        let (alone, _) = reference_frame(&gpu, &composer, &v, &scene).unwrap();
+        assert!(
+            cached.hdr == alone.hdr,
+            "{name}: HDR differs from its own reference"
+        );
+        assert!(cached.ldr == alone.ldr, "{name}: 8-bit image differs");
+    }
+    let (frames, shadings) = cache.counts();
+    assert_eq!(frames, 4);
+    assert!(
+        (1..=2).contains(&shadings),
+        "{shadings} shadings for 4 frames: the three without a pre-pass share one"
+    );
 }

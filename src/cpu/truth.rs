@@ -19,6 +19,19 @@ pub struct RasterTruth {
 }
 
 impl RasterTruth {
+    /// Whether `other` holds the same coverage and attributes, bit for bit (so that
+    /// shading either gives the same frame).
+    pub fn same_as(&self, other: &RasterTruth) -> bool {
+        fn bytes(v: &[[f32; 4]]) -> &[u8] {
+            bytemuck::cast_slice(v)
+        }
+        self.width == other.width
+            && self.height == other.height
+            && bytes(&self.position) == bytes(&other.position)
+            && bytes(&self.normal) == bytes(&other.normal)
+            && bytes(&self.albedo) == bytes(&other.albedo)
+    }
+
     pub fn covered(&self, i: usize) -> bool {
         self.position[i][3] > 0.5
     }

@@ -161,6 +161,12 @@ pub struct RunCost {
     pub pipelines: PipelineStats,
     pub warmup_frames: u32,
     pub timed_frames: u32,
+    /// Distinct reference frames, and the f64 shadings they were made from (variants that
+    /// differ only in post effects, or whose rasterisations agree bit for bit, share one).
+    #[serde(default)]
+    pub reference_frames: usize,
+    #[serde(default)]
+    pub reference_shadings: usize,
 }
 
 impl RunCost {
@@ -169,13 +175,15 @@ impl RunCost {
         let c = &self.cells_ms;
         let s = |ms: f64| format!("{:.0} s", ms / 1e3);
         format!(
-            "{:.0} s over the cells: frames {} ({} timed, {} untimed), counters {}, reference {}, images {}, set-up {}; {} pipelines compiled, {} reused ({:.1} s compiling)",
+            "{:.0} s over the cells: frames {} ({} timed, {} untimed), counters {}, reference {} ({} frames from {} shadings), images {}, set-up {}; {} pipelines compiled, {} reused ({:.1} s compiling)",
             self.wall_s,
             s(c.frames),
             self.timed_frames,
             self.warmup_frames,
             s(c.counters),
             s(c.reference),
+            self.reference_frames,
+            self.reference_shadings,
             s(c.images),
             s(c.setup),
             self.pipelines.created,
@@ -318,9 +326,12 @@ pub fn run(
         bar.inc(1);
     }
     bar.finish_and_clear();
+    let (reference_frames, reference_shadings) = references.counts();
     let mut cost = RunCost {
         wall_s: start.elapsed().as_secs_f64(),
         pipelines: add_pipelines(replaced, gpu.pipeline_stats()),
+        reference_frames,
+        reference_shadings,
         ..Default::default()
     };
     for r in &records {

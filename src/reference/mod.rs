@@ -12,20 +12,36 @@ use crate::compose::Composer;
 use crate::cpu::frame::{ReferenceFrame, post_process, shade_reference};
 use crate::cpu::post::{CameraPair, Geometry, PostParams};
 use crate::cpu::shading::ShadingParams;
+use crate::cpu::truth::RasterTruth;
 use crate::gpu::Gpu;
 use crate::render::raster_truth;
 use crate::run::RunError;
 use crate::scene::Scene;
-use crate::variant::LoadedVariant;
+use crate::variant::{LoadedVariant, Variant};
 
 /// Exposure of the tonemap (fixed: images of different variants are comparable).
 pub const EXPOSURE: f64 = 1.0;
 
 /// Reference frames by what determines them, so that variants which rasterise, shade and
-/// post-process alike share one (the matrix runs many such cells).
+/// post-process alike share one (the matrix runs many such cells). Below the whole frames,
+/// the f64 shading (most of a reference's time) is shared too: by variants that differ only
+/// in their post effects, and by variants whose rasterisations agree bit for bit though
+/// their depth set-up differs (a depth pre-pass or another depth format mostly changes
+/// nothing in the raster truth).
 #[derive(Default)]
 pub struct ReferenceCache {
     frames: Mutex<HashMap<String, (Arc<ReferenceFrame>, f64)>>,
+    /// Shadings before post effects, by scene (name, file and parameters).
+    shadings: Mutex<HashMap<String, Vec<Shading>>>,
+}
+
+/// One raster truth shaded in f64, before post effects.
+struct Shading {
+    truth: Arc<RasterTruth>,
+    params: ShadingParams,
+    frame: Arc<ReferenceFrame>,
+    /// What the shading took when it was computed.
+    ms: f64,
 }
 
 impl std::fmt::Debug for ReferenceCache {
@@ -36,8 +52,18 @@ impl std::fmt::Debug for ReferenceCache {
 }
 
 impl ReferenceCache {
+    /// Reference frames held, and the f64 shadings they were made from.
+    pub fn counts(&self) -> (usize, usize) {
+        let frames = self.frames.lock().map_or(0, |m| m.len());
+        let shadings = self
+            .shadings
+            .lock()
+            .map_or(0, |m| m.values().map(Vec::len).sum());
+        (frames, shadings)
+    }
+
     /// The reference of `variant` on `scene`, computed on first use. The time returned is
-    /// the time it took when it was computed.
+    /// what its shading and post effects took when they were computed.
     pub fn get_or_compute(
         &self,
         gpu: &Gpu,
@@ -46,12 +72,15 @@ impl ReferenceCache {
         scene: &Scene,
     ) -> Result<(Arc<ReferenceFrame>, f64), RunError> {
         let v = &variant.variant;
-        // Everything the raster truth, the shading and the post chain depend on.
-        let key = format!(
-            "{}|{:?}|{:?}|{:?}|{:?}|{:?}|{}",
+        let scene_key = format!(
+            "{}|{:?}|{:?}",
             scene.name,
             scene.file.as_ref().map(|f| &f.sha256),
-            scene.params,
+            scene.params
+        );
+        // Everything the raster truth, the shading and the post chain depend on.
+        let key = format!(
+            "{scene_key}|{:?}|{:?}|{:?}|{}",
             ShadingParams::of(v),
             PostParams::of(v),
             v.depth,
@@ -60,13 +89,80 @@ impl ReferenceCache {
         if let Some(hit) = self.frames.lock().expect("cache lock").get(&key) {
             return Ok(hit.clone());
         }
-        let (frame, ms) = reference_frame(gpu, composer, variant, scene)?;
+        let truth = raster_truth(gpu, composer, v, scene)?;
+        let (shaded, shading_ms) = self.shading(scene_key, truth, v, scene);
+        let start = Instant::now();
+        let mut frame = Arc::unwrap_or_clone(shaded.frame);
+        post(&mut frame, &shaded.truth, variant, scene);
+        let ms = shading_ms + start.elapsed().as_secs_f64() * 1e3;
         let entry = (Arc::new(frame), ms);
         self.frames
             .lock()
             .expect("cache lock")
             .insert(key, entry.clone());
         Ok(entry)
+    }
+
+    /// `truth` shaded as `v` shades, shared with an earlier variant of the same scene whose
+    /// truth is the same bit for bit and which shades alike; and the time the shading took.
+    fn shading(
+        &self,
+        scene_key: String,
+        truth: RasterTruth,
+        v: &Variant,
+        scene: &Scene,
+    ) -> (SharedShading, f64) {
+        let params = ShadingParams::of(v);
+        let mut shadings = self.shadings.lock().expect("cache lock");
+        let known = shadings.entry(scene_key).or_default();
+        // One copy of each distinct truth, whatever shadings it has.
+        let same_truth = known
+            .iter()
+            .find(|s| s.truth.same_as(&truth))
+            .map(|s| s.truth.clone());
+        if let Some(same) = &same_truth
+            && let Some(s) = known
+                .iter()
+                .find(|s| Arc::ptr_eq(&s.truth, same) && s.params == params)
+        {
+            let shared = SharedShading {
+                truth: s.truth.clone(),
+                frame: s.frame.clone(),
+            };
+            return (shared, s.ms);
+        }
+        let truth = same_truth.unwrap_or_else(|| Arc::new(truth));
+        let start = Instant::now();
+        let frame = Arc::new(shade_reference(
+            &truth,
+            &scene.lights,
+            scene.camera.eye,
+            &params,
+            EXPOSURE,
+        ));
+        let ms = start.elapsed().as_secs_f64() * 1e3;
+        known.push(Shading {
+            truth: truth.clone(),
+            params,
+            frame: frame.clone(),
+            ms,
+        });
+        (SharedShading { truth, frame }, ms)
+    }
+}
+
+/// A cached shading and the truth it was shaded from.
+struct SharedShading {
+    truth: Arc<RasterTruth>,
+    frame: Arc<ReferenceFrame>,
+}
+
+/// Apply `variant`'s post effects, if any, to a shaded reference frame.
+fn post(frame: &mut ReferenceFrame, truth: &RasterTruth, variant: &LoadedVariant, scene: &Scene) {
+    let post = PostParams::of(&variant.variant);
+    if post.any() {
+        let cams = CameraPair::of(scene, variant.variant.depth.mapping());
+        post_process(frame, &post, &Geometry::from_truth(truth, &cams), EXPOSURE);
     }
 }
 
@@ -87,15 +183,6 @@ pub fn reference_frame(
         &ShadingParams::of(&variant.variant),
         EXPOSURE,
     );
-    let post = PostParams::of(&variant.variant);
-    if post.any() {
-        let cams = CameraPair::of(scene, variant.variant.depth.mapping());
-        post_process(
-            &mut reference,
-            &post,
-            &Geometry::from_truth(&truth, &cams),
-            EXPOSURE,
-        );
-    }
+    post(&mut reference, &truth, variant, scene);
     Ok((reference, start.elapsed().as_secs_f64() * 1e3))
 }
