@@ -92,10 +92,15 @@ impl ReferenceCache {
         let truth = raster_truth(gpu, composer, v, scene)?;
         let (shaded, shading_ms) = self.shading(scene_key, truth, v, scene);
         let start = Instant::now();
-        let mut frame = Arc::unwrap_or_clone(shaded.frame);
-        post(&mut frame, &shaded.truth, variant, scene);
-        let ms = shading_ms + start.elapsed().as_secs_f64() * 1e3;
-        let entry = (Arc::new(frame), ms);
+        // Without post effects the frame is the shading itself, held once.
+        let frame = if PostParams::of(v).any() {
+            let mut frame = Arc::unwrap_or_clone(shaded.frame);
+            post(&mut frame, &shaded.truth, variant, scene);
+            Arc::new(frame)
+        } else {
+            shaded.frame
+        };
+        let entry = (frame, shading_ms + start.elapsed().as_secs_f64() * 1e3);
         self.frames
             .lock()
             .expect("cache lock")
