@@ -109,6 +109,14 @@ impl PassId {
                 | PassId::Screen(ScreenPass::Resolve | ScreenPass::ScissorLights)
         )
     }
+
+    /// Passes that only turn shaded colour into the displayed image.
+    pub fn after_shading(self) -> bool {
+        matches!(
+            self,
+            PassId::Post(_) | PassId::Screen(ScreenPass::Tonemap | ScreenPass::DebugView)
+        )
+    }
 }
 
 /// One pass of a frame and the root module it is composed from.

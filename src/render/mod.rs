@@ -469,6 +469,11 @@ impl<'g> Renderer<'g> {
 
     /// Whether this frame can leave out pass `id`.
     fn skips_pass(&self, id: PassId, instrumented: bool) -> bool {
+        // An instrumented frame's counters come from assignment and shading: what only
+        // turns shaded colour into pixels (post effects, tonemap, a debug view) is left out.
+        if instrumented && id.after_shading() {
+            return true;
+        }
         let s = &self.skips;
         if !s.on {
             return false;
