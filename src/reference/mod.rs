@@ -17,7 +17,7 @@ use crate::gpu::Gpu;
 use crate::render::raster_truth;
 use crate::run::RunError;
 use crate::scene::Scene;
-use crate::variant::{LoadedVariant, Variant};
+use crate::variant::LoadedVariant;
 
 /// Exposure of the tonemap (fixed: images of different variants are comparable).
 pub const EXPOSURE: f64 = 1.0;
@@ -72,6 +72,8 @@ impl ReferenceCache {
         scene: &Scene,
     ) -> Result<(Arc<ReferenceFrame>, f64), RunError> {
         let v = &variant.variant;
+        let shading = ShadingParams::of(v);
+        let post_params = PostParams::of(v);
         let scene_key = format!(
             "{}|{:?}|{:?}",
             scene.name,
@@ -80,22 +82,19 @@ impl ReferenceCache {
         );
         // Everything the raster truth, the shading and the post chain depend on.
         let key = format!(
-            "{scene_key}|{:?}|{:?}|{:?}|{}",
-            ShadingParams::of(v),
-            PostParams::of(v),
-            v.depth,
-            v.depth_prepass
+            "{scene_key}|{shading:?}|{post_params:?}|{:?}|{}",
+            v.depth, v.depth_prepass
         );
         if let Some(hit) = self.frames.lock().expect("cache lock").get(&key) {
             return Ok(hit.clone());
         }
         let truth = raster_truth(gpu, composer, v, scene)?;
-        let (shaded, shading_ms) = self.shading(scene_key, truth, v, scene);
+        let (shaded, shading_ms) = self.shading(scene_key, truth, shading, scene);
         let start = Instant::now();
         // Without post effects the frame is the shading itself, held once.
-        let frame = if PostParams::of(v).any() {
+        let frame = if post_params.any() {
             let mut frame = Arc::unwrap_or_clone(shaded.frame);
-            post(&mut frame, &shaded.truth, variant, scene);
+            post(&mut frame, &shaded.truth, &post_params, variant, scene);
             Arc::new(frame)
         } else {
             shaded.frame
@@ -108,16 +107,15 @@ impl ReferenceCache {
         Ok(entry)
     }
 
-    /// `truth` shaded as `v` shades, shared with an earlier variant of the same scene whose
+    /// `truth` shaded with `params`, shared with an earlier variant of the same scene whose
     /// truth is the same bit for bit and which shades alike; and the time the shading took.
     fn shading(
         &self,
         scene_key: String,
         truth: RasterTruth,
-        v: &Variant,
+        params: ShadingParams,
         scene: &Scene,
     ) -> (SharedShading, f64) {
-        let params = ShadingParams::of(v);
         let mut shadings = self.shadings.lock().expect("cache lock");
         let known = shadings.entry(scene_key).or_default();
         // One copy of each distinct truth, whatever shadings it has.
@@ -162,13 +160,16 @@ struct SharedShading {
     frame: Arc<ReferenceFrame>,
 }
 
-/// Apply `variant`'s post effects, if any, to a shaded reference frame.
-fn post(frame: &mut ReferenceFrame, truth: &RasterTruth, variant: &LoadedVariant, scene: &Scene) {
-    let post = PostParams::of(&variant.variant);
-    if post.any() {
-        let cams = CameraPair::of(scene, variant.variant.depth.mapping());
-        post_process(frame, &post, &Geometry::from_truth(truth, &cams), EXPOSURE);
-    }
+/// Apply `variant`'s post effects (`params`) to a shaded reference frame.
+fn post(
+    frame: &mut ReferenceFrame,
+    truth: &RasterTruth,
+    params: &PostParams,
+    variant: &LoadedVariant,
+    scene: &Scene,
+) {
+    let cams = CameraPair::of(scene, variant.variant.depth.mapping());
+    post_process(frame, params, &Geometry::from_truth(truth, &cams), EXPOSURE);
 }
 
 /// The raster truth of the variant's rasterisation, shaded and post-processed on the CPU
@@ -188,6 +189,9 @@ pub fn reference_frame(
         &ShadingParams::of(&variant.variant),
         EXPOSURE,
     );
-    post(&mut reference, &truth, variant, scene);
+    let params = PostParams::of(&variant.variant);
+    if params.any() {
+        post(&mut reference, &truth, &params, variant, scene);
+    }
     Ok((reference, start.elapsed().as_secs_f64() * 1e3))
 }
