@@ -202,10 +202,10 @@ pub fn check_rasterised(gpu: &Gpu, grid: (u32, u32, u32), lights: usize) -> Resu
 }
 
 /// Bytes of two-level culling's coarse masks: for each big tile of `big` tiles a side, a
-/// mask of `words` words and its summary (`two_level.wesl`).
+/// mask of `words` words and its summary, then a mask for each slice (`two_level.wesl`).
 fn coarse_bytes(grid: (u32, u32, u32), big: u32, words: u64) -> u64 {
     let big_tiles = (grid.0.div_ceil(big) * grid.1.div_ceil(big)) as u64;
-    big_tiles * (words + words.div_ceil(32)) * 4
+    (big_tiles * (words + words.div_ceil(32)) + grid.2 as u64 * words) * 4
 }
 
 /// The long lists' buffer (`SortJobs` in build_bindings.wesl), its dispatch header
