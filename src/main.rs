@@ -199,9 +199,9 @@ struct MatrixArgs {
     /// median (or its budget is spent).
     #[arg(long, default_value_t = Budget::DEFAULT.precision * 100.0, value_parser = parse_percent, conflicts_with = "frames")]
     precision: f64,
-    /// Frames by budget: milliseconds of frames (the warm-up included) one cell may spend;
-    /// a first frame longer than this is timed once when its first use is within the
-    /// precision of it.
+    /// Frames by budget: milliseconds of frames one cell may spend, counting the untimed
+    /// frame without lights it draws first (which compiles what is new); a first timed
+    /// frame longer than this is the only one.
     #[arg(long, default_value_t = Budget::DEFAULT.budget_ms, value_parser = parse_budget_ms, conflicts_with = "frames")]
     budget_ms: f64,
     /// Frames by budget: most timed frames per cell.

@@ -286,22 +286,14 @@ fn timed_frames(
             }
         }
         Frames::Budget(budget) => {
-            let cold = renderer.cold();
-            let first = renderer.render()?;
-            let mut warmup_ms = 0.0;
-            if budget.keep_first(first.timings.total_ms(), cold) {
-                count.cold_start = cold;
-                runs.push(first);
-            } else {
-                count.warmup = 1;
-                warmup_ms = first.timings.total_ms();
-            }
+            let untimed_ms = renderer.draw_without_lights()?;
+            count.frame_without_lights = true;
             loop {
+                runs.push(renderer.render()?);
                 let times: Vec<f64> = runs.iter().map(|f| f.timings.total_ms()).collect();
-                if budget.enough(&times, warmup_ms) {
+                if budget.enough(&times, untimed_ms) {
                     break;
                 }
-                runs.push(renderer.render()?);
             }
         }
     }

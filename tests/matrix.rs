@@ -92,7 +92,10 @@ fn a_broken_variant_fails_its_cells_and_the_rest_run_and_report() {
         assert!(c.speedup_vs_naive.is_some(), "{}", c.spec.id);
         let e = c.error.as_ref().unwrap();
         assert!(e.max_abs_8bit <= 1, "{}: {e:?}", c.spec.id);
-        assert_eq!((c.frames, c.warmup_frames, c.cold_start), (2, 0, false));
+        assert_eq!(
+            (c.frames, c.warmup_frames, c.frame_without_lights),
+            (2, 0, false)
+        );
         for image in [&c.images.image, &c.images.heat].into_iter().flatten() {
             assert!(out.join(image).is_file(), "{image}");
         }
@@ -416,9 +419,14 @@ fn frames_by_budget_are_the_default_and_every_cell_says_how_many_it_took() {
         let cost = c.cost_ms.expect("a cell that ran has its cost");
         assert!(cost.frames > 0.0 && cost.setup > 0.0, "{cost:?}");
     }
-    // Frames far shorter than the budget: each cell's first frame is a warm-up.
+    // Frames by budget: a frame without lights first, then no warm-up.
     for c in &r.cells {
-        assert_eq!((c.warmup_frames, c.cold_start), (1, false), "{}", c.spec.id);
+        assert_eq!(
+            (c.warmup_frames, c.frame_without_lights),
+            (0, true),
+            "{}",
+            c.spec.id
+        );
     }
     let p = &r.provenance[0];
     assert!(p.frames.starts_with("by budget"), "{}", p.frames);

@@ -112,8 +112,7 @@ fn frames_by_budget_time_a_long_frame_once_and_short_ones_until_precise() {
         .unwrap()
         .report
     };
-    // A budget any frame spends, and a precision any first-use cost is within: the first
-    // frame is timed, and is the only one, though it compiled its pipelines.
+    // A budget the frame without lights spends alone: still one timed frame, and no warm-up.
     let once = run(Budget {
         precision: 1e9,
         budget_ms: 1e-6,
@@ -121,28 +120,16 @@ fn frames_by_budget_time_a_long_frame_once_and_short_ones_until_precise() {
     });
     assert_eq!(once.frames, 1);
     assert_eq!(once.frame_count.warmup, 0);
-    assert!(
-        once.frame_count.cold_start,
-        "a new device: its first frame compiled"
-    );
-    // A budget no frame spends and a precision any frames meet: a warm-up frame, then
-    // exactly the 3 frames a precision is judged on.
+    assert!(once.frame_count.frame_without_lights);
+    // A budget no frame spends and a precision any frames meet: exactly the 3 frames a
+    // precision is judged on.
     let precise = run(Budget {
         precision: 1e9,
         budget_ms: 1e9,
         max_frames: 20,
     });
     assert_eq!(precise.frames, clusterlab::measure::MIN_FRAMES as u32);
-    assert_eq!(precise.frame_count.warmup, 1);
-    assert!(!precise.frame_count.cold_start);
-    // A first frame that spends the budget but not by enough to hide its first use is a
-    // warm-up too (a 64x36 frame is far below 15 ms / 3%).
-    let short = run(Budget {
-        precision: 0.03,
-        budget_ms: 1e-6,
-        max_frames: 20,
-    });
-    assert_eq!((short.frame_count.warmup, short.frames), (1, 1));
+    assert_eq!(precise.frame_count.warmup, 0);
     // A precision no frames meet: the frame cap.
     let capped = run(Budget {
         precision: 1e-12,
@@ -183,5 +170,44 @@ fn naive_counters_from_the_clustered_twin_equal_naive_forwards_own() {
             "{name}@{scene_name}: nothing lit"
         );
         assert_eq!(twin, own, "{name}@{scene_name}");
+    }
+}
+
+#[test]
+fn a_frame_without_lights_leaves_no_trace_and_warms_the_pipelines() {
+    let gpu = gpu();
+    let composer = Composer::default();
+    let scene = scene::generate("stage", small("stage", 64, 36, Some(48))).unwrap();
+    // One variant of each way of building lists (on the GPU in one and two levels, by
+    // z-binning, by drawing, on the CPU, none), a dynamic z-range and post effects.
+    for name in [
+        "naive_forward",
+        "deferred_scissor",
+        "forward_plus",
+        "forward_plus_zbinning",
+        "forward_plus_rasterised",
+        "forward_plus_cpu_assignment",
+        "clustered_deferred_compact",
+        "clustered_deferred_two_level",
+        "clustered_deferred_toon_bloom",
+    ] {
+        let v = load(name).variant;
+        let plain = {
+            let mut r = Renderer::new(&gpu, &composer, &v, &scene).unwrap();
+            r.render().unwrap();
+            (r.render().unwrap(), r.stats().unwrap())
+        };
+        let mut r = Renderer::new(&gpu, &composer, &v, &scene).unwrap();
+        let ms = r.draw_without_lights().unwrap();
+        assert!(ms > 0.0, "{name}: {ms} ms");
+        assert!(!r.cold(), "{name}: warm after it");
+        r.render().unwrap();
+        let after = (r.render().unwrap(), r.stats().unwrap());
+        let differing =
+            |a: &[[f32; 4]], b: &[[f32; 4]]| a.iter().zip(b).filter(|(x, y)| x != y).count();
+        let hdr = differing(&after.0.hdr, &plain.0.hdr);
+        assert_eq!(hdr, 0, "{name}: {hdr} HDR pixels differ");
+        assert_eq!(after.0.ldr, plain.0.ldr, "{name}");
+        assert_eq!(after.1, plain.1, "{name}");
     }
 }

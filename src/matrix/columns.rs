@@ -54,7 +54,7 @@ impl CellRecord {
             frames: self.ok().then_some(crate::measure::FrameCount {
                 warmup: self.warmup_frames,
                 timed: self.frames,
-                cold_start: self.cold_start,
+                frame_without_lights: self.frame_without_lights,
             }),
         }
     }
@@ -223,10 +223,9 @@ pub const COLUMNS: &[Column] = &[
         shown: CSV_AND_HTML,
         value: |m| m.frames.map(|f| f.timed).into(),
         text: |m| {
-            or_dash(m.frames, |f| match (f.warmup, f.cold_start) {
-                (_, true) => format!("{} (cold)", f.timed),
-                (0, _) => f.timed.to_string(),
-                (w, _) => format!("{w}+{}", f.timed),
+            or_dash(m.frames, |f| match f.warmup {
+                0 => f.timed.to_string(),
+                w => format!("{w}+{}", f.timed),
             })
         },
     },

@@ -66,10 +66,10 @@ pub struct CellRecord {
     /// Untimed frames run before the timed ones.
     #[serde(default)]
     pub warmup_frames: u32,
-    /// The one timed frame was also the first draw of pipelines made for this cell (see
+    /// A frame without lights was drawn first, untimed (frames by budget; see
     /// `measure::Budget`).
     #[serde(default)]
-    pub cold_start: bool,
+    pub frame_without_lights: bool,
     /// Where the cell's wall-clock time went (absent for a failed cell).
     #[serde(default)]
     pub cost_ms: Option<CellCost>,
@@ -119,7 +119,7 @@ impl CellRecord {
             vs_baseline: None,
             skipped_passes: Vec::new(),
             warmup_frames: 0,
-            cold_start: false,
+            frame_without_lights: false,
             cost_ms: None,
         }
     }
@@ -488,7 +488,7 @@ fn run_one(
         vs_baseline: None,
         skipped_passes: r.skipped_passes,
         warmup_frames: r.frame_count.warmup,
-        cold_start: r.frame_count.cold_start,
+        frame_without_lights: r.frame_count.frame_without_lights,
         cost_ms: Some(r.cost_ms),
     }
 }
@@ -740,7 +740,7 @@ fn provenance(gpu: &Gpu, options: &MatrixOptions) -> Provenance {
                 format!("exact: {warmup} untimed then {timed} timed per cell")
             }
             Frames::Budget(b) => format!(
-                "by budget: until 3+ frames lie within +-{}% of their median, {} ms of frames are spent (a warm-up included), or {} frames",
+                "by budget: a frame without lights (untimed), then until 3+ frames lie within +-{}% of their median, {} ms of frames are spent (the untimed one included), or {} frames",
                 b.precision * 100.0,
                 b.budget_ms,
                 b.max_frames

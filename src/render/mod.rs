@@ -112,6 +112,8 @@ pub struct Renderer<'g> {
     skips: Skips,
     /// Frames rendered (not counting instrumented ones).
     frames_done: u32,
+    /// A frame without lights was drawn (see `draw_without_lights`).
+    drew_without_lights: bool,
     /// Pipelines of the timed frame that this renderer created rather than found made
     /// earlier in the run (see `cold`).
     fresh_pipelines: u32,
@@ -306,6 +308,7 @@ impl<'g> Renderer<'g> {
             reallocations: 0,
             skips,
             frames_done: 0,
+            drew_without_lights: false,
             fresh_pipelines: 0,
             frame_features,
             naive_twin: None,
@@ -437,7 +440,31 @@ impl<'g> Renderer<'g> {
     /// so that frame's time includes compiling. Pipelines found made earlier in the run are
     /// taken as warm (the cell that made them drew with them).
     pub fn cold(&self) -> bool {
-        self.fresh_pipelines > 0 && self.frames_done == 0
+        self.fresh_pipelines > 0 && self.frames_done == 0 && !self.drew_without_lights
+    }
+
+    /// Draw a frame of the scene without its lights, not read back; returns the summed time
+    /// of its passes. Every pass runs with the frame's pipelines, so a software rasteriser
+    /// compiles their shader variants (on first draw) and the images are touched, for about
+    /// what a frame with nothing to shade costs; the renderer is warm afterwards (`cold` is
+    /// false). It leaves no trace in later frames: they count as if it had not been drawn.
+    pub fn draw_without_lights(&mut self) -> Result<f64, RenderError> {
+        let lights = self.res.scene.light_count;
+        self.set_light_count(0);
+        let run = self.run_frame(false);
+        self.set_light_count(lights);
+        self.drew_without_lights = true;
+        Ok(run?.timings.total_ms())
+    }
+
+    /// The light count the frame's passes see: in the view uniform, and for the draws and
+    /// dispatches sized by it.
+    fn set_light_count(&mut self, lights: u32) {
+        self.res.scene.light_count = lights;
+        let at = std::mem::offset_of!(resources::ViewUniform, light_count) as u64;
+        self.gpu
+            .queue
+            .write_buffer(&self.res.scene.view, at, bytemuck::bytes_of(&lights));
     }
 
     /// Render one frame (timed) and read back its images.
