@@ -120,7 +120,7 @@ mod tests {
         assert!(!B.enough(&[], 1e9), "at least one timed frame");
         assert!(
             B.enough(&[100.0], 400.0),
-            "the warm-up spends the budget too"
+            "untimed frames spend the budget too"
         );
         assert!(B.enough(&[500.0], 0.0));
         assert!(!B.enough(&[499.0], 0.0));
