@@ -5,8 +5,9 @@ use glam::DVec3;
 use rayon::prelude::*;
 
 use super::color::display8;
+use super::light_grid::LightGrid;
 use super::post::{Geometry, Image, PostParams};
-use super::shading::{ShadingParams, shade};
+use super::shading::{ShadingParams, shade_lights};
 use super::truth::RasterTruth;
 use crate::common::Light;
 
@@ -19,7 +20,9 @@ pub struct ReferenceFrame {
     pub ldr: Vec<[u8; 3]>,
 }
 
-/// Shade every covered pixel of `truth` with all `lights`; background stays black.
+/// Shade every covered pixel of `truth` with all `lights`; background stays black. Where a
+/// `LightGrid` culls, each pixel sums the lights of its cell, in index order: the sum of
+/// every light's contribution, bit for bit, since the others add exactly 0.
 pub fn shade_reference(
     truth: &RasterTruth,
     lights: &[Light],
@@ -27,13 +30,24 @@ pub fn shade_reference(
     params: &ShadingParams,
     exposure: f64,
 ) -> ReferenceFrame {
+    let covered: Vec<DVec3> = (0..truth.position.len())
+        .filter(|&i| truth.covered(i))
+        .map(|i| truth.surface(i).position)
+        .collect();
+    let grid = LightGrid::new(&covered, lights);
+    let culls = grid.culls(&covered, lights.len());
     let hdr: Vec<[f64; 3]> = (0..truth.position.len())
         .into_par_iter()
         .map(|i| {
-            if truth.covered(i) {
-                shade(&truth.surface(i), eye, lights, params).to_array()
+            if !truth.covered(i) {
+                return [0.0; 3];
+            }
+            let s = truth.surface(i);
+            if culls {
+                let near = grid.lights_at(s.position).iter();
+                shade_lights(&s, eye, near.map(|&l| &lights[l as usize]), params).to_array()
             } else {
-                [0.0; 3]
+                shade_lights(&s, eye, lights.iter(), params).to_array()
             }
         })
         .collect();

@@ -6,6 +6,7 @@ pub mod clusters;
 pub mod color;
 pub mod depth;
 pub mod frame;
+pub mod light_grid;
 pub mod normals;
 pub mod post;
 pub mod shading;

@@ -176,11 +176,19 @@ pub fn light_contribution(s: &Surface, to_eye: DVec3, light: &Light, p: &Shading
 
 /// The full shading of a point: every light, then the ambient term.
 pub fn shade(s: &Surface, eye: DVec3, lights: &[Light], p: &ShadingParams) -> DVec3 {
+    shade_lights(s, eye, lights.iter(), p)
+}
+
+/// `shade` with `lights` only, in their order: the same sum, bit for bit, when the lights
+/// left out add exactly 0 (lie beyond their radius; see `light_grid`).
+pub fn shade_lights<'a>(
+    s: &Surface,
+    eye: DVec3,
+    lights: impl Iterator<Item = &'a Light>,
+    p: &ShadingParams,
+) -> DVec3 {
     let to_eye = (eye - s.position).normalize_or_zero();
-    let direct: DVec3 = lights
-        .iter()
-        .map(|l| light_contribution(s, to_eye, l, p))
-        .sum();
+    let direct: DVec3 = lights.map(|l| light_contribution(s, to_eye, l, p)).sum();
     direct + s.albedo * p.ambient
 }
 
