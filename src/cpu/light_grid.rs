@@ -1,13 +1,15 @@
 //! Which lights can reach a point, for the reference frame: a uniform world-space grid over
-//! the points it shades, each cell listing (in index order) the lights whose sphere's
-//! bounding box meets it. A light adds exactly 0 beyond its radius
-//! (`shading::light_contribution`), so inside that box: the lights of a point's cell hold
-//! every light that reaches it, and shading them in index order gives the sum that every
-//! light gives, bit for bit (the others add +0.0, which changes no sum that starts at +0.0).
-//! Nothing of the GPU's culling is used: the shading itself is the f64 twin, unchanged.
+//! the points it shades, each cell listing (in index order) the lights whose bounding box
+//! meets it: the box of a point light's sphere, of a spot's cone's bounding sphere. A light
+//! adds exactly 0 beyond its radius and outside its cone (`shading::light_contribution`),
+//! so inside that box: the lights of a point's cell hold every light that reaches it, and
+//! shading them in index order gives the sum that every light gives, bit for bit (the
+//! others add +0.0, which changes no sum that starts at +0.0). The shading itself is the f64
+//! twin, unchanged.
 
 use glam::DVec3;
 
+use super::clusters::cone_bounding_sphere;
 use crate::common::Light;
 
 /// Most cells a grid has.
@@ -81,12 +83,19 @@ impl LightGrid {
         grid
     }
 
-    /// The cells along each axis that light `l`'s sphere's box meets (None outside the
+    /// The cells along each axis that light `l`'s bounding box meets (None outside the
     /// grid's box, which ends at `hi`). The box is widened by a relative 1e-9 so that a
-    /// point whose rounded distance to the light falls below the radius lies in it.
+    /// point whose rounded distance to the light falls below the radius lies in it (a
+    /// spot's bounding sphere is widened by `SPOT_SLACK` already, for its cone's rounding).
     fn cell_range(&self, l: &Light, hi: DVec3) -> Option<[[usize; 2]; 3]> {
-        let c = DVec3::from(l.position.map(f64::from));
-        let r = l.radius as f64 * (1.0 + 1e-9) + c.abs().max_element() * 1e-12;
+        let apex = DVec3::from(l.position.map(f64::from));
+        let (c, r) = if l.cos_outer > -1.0 {
+            let axis = DVec3::from(l.direction.map(f64::from)).normalize_or_zero();
+            cone_bounding_sphere(apex, axis, l.radius as f64, l.cos_outer as f64)
+        } else {
+            (apex, l.radius as f64)
+        };
+        let r = r * (1.0 + 1e-9) + c.abs().max_element() * 1e-12;
         let (a, b) = (c - r, c + r);
         if a.cmpgt(hi).any() || b.cmplt(self.lo).any() {
             return None;
@@ -135,7 +144,9 @@ fn grid_for_cells(dims: &[usize; 3], r: &[[usize; 2]; 3], mut f: impl FnMut(usiz
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::cpu::shading::{Brdf, ShadingParams, Surface, shade, shade_lights};
+    use crate::cpu::shading::{
+        Brdf, ShadingParams, Surface, light_contribution, shade, shade_lights,
+    };
 
     /// A small deterministic generator (no dependency for one test).
     struct Lcg(u64);
@@ -162,7 +173,13 @@ mod tests {
                     1 => 40.0,
                     _ => rng.range(0.1, 4.0) as f32,
                 };
-                let mut l = Light::point(p, radius, [1.0, 0.8, 0.6], 1.0);
+                let mut l = if i % 3 == 0 {
+                    let axis = [0; 3].map(|_| rng.range(-1.0, 1.0));
+                    let outer = rng.range(5.0, 85.0);
+                    Light::spot(p, radius, [1.0, 0.8, 0.6], 1.0, axis, outer * 0.7, outer)
+                } else {
+                    Light::point(p, radius, [1.0, 0.8, 0.6], 1.0)
+                };
                 if i % 5 == 0 {
                     l.position[0] += 30.0;
                 }
@@ -184,11 +201,21 @@ mod tests {
                 )
             })
             .collect();
-        // Points on lights' spheres, a hair inside and outside (the rounding edge).
-        for l in lights.iter().take(60) {
+        // Points on lights' spheres and spots' cones, a hair inside and outside (the
+        // rounding edge).
+        for l in lights.iter().take(90) {
             let c = DVec3::from(l.position.map(f64::from));
+            let axis = DVec3::from(l.direction.map(f64::from)).normalize_or(DVec3::Y);
+            let side = axis.any_orthonormal_vector();
+            let rim = |f: f64| {
+                let cos = (l.cos_outer as f64 * f).clamp(-1.0, 1.0);
+                axis * cos + side * (1.0 - cos * cos).sqrt()
+            };
             for f in [1.0 - 1e-15, 1.0, 1.0 + 1e-15] {
-                points.push(c + DVec3::new(1.0, 2.0, -0.5).normalize() * (l.radius as f64 * f));
+                let r = l.radius as f64;
+                points.push(c + DVec3::new(1.0, 2.0, -0.5).normalize() * (r * f));
+                points.push(c + rim(f) * (r * 0.999999));
+                points.push(c + rim(f) * (r * 0.5));
             }
         }
         let grid = LightGrid::new(&points, &lights);
@@ -202,9 +229,16 @@ mod tests {
         for p in &points {
             let held = grid.lights_at(*p);
             assert!(held.windows(2).all(|w| w[0] < w[1]), "ascending");
+            let s = Surface {
+                position: *p,
+                normal: (eye - *p).normalize(),
+                albedo: DVec3::splat(0.7),
+                roughness: 0.5,
+                metallic: 0.0,
+            };
+            let to_eye = (eye - *p).normalize_or_zero();
             for (i, l) in lights.iter().enumerate() {
-                let d = (DVec3::from(l.position.map(f64::from)) - *p).length();
-                if d < l.radius as f64 {
+                if light_contribution(&s, to_eye, l, &models[0]) != DVec3::ZERO {
                     reached += 1;
                     assert!(
                         held.contains(&(i as u32)),
@@ -212,13 +246,6 @@ mod tests {
                     );
                 }
             }
-            let s = Surface {
-                position: *p,
-                normal: DVec3::Y,
-                albedo: DVec3::splat(0.7),
-                roughness: 0.5,
-                metallic: 0.0,
-            };
             for params in &models {
                 let all = shade(&s, eye, &lights, params);
                 let near = held.iter().map(|&i| &lights[i as usize]);
