@@ -21,8 +21,8 @@ pub struct ReferenceFrame {
 }
 
 /// Shade every covered pixel of `truth` with all `lights`; background stays black. Where a
-/// `LightGrid` culls, each pixel sums the lights of its cell, in index order: the sum of
-/// every light's contribution, bit for bit, since the others add exactly 0.
+/// `LightGrid` is made and culls, each pixel sums the lights of its cell, in index order:
+/// the sum of every light's contribution, bit for bit, since the others add exactly 0.
 pub fn shade_reference(
     truth: &RasterTruth,
     lights: &[Light],
@@ -34,8 +34,7 @@ pub fn shade_reference(
         .filter(|&i| truth.covered(i))
         .map(|i| truth.surface(i).position)
         .collect();
-    let grid = LightGrid::new(&covered, lights);
-    let culls = grid.culls(&covered, lights.len());
+    let grid = LightGrid::new(&covered, lights).filter(|g| g.culls(&covered, lights.len()));
     let hdr: Vec<[f64; 3]> = (0..truth.position.len())
         .into_par_iter()
         .map(|i| {
@@ -43,12 +42,14 @@ pub fn shade_reference(
                 return [0.0; 3];
             }
             let s = truth.surface(i);
-            if culls {
-                let near = grid.lights_at(s.position).iter();
-                shade_lights(&s, eye, near.map(|&l| &lights[l as usize]), params).to_array()
-            } else {
-                shade_lights(&s, eye, lights.iter(), params).to_array()
+            match &grid {
+                Some(grid) => {
+                    let near = grid.lights_at(s.position).iter();
+                    shade_lights(&s, eye, near.map(|&l| &lights[l as usize]), params)
+                }
+                None => shade_lights(&s, eye, lights.iter(), params),
             }
+            .to_array()
         })
         .collect();
     let ldr = hdr.iter().map(|&c| display8(c, exposure)).collect();

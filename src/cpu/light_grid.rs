@@ -15,6 +15,10 @@ use crate::common::Light;
 /// Most cells a grid has.
 const MAX_CELLS: usize = 1 << 20;
 
+/// Most cell entries a grid holds per point and light it is made for (a few lights far
+/// wider than the mean would otherwise fill every cell).
+const MAX_ENTRIES_PER_ITEM: usize = 64;
+
 /// Lights bucketed by the cells of a box around a set of points.
 #[derive(Clone, Debug)]
 pub struct LightGrid {
@@ -29,8 +33,9 @@ pub struct LightGrid {
 
 impl LightGrid {
     /// A grid over the box of `points`, its cells about half as wide as the lights' mean
-    /// radius (at most `MAX_CELLS` of them).
-    pub fn new(points: &[DVec3], lights: &[Light]) -> Self {
+    /// radius (at most `MAX_CELLS` of them); None where its cells would hold more than
+    /// `MAX_ENTRIES_PER_ITEM` entries per point and light.
+    pub fn new(points: &[DVec3], lights: &[Light]) -> Option<Self> {
         let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
         for p in points {
             lo = lo.min(*p);
@@ -62,6 +67,11 @@ impl LightGrid {
         // Count each light in its cells, take room, then fill in light order.
         let ranges: Vec<Option<[[usize; 2]; 3]>> =
             lights.iter().map(|l| grid.cell_range(l, hi)).collect();
+        let cells = |r: &[[usize; 2]; 3]| r.iter().map(|a| a[1] - a[0] + 1).product::<usize>();
+        let entries: usize = ranges.iter().flatten().map(cells).sum();
+        if entries > MAX_ENTRIES_PER_ITEM * (points.len() + lights.len()) {
+            return None;
+        }
         for r in ranges.iter().flatten() {
             let starts = &mut grid.starts;
             grid_for_cells(&grid.dims, r, |c| starts[c + 1] += 1);
@@ -80,7 +90,7 @@ impl LightGrid {
                 });
             }
         }
-        grid
+        Some(grid)
     }
 
     /// The cells along each axis that light `l`'s bounding box meets (None outside the
@@ -218,7 +228,7 @@ mod tests {
                 points.push(c + rim(f) * (r * 0.5));
             }
         }
-        let grid = LightGrid::new(&points, &lights);
+        let grid = LightGrid::new(&points, &lights).expect("within its entries");
         let models = [Brdf::Lambert, Brdf::Ggx].map(|brdf| ShadingParams {
             brdf,
             ambient: 0.03,
@@ -258,5 +268,28 @@ mod tests {
         // And the grid culls: most cells hold few of the lights.
         let held: usize = points.iter().map(|p| grid.lights_at(*p).len()).sum();
         assert!(held < points.len() * lights.len() / 5, "{held}");
+    }
+
+    #[test]
+    fn a_few_lights_far_wider_than_the_rest_leave_no_grid() {
+        let mut rng = Lcg(3);
+        let mut lights: Vec<Light> = (0..1000)
+            .map(|_| {
+                let p = [0; 3].map(|_| rng.range(-10.0, 10.0) as f32);
+                Light::point(p, 0.1, [1.0; 3], 1.0)
+            })
+            .collect();
+        lights.extend((0..20).map(|_| Light::point([0.0; 3], 100.0, [1.0; 3], 1.0)));
+        let points: Vec<DVec3> = (0..1000)
+            .map(|_| {
+                DVec3::new(
+                    rng.range(-10.0, 10.0),
+                    rng.range(-10.0, 10.0),
+                    rng.range(-10.0, 10.0),
+                )
+            })
+            .collect();
+        assert!(LightGrid::new(&points, &lights).is_none());
+        assert!(LightGrid::new(&points, &lights[..1000]).is_some());
     }
 }
