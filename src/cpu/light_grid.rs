@@ -171,6 +171,10 @@ mod tests {
         fn range(&mut self, a: f64, b: f64) -> f64 {
             a + (b - a) * self.next()
         }
+        /// A point of the box [lo, hi].
+        fn point(&mut self, lo: [f64; 3], hi: [f64; 3]) -> DVec3 {
+            DVec3::from([0, 1, 2].map(|k| self.range(lo[k], hi[k])))
+        }
     }
 
     fn lights(rng: &mut Lcg, n: usize) -> Vec<Light> {
@@ -203,13 +207,7 @@ mod tests {
         let mut rng = Lcg(7);
         let lights = lights(&mut rng, 300);
         let mut points: Vec<DVec3> = (0..4000)
-            .map(|_| {
-                DVec3::new(
-                    rng.range(-8.0, 8.0),
-                    rng.range(-3.0, 5.0),
-                    rng.range(-8.0, 8.0),
-                )
-            })
+            .map(|_| rng.point([-8.0, -3.0, -8.0], [8.0, 5.0, 8.0]))
             .collect();
         // Points on lights' spheres and spots' cones, a hair inside and outside (the
         // rounding edge).
@@ -281,13 +279,7 @@ mod tests {
             .collect();
         lights.extend((0..20).map(|_| Light::point([0.0; 3], 100.0, [1.0; 3], 1.0)));
         let points: Vec<DVec3> = (0..1000)
-            .map(|_| {
-                DVec3::new(
-                    rng.range(-10.0, 10.0),
-                    rng.range(-10.0, 10.0),
-                    rng.range(-10.0, 10.0),
-                )
-            })
+            .map(|_| rng.point([-10.0; 3], [10.0; 3]))
             .collect();
         assert!(LightGrid::new(&points, &lights).is_none());
         assert!(LightGrid::new(&points, &lights[..1000]).is_some());
