@@ -1,6 +1,7 @@
 //! What makes a run cheap without changing its figures: pipelines compiled once per device
 //! and shared by every cell whose passes compose alike, the debug view drawn from the timed
-//! frame instead of a frame of its own, and instrumented frames that only count.
+//! frame instead of a frame of its own, and instrumented frames that only count, on the
+//! timed frame's depth and lists.
 
 mod common;
 
@@ -209,5 +210,49 @@ fn a_frame_without_lights_leaves_no_trace_and_warms_the_pipelines() {
         assert_eq!(hdr, 0, "{name}: {hdr} HDR pixels differ");
         assert_eq!(after.0.ldr, plain.0.ldr, "{name}");
         assert_eq!(after.1, plain.1, "{name}");
+    }
+}
+
+#[test]
+fn an_instrumented_frame_after_a_whole_frame_counts_what_a_whole_one_counts() {
+    let gpu = gpu();
+    let composer = Composer::default();
+    let scene = scene::generate("stage", small("stage", 64, 36, Some(48))).unwrap();
+    // After a timed frame, the instrumented frame runs only the counting shading pass on
+    // that frame's depth, G-buffer and lists; a renderer that drew nothing before runs
+    // every pass. One variant of each way of making the depth and building lists.
+    for name in [
+        "deferred_scissor",
+        "forward_plus",
+        "forward_plus_no_prepass",
+        "forward_plus_tiled_2_5d",
+        "forward_plus_zbinning",
+        "forward_plus_rasterised",
+        "forward_plus_cpu_assignment",
+        "forward_plus_capped",
+        "clustered_deferred_compact",
+        "clustered_deferred_olsson_2_5d",
+        "clustered_deferred_two_level",
+        "clustered_deferred_toon_bloom",
+    ] {
+        let v = load(name).variant;
+        let whole = Renderer::new(&gpu, &composer, &v, &scene)
+            .unwrap()
+            .stats()
+            .unwrap();
+        let mut r = Renderer::new(&gpu, &composer, &v, &scene).unwrap();
+        r.render().unwrap();
+        let after = r.stats().unwrap();
+        assert!(whole.light_evals > 0, "{name}: {whole:?}");
+        assert_eq!(after, whole, "{name}");
+        // A frame without lights leaves no lists to count on: the instrumented frame after
+        // it builds its own.
+        let mut r = Renderer::new(&gpu, &composer, &v, &scene).unwrap();
+        r.draw_without_lights().unwrap();
+        assert_eq!(
+            r.stats().unwrap(),
+            whole,
+            "{name}, after a frame without lights"
+        );
     }
 }

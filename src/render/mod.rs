@@ -114,6 +114,9 @@ pub struct Renderer<'g> {
     frames_done: u32,
     /// A frame without lights was drawn (see `draw_without_lights`).
     drew_without_lights: bool,
+    /// The last frame drawn was a whole frame of the scene: its depth, G-buffer, cluster
+    /// data and light lists are in place for an instrumented frame to count on.
+    last_frame_whole: bool,
     /// Pipelines of the timed frame that this renderer created rather than found made
     /// earlier in the run (see `cold`).
     fresh_pipelines: u32,
@@ -309,6 +312,7 @@ impl<'g> Renderer<'g> {
             skips,
             frames_done: 0,
             drew_without_lights: false,
+            last_frame_whole: false,
             fresh_pipelines: 0,
             frame_features,
             naive_twin: None,
@@ -454,6 +458,7 @@ impl<'g> Renderer<'g> {
         let run = self.run_frame(false);
         self.set_light_count(lights);
         self.drew_without_lights = true;
+        self.last_frame_whole = false;
         Ok(run?.timings.total_ms())
     }
 
@@ -476,6 +481,7 @@ impl<'g> Renderer<'g> {
             mut skipped,
         } = self.run_fitted(false)?;
         self.frames_done += 1;
+        self.last_frame_whole = true;
         if self.post.blur_skipped(self.gpu)? {
             skipped.push(PassId::Post(compose::PostPass::BloomBlur).name().into());
         }
@@ -498,7 +504,10 @@ impl<'g> Renderer<'g> {
     fn skips_pass(&self, id: PassId, instrumented: bool) -> bool {
         // An instrumented frame's counters come from assignment and shading: what only
         // turns shaded colour into pixels (post effects, tonemap, a debug view) is left out.
-        if instrumented && id.after_shading() {
+        // After a whole frame it counts on that frame's depth, G-buffer and lists (every
+        // frame of a renderer draws the same picture, and assignment's counters stay in
+        // the cluster stats), so only the shading pass runs.
+        if instrumented && (id.after_shading() || (self.last_frame_whole && !id.is_shading())) {
             return true;
         }
         let s = &self.skips;
@@ -509,7 +518,8 @@ impl<'g> Renderer<'g> {
         if s.no_lights && builds_clusters {
             return true;
         }
-        // Instrumented frames rebuild the lists: their counters come from assignment.
+        // From a still scene's third frame on, the lists are those built before (an
+        // instrumented frame with no whole frame before it builds its own).
         if s.static_scene && !instrumented && self.frames_done >= 2 && builds_clusters {
             return true;
         }
@@ -527,10 +537,14 @@ impl<'g> Renderer<'g> {
     /// the CPU assignment time and the passes skipped.
     fn run_frame(&mut self, instrumented: bool) -> Result<FrameRun, RenderError> {
         let gpu = self.gpu;
-        // Counters start at zero in every run of a frame (a re-run must not add up twice).
+        // Counters start at zero in every run of a frame that adds to them (a re-run must
+        // not add up twice); the cluster stats stay as the last assignment left them when
+        // this frame assigns nothing.
+        let assign = PassId::Clustering(compose::ClusterPass::LightAssign);
+        let assigns = !self.skips_pass(assign, instrumented);
         gpu.scoped("clearing counters", || {
             let mut e = gpu.device.create_command_encoder(&Default::default());
-            if let Some(c) = &self.res.clusters {
+            if let Some(c) = self.res.clusters.as_ref().filter(|_| assigns) {
                 e.clear_buffer(&c.stats, 0, None);
             }
             if instrumented {
@@ -539,12 +553,7 @@ impl<'g> Renderer<'g> {
             gpu.queue.submit([e.finish()]);
         })?;
         // CPU assignment is the light_assign pass of its variants.
-        let assign = PassId::Clustering(compose::ClusterPass::LightAssign);
-        let cpu_ms = if self.skips_pass(assign, instrumented) {
-            None
-        } else {
-            self.assign_on_cpu()?
-        };
+        let cpu_ms = if assigns { self.assign_on_cpu()? } else { None };
         let mut skipped: Vec<String> = self.plan.never.iter().map(|p| p.name().into()).collect();
         if self.skips.no_spots {
             skipped.push(SPOT_CONE.into());
