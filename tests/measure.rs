@@ -10,7 +10,7 @@ use clusterlab::measure::Frames;
 use clusterlab::render::Renderer;
 use clusterlab::run::{CellOptions, run_cell};
 use clusterlab::scene;
-use clusterlab::variant::DebugView;
+use clusterlab::variant::{DebugView, DepthRangeSource, ZSlicing};
 use common::{gpu, load, small};
 
 #[test]
@@ -221,7 +221,11 @@ fn an_instrumented_frame_after_a_whole_frame_counts_what_a_whole_one_counts() {
     // After a timed frame, the instrumented frame runs only the counting shading pass on
     // that frame's depth, G-buffer and lists; a renderer that drew nothing before runs
     // every pass. One variant of each way of making the depth and building lists.
-    for name in [
+    let mut late_range = load("forward_plus").variant;
+    late_range.clusters.as_mut().unwrap().slicing = ZSlicing::DynamicRange {
+        source: DepthRangeSource::PreviousFrame,
+    };
+    let variants = [
         "deferred_scissor",
         "forward_plus",
         "forward_plus_no_prepass",
@@ -234,17 +238,29 @@ fn an_instrumented_frame_after_a_whole_frame_counts_what_a_whole_one_counts() {
         "clustered_deferred_olsson_2_5d",
         "clustered_deferred_two_level",
         "clustered_deferred_toon_bloom",
-    ] {
-        let v = load(name).variant;
-        let whole = Renderer::new(&gpu, &composer, &v, &scene)
-            .unwrap()
-            .stats()
-            .unwrap();
-        let mut r = Renderer::new(&gpu, &composer, &v, &scene).unwrap();
-        r.render().unwrap();
-        let after = r.stats().unwrap();
+    ]
+    .map(|name| (name, load(name).variant));
+    // A z-range from the previous frame: a renderer's first frame builds its lists on the
+    // starting range and later ones on this picture's, so that variant's whole
+    // instrumented frame is the one after a timed frame (which, for the lists to agree,
+    // runs every pass too), and the frame after the second counts on it.
+    let cases = variants.map(|(name, v)| (name, v, 0));
+    for (name, v, first) in cases.into_iter().chain([("late range", late_range, 1)]) {
+        let whole = {
+            let mut r = Renderer::new(&gpu, &composer, &v, &scene).unwrap();
+            for _ in 0..first {
+                r.render().unwrap();
+            }
+            r.stats().unwrap()
+        };
+        for frames in 1..=2 {
+            let mut r = Renderer::new(&gpu, &composer, &v, &scene).unwrap();
+            for _ in 0..frames {
+                r.render().unwrap();
+            }
+            assert_eq!(r.stats().unwrap(), whole, "{name}, after {frames} frames");
+        }
         assert!(whole.light_evals > 0, "{name}: {whole:?}");
-        assert_eq!(after, whole, "{name}");
         // A frame without lights leaves no lists to count on: the instrumented frame after
         // it builds its own.
         let mut r = Renderer::new(&gpu, &composer, &v, &scene).unwrap();

@@ -31,7 +31,7 @@ use crate::compose::{self, ComposedPass, Composer, FramePlan, Pass, PassId, Shad
 use crate::cpu::clusters::ClusterLists;
 use crate::gpu::{Gpu, GpuError, TimestampSlot, Timings, read_texture};
 use crate::scene::Scene;
-use crate::variant::{Assignment, Pipeline, Variant, ZSlicing};
+use crate::variant::{Assignment, DepthRangeSource, Pipeline, Variant, ZSlicing};
 use lists::CpuAssignment;
 use passes::ComputePipelines;
 use post::PostChain;
@@ -114,9 +114,9 @@ pub struct Renderer<'g> {
     frames_done: u32,
     /// A frame without lights was drawn (see `draw_without_lights`).
     drew_without_lights: bool,
-    /// The last frame drawn was a whole frame of the scene: its depth, G-buffer, cluster
-    /// data and light lists are in place for an instrumented frame to count on.
-    last_frame_whole: bool,
+    /// The last frame drawn left depth, G-buffer, cluster data and light lists that agree
+    /// with what shading reads, for an instrumented frame to count on (see `render`).
+    last_frame_countable: bool,
     /// Pipelines of the timed frame that this renderer created rather than found made
     /// earlier in the run (see `cold`).
     fresh_pipelines: u32,
@@ -312,7 +312,7 @@ impl<'g> Renderer<'g> {
             skips,
             frames_done: 0,
             drew_without_lights: false,
-            last_frame_whole: false,
+            last_frame_countable: false,
             fresh_pipelines: 0,
             frame_features,
             naive_twin: None,
@@ -458,7 +458,7 @@ impl<'g> Renderer<'g> {
         let run = self.run_frame(false);
         self.set_light_count(lights);
         self.drew_without_lights = true;
-        self.last_frame_whole = false;
+        self.last_frame_countable = false;
         Ok(run?.timings.total_ms())
     }
 
@@ -481,7 +481,15 @@ impl<'g> Renderer<'g> {
             mut skipped,
         } = self.run_fitted(false)?;
         self.frames_done += 1;
-        self.last_frame_whole = true;
+        // With a z-range from the previous frame, the first frame's lists were built on the
+        // starting range, which its depth-range pass then replaced with this picture's: the
+        // lists agree with the range shading reads from the second frame on.
+        let late_range = self.variant.pipeline.is_clustered()
+            && self.variant.clusters().slicing
+                == (ZSlicing::DynamicRange {
+                    source: DepthRangeSource::PreviousFrame,
+                });
+        self.last_frame_countable = !late_range || self.frames_done >= 2;
         if self.post.blur_skipped(self.gpu)? {
             skipped.push(PassId::Post(compose::PostPass::BloomBlur).name().into());
         }
@@ -504,10 +512,10 @@ impl<'g> Renderer<'g> {
     fn skips_pass(&self, id: PassId, instrumented: bool) -> bool {
         // An instrumented frame's counters come from assignment and shading: what only
         // turns shaded colour into pixels (post effects, tonemap, a debug view) is left out.
-        // After a whole frame it counts on that frame's depth, G-buffer and lists (every
+        // After a timed frame it counts on that frame's depth, G-buffer and lists (every
         // frame of a renderer draws the same picture, and assignment's counters stay in
         // the cluster stats), so only the shading pass runs.
-        if instrumented && (id.after_shading() || (self.last_frame_whole && !id.is_shading())) {
+        if instrumented && (id.after_shading() || (self.last_frame_countable && !id.is_shading())) {
             return true;
         }
         let s = &self.skips;
@@ -519,7 +527,7 @@ impl<'g> Renderer<'g> {
             return true;
         }
         // From a still scene's third frame on, the lists are those built before (an
-        // instrumented frame with no whole frame before it builds its own).
+        // instrumented frame with no countable frame before it builds its own).
         if s.static_scene && !instrumented && self.frames_done >= 2 && builds_clusters {
             return true;
         }
