@@ -835,6 +835,9 @@ fn matrix(args: &MatrixArgs) -> Result<bool, String> {
     matrix::write_report(&folder.staging, &results)?;
     folder.commit()?;
     report(&results, args.json, &args.out)?;
+    if let Some(old) = &baseline {
+        eprint!("{}", matrix::compare_runs(&results, old));
+    }
     eprintln!("finished in {:.0} s", start.elapsed().as_secs_f64());
     Ok(results.failed() == 0)
 }

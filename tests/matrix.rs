@@ -5,7 +5,7 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use clusterlab::matrix::Results;
+use clusterlab::matrix::{Results, compare_runs};
 
 fn scratch(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("clusterlab-matrix-{name}-{}", std::process::id()));
@@ -355,6 +355,46 @@ fn shards_merge_into_the_whole_and_a_baseline_shows_changes() {
     assert!(text.contains("vs baseline"), "{text}");
     let again = Results::load(&dir.join("again")).unwrap();
     assert!(again.cells.iter().all(|c| c.vs_baseline.is_some()));
+    // The whole run against it: same cells, same figures; merged shards ran side by side,
+    // so the baseline has no one wall time.
+    for line in [
+        "against the baseline: 8 cells in both (0 only in this run, 0 only in the baseline)\n",
+        "  error figures: the same in 8 of 8 cells\n",
+        "  counters: the same in 8 of 8 cells\n",
+        "  time, this run over the baseline, per cell: median x",
+        "(the baseline records none for one whole run)\n",
+    ] {
+        assert!(text.contains(line), "{line:?} in\n{text}");
+    }
+    // A changed error figure, a changed counter and a cell the baseline lacks are each named.
+    let mut old = rm.clone();
+    let gone = old.cells.pop().unwrap();
+    old.cells[0].error.as_mut().unwrap().max_abs_8bit += 2;
+    old.cells[1].stats.as_mut().unwrap().light_evals += 1;
+    let cmp = compare_runs(&again, &old);
+    assert_eq!((cmp.common, cmp.only_here, cmp.only_there), (7, 1, 0));
+    assert_eq!(cmp.errors_changed, vec![old.cells[0].spec.id.clone()]);
+    assert_eq!(
+        cmp.counters_changed.into_iter().collect::<Vec<_>>(),
+        [("light_evals".to_string(), 1)]
+    );
+    let shown = compare_runs(&again, &old).to_string();
+    let different = format!(
+        "error figures: the same in 6 of 7 cells; different in 1: {}\n",
+        old.cells[0].spec.id
+    );
+    assert!(shown.contains(&different), "{shown}");
+    assert!(
+        shown.contains("counters: the same in 6 of 7 cells; different: light_evals in 1\n"),
+        "{shown}"
+    );
+    let swapped = compare_runs(&old, &again);
+    assert_eq!(
+        (swapped.only_here, swapped.only_there),
+        (0, 1),
+        "{}",
+        gone.spec.id
+    );
     let _ = std::fs::remove_dir_all(&dir);
 }
 

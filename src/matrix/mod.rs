@@ -2,6 +2,7 @@
 //! timed over several frames and measured against the CPU reference; then speed-ups against
 //! naive forward, the time-error Pareto front, and a report (JSON, CSV, HTML, terminal).
 
+mod baseline;
 mod columns;
 mod folder;
 mod html;
@@ -9,6 +10,7 @@ mod plan;
 mod plots;
 mod report;
 
+pub use baseline::{RunComparison, compare_runs};
 pub use columns::{COLUMNS, Cell, Column, Measured, Shown, count};
 pub use folder::RunFolder;
 pub use plan::{
