@@ -200,7 +200,7 @@ impl fmt::Display for RunComparison {
             ),
             (Some(now), _) => writeln!(
                 f,
-                "  wall time over the cells: {now:.1} s (the baseline records none for one whole run)"
+                "  wall time over the cells: {now:.1} s (the baseline records no single run's wall time)"
             ),
             _ => Ok(()),
         }
