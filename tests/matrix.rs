@@ -388,6 +388,19 @@ fn shards_merge_into_the_whole_and_a_baseline_shows_changes() {
         shown.contains("counters: the same in 6 of 7 cells; different: light_evals in 1\n"),
         "{shown}"
     );
+    // A run against itself: every cell's [min, max] overlaps its own, and both walls are
+    // one; a cell whose frames were far slower does not overlap.
+    let itself = compare_runs(&again, &again);
+    assert_eq!(itself.spreads_overlap, again.cells.len());
+    assert!(itself.to_string().contains(" s (x1.000)\n"), "{itself}");
+    let mut slower = again.clone();
+    slower.cells[0]
+        .gpu_ms_spread
+        .insert("total".into(), serde_json::json!([1e6, 2e6]));
+    assert_eq!(
+        compare_runs(&again, &slower).spreads_overlap,
+        again.cells.len() - 1
+    );
     let swapped = compare_runs(&old, &again);
     assert_eq!(
         (swapped.only_here, swapped.only_there),
