@@ -52,7 +52,7 @@ pub fn compare_runs(new: &Results, baseline: &Results) -> RunComparison {
         out.common += 1;
         if let (Some(a), Some(b)) = (&cell.error, &before.error) {
             out.with_errors += 1;
-            if as_value(a) != as_value(b) {
+            if a != b {
                 out.errors_changed.push(cell.spec.id.clone());
             }
         }
@@ -86,10 +86,10 @@ pub fn compare_runs(new: &Results, baseline: &Results) -> RunComparison {
 }
 
 /// What makes two cells the same cell: its id and, for a file scene, the file's hash (an
-/// edited file is another scene), as for each cell's own change.
-type Key<'a> = (&'a str, Option<&'a str>);
+/// edited file is another scene). Each cell's own change (`derive`) matches by it too.
+pub(super) type Key<'a> = (&'a str, Option<&'a str>);
 
-fn key(c: &CellRecord) -> Key<'_> {
+pub(super) fn key(c: &CellRecord) -> Key<'_> {
     (c.spec.id.as_str(), c.spec.scene_sha256.as_deref())
 }
 

@@ -528,10 +528,10 @@ pub fn derive(cells: &mut [CellRecord], baseline: Option<&Results>) {
             })
         });
         let vs_baseline = baseline.and_then(|b| {
-            // Same id and, for a file scene, the same file: an edited file is another scene.
-            let old = b.cells.iter().find(|o| {
-                o.spec.id == cells[i].spec.id && o.spec.scene_sha256 == cells[i].spec.scene_sha256
-            })?;
+            let old = b
+                .cells
+                .iter()
+                .find(|o| baseline::key(o) == baseline::key(&cells[i]))?;
             let (t_new, t_old) = (cells[i].total_ms()?, old.total_ms()?);
             let (e_new, e_old) = (cells[i].error.as_ref()?, old.error.as_ref()?);
             Some(BaselineChange {
