@@ -84,9 +84,10 @@ enum Command {
         #[command(flatten)]
         gpu: GpuArgs,
     },
-    /// Run an accuracy study against published numbers: codecs (normal codec angular
-    /// error, GPU and CPU), depth (view depth rebuilt from the depth buffer), slicing
-    /// (culling efficiency of each z-slicing scheme and grid on each built-in scene).
+    /// Run a study against published numbers: codecs (normal codec angular error, GPU and
+    /// CPU), depth (view depth rebuilt from the depth buffer), slicing (culling efficiency of
+    /// each z-slicing scheme and grid), cones (spot lights culled by sphere or cone), culling
+    /// (every culling method, and which did best on each scene and light count).
     Study {
         /// Which study.
         name: clusterlab::study::StudyName,

@@ -276,6 +276,44 @@ fn culling_counts_what_shading_does() {
     let bytes = |m: &str| rows.iter().find(|r| r.method == m).expect(m).list_bytes;
     assert!(bytes("z-binning") < bytes("fine clusters"));
     assert!(culling::plot(&rows).is_some());
+
+    // Which did best, at 64 lights without spots: among the exact runs only.
+    let runs: Vec<&culling::CullingRow> = rows
+        .iter()
+        .filter(|r| r.lights == 64 && r.spot_fraction == 0.0)
+        .collect();
+    let b = culling::best(&rows, "atrium", 64, 0.0).expect("a best method");
+    let fastest = runs
+        .iter()
+        .map(|r| r.frame_ms)
+        .fold(f64::INFINITY, f64::min);
+    assert_eq!(b.fastest.frame_ms, fastest);
+    let next = b.runner_up.expect("a runner-up");
+    assert!(next.frame_ms >= fastest && next.method != b.fastest.method);
+    let fewest = runs.iter().map(|r| r.evaluations).min();
+    assert_eq!(Some(b.fewest_evaluations.evaluations), fewest);
+    let least = runs.iter().map(|r| r.list_bytes).min();
+    assert_eq!(Some(b.least_memory.list_bytes), least);
+    let notes = culling::table(&rows).notes.join("\n");
+    let line = format!(
+        "atrium, 64 lights, spots 0: fastest frame {} (",
+        b.fastest.method
+    );
+    assert!(notes.contains(&line), "{notes}");
+    // A run that left out a light is never the best, however fast, few or small.
+    let mut lossy = rows.clone();
+    let i = lossy
+        .iter()
+        .position(|r| r.lights == 64 && r.spot_fraction == 0.0)
+        .expect("a run at 64 lights");
+    lossy[i].useful_evaluations -= 1;
+    lossy[i].frame_ms = 0.0;
+    lossy[i].evaluations = 0;
+    lossy[i].list_bytes = 0;
+    let lb = culling::best(&lossy, "atrium", 64, 0.0).expect("a best method");
+    for picked in [lb.fastest, lb.fewest_evaluations, lb.least_memory] {
+        assert_ne!(picked.method, lossy[i].method);
+    }
 }
 
 #[test]

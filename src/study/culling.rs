@@ -311,6 +311,43 @@ pub fn worst_tiles(
     ))
 }
 
+/// On one scene, light count and spot fraction, the methods that did best among the exact
+/// ones: those that ran and found the group's most useful evaluations (a method that left
+/// out a light would find fewer).
+pub struct Best<'a> {
+    /// The shortest median frame, and the next shortest (on a noisy machine, whether the
+    /// first is a clear win).
+    pub fastest: &'a CullingRow,
+    pub runner_up: Option<&'a CullingRow>,
+    /// The fewest evaluations (the highest useful fraction); among equals, the faster.
+    pub fewest_evaluations: &'a CullingRow,
+    /// The fewest bytes of culling buffers.
+    pub least_memory: &'a CullingRow,
+}
+
+/// The best methods of one scene, light count and spot fraction (None if no run succeeded).
+pub fn best<'a>(rows: &'a [CullingRow], scene: &str, lights: u32, spots: f32) -> Option<Best<'a>> {
+    let group = || {
+        rows.iter().filter(move |r| {
+            r.scene == scene && r.lights == lights && r.spot_fraction == spots && r.error.is_none()
+        })
+    };
+    let useful = group().map(|r| r.useful_evaluations).max()?;
+    let exact = || group().filter(move |r| r.useful_evaluations == useful);
+    let mut by_frame: Vec<&CullingRow> = exact().collect();
+    by_frame.sort_by(|a, b| a.frame_ms.total_cmp(&b.frame_ms));
+    Some(Best {
+        fastest: by_frame.first()?,
+        runner_up: by_frame.get(1).copied(),
+        fewest_evaluations: exact().min_by(|a, b| {
+            a.evaluations
+                .cmp(&b.evaluations)
+                .then(a.frame_ms.total_cmp(&b.frame_ms))
+        })?,
+        least_memory: exact().min_by_key(|r| r.list_bytes)?,
+    })
+}
+
 /// The table: each scene, light count and spot fraction, methods ranked by useful fraction.
 pub fn table(rows: &[CullingRow]) -> Table {
     let mut t = Table::new(
@@ -364,6 +401,24 @@ pub fn table(rows: &[CullingRow]) -> Table {
         }
     }
     for (scene, lights, spots) in &groups {
+        if let Some(b) = best(rows, scene, *lights, *spots) {
+            let next = b
+                .runner_up
+                .map(|r| format!("; next {}, {} ms", r.method, sig(r.frame_ms, 3)))
+                .unwrap_or_default();
+            t.notes.push(format!(
+                "{scene}, {lights} lights, spots {spots}: fastest frame {} ({} ms{next}); \
+                 fewest evaluations {} ({:.1}% useful); smallest lists {} ({} bytes).",
+                b.fastest.method,
+                sig(b.fastest.frame_ms, 3),
+                b.fewest_evaluations.method,
+                100.0 * b.fewest_evaluations.efficiency,
+                b.least_memory.method,
+                b.least_memory.list_bytes,
+            ));
+        }
+    }
+    for (scene, lights, spots) in &groups {
         if let Some((bounds, mask)) = worst_tiles(rows, scene, *lights, *spots) {
             t.notes.push(format!(
                 "{scene}, {lights} lights, spots {spots}: worst tile {bounds} lights with depth \
@@ -374,7 +429,7 @@ pub fn table(rows: &[CullingRow]) -> Table {
     }
     if let Some(r) = rows.first() {
         t.notes.push(format!(
-            "Built-in scenes at {}x{}; times are medians of the timed frames ({} on this \
+            "Scenes at {}x{}; times are medians of the timed frames ({} on this \
              adapter). Assignment: every pass that builds the lists (marking, boxes, \
              assignment); shading: the light loop's pass. Worst list: the longest list of a \
              tile or cluster holding a visible sample. Useful: evaluations where the surface \
