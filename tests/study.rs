@@ -314,6 +314,15 @@ fn culling_counts_what_shading_does() {
     for picked in [lb.fastest, lb.fewest_evaluations, lb.least_memory] {
         assert_ne!(picked.method, lossy[i].method);
     }
+    // Where every run failed, nothing is named best and no timing source is made up.
+    let mut failed = rows.clone();
+    for r in &mut failed {
+        r.error = Some("no adapter".into());
+        r.timing_source.clear();
+    }
+    let notes = culling::table(&failed).notes.join("\n");
+    assert!(!notes.contains("fastest frame"), "{notes}");
+    assert!(notes.contains("medians of the timed frames. "), "{notes}");
 }
 
 #[test]

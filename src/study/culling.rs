@@ -428,15 +428,19 @@ pub fn table(rows: &[CullingRow]) -> Table {
         }
     }
     if let Some(r) = rows.first() {
+        // A failed run has no timing source; when every run failed, none is named.
+        let timing = rows
+            .iter()
+            .find(|r| r.error.is_none())
+            .map(|r| format!(" ({} on this adapter)", r.timing_source))
+            .unwrap_or_default();
         t.notes.push(format!(
-            "Scenes at {}x{}; times are medians of the timed frames ({} on this \
-             adapter). Assignment: every pass that builds the lists (marking, boxes, \
+            "Scenes at {}x{}; times are medians of the timed frames{timing}. Assignment: every pass that builds the lists (marking, boxes, \
              assignment); shading: the light loop's pass. Worst list: the longest list of a \
              tile or cluster holding a visible sample. Useful: evaluations where the surface \
              is within the light's reach. Sources: {}.",
             r.width,
             r.height,
-            r.timing_source,
             methods()
                 .iter()
                 .map(|m| format!("{}: {}", m.name, m.source))

@@ -7,6 +7,9 @@ pub struct Table {
     pub title: String,
     pub columns: Vec<String>,
     pub rows: Vec<Vec<String>>,
+    /// For each row of `rows` that a failed run made, the index of its error cell: the
+    /// terminal lets the error run on from there rather than widen its column.
+    failed: Vec<(usize, usize)>,
     /// Lines printed under the table: sources, conventions, caveats.
     pub notes: Vec<String>,
 }
@@ -27,6 +30,7 @@ impl Table {
 
     /// A row for a run that failed: the cells that name it, then the error, then blanks.
     pub fn failed_row(&mut self, names: Vec<String>, error: &str) {
+        self.failed.push((self.rows.len(), names.len()));
         let blanks = self.columns.len().saturating_sub(names.len() + 1);
         let cells = names
             .into_iter()
@@ -36,6 +40,11 @@ impl Table {
         self.row(cells);
     }
 
+    /// Where row `r`'s error cell is, if a failed run made it.
+    fn error_cell(&self, r: usize) -> Option<usize> {
+        self.failed.iter().find(|f| f.0 == r).map(|f| f.1)
+    }
+
     fn widths(&self) -> Vec<usize> {
         self.columns
             .iter()
@@ -43,7 +52,9 @@ impl Table {
             .map(|(i, c)| {
                 self.rows
                     .iter()
-                    .map(|r| r[i].chars().count())
+                    .enumerate()
+                    .filter(|&(r, _)| self.error_cell(r).is_none_or(|e| i < e))
+                    .map(|(_, row)| row[i].chars().count())
                     .chain([c.chars().count()])
                     .max()
                     .unwrap_or(0)
@@ -75,8 +86,16 @@ impl Table {
         let rule: Vec<String> = widths.iter().map(|&w| "-".repeat(w)).collect();
         out += &line(&rule);
         out.push('\n');
-        for r in &self.rows {
-            out += &line(r);
+        for (i, r) in self.rows.iter().enumerate() {
+            match self.error_cell(i) {
+                // The naming cells aligned, then the error as it is.
+                Some(e) => {
+                    let names = line(&r[..e]);
+                    let pad = widths[..e].iter().sum::<usize>() + 2 * e;
+                    out += &format!("{names:<pad$}{}", r[e]);
+                }
+                None => out += &line(r),
+            }
             out.push('\n');
         }
         for n in &self.notes {
@@ -151,5 +170,45 @@ mod tests {
             "{md}"
         );
         assert!(md.ends_with("\nnote\n"));
+    }
+
+    #[test]
+    fn a_failed_row_keeps_the_columns_and_shows_its_whole_error() {
+        let mut t = Table::new("T", &["name", "grid", "value", "more"]);
+        t.row(vec!["a".into(), "2x2".into(), "1.5".into(), "7".into()]);
+        let error = "a long error that names what would be valid";
+        t.failed_row(vec!["bb".into(), "4x4".into()], error);
+        let text = t.terminal();
+        // The columns are as wide as the ok row and the headers make them.
+        assert!(
+            text.contains(
+                "
+name  grid  value  more
+"
+            ),
+            "{text}"
+        );
+        assert!(
+            text.contains(
+                "
+a      2x2    1.5     7
+"
+            ),
+            "{text}"
+        );
+        assert!(
+            text.contains(&format!(
+                "
+bb     4x4  FAILED: {error}
+"
+            )),
+            "{text}"
+        );
+        // Markdown keeps one cell per column.
+        let md = t.markdown();
+        assert!(
+            md.contains(&format!("| bb | 4x4 | FAILED: {error} |  |")),
+            "{md}"
+        );
     }
 }
