@@ -435,10 +435,11 @@ pub fn table(rows: &[CullingRow]) -> Table {
             .map(|r| format!(" ({} on this adapter)", r.timing_source))
             .unwrap_or_default();
         t.notes.push(format!(
-            "Scenes at {}x{}; times are medians of the timed frames{timing}. Assignment: every pass that builds the lists (marking, boxes, \
-             assignment); shading: the light loop's pass. Worst list: the longest list of a \
-             tile or cluster holding a visible sample. Useful: evaluations where the surface \
-             is within the light's reach. Sources: {}.",
+            "Scenes at {}x{}; times are medians of the timed frames{timing}. Assignment: \
+             every pass that builds the lists (marking, boxes, assignment); shading: the \
+             light loop's pass. Worst list: the longest list of a tile or cluster holding a \
+             visible sample. Useful: evaluations where the surface is within the light's \
+             reach. Sources: {}.",
             r.width,
             r.height,
             methods()

@@ -180,30 +180,10 @@ mod tests {
         t.failed_row(vec!["bb".into(), "4x4".into()], error);
         let text = t.terminal();
         // The columns are as wide as the ok row and the headers make them.
-        assert!(
-            text.contains(
-                "
-name  grid  value  more
-"
-            ),
-            "{text}"
-        );
-        assert!(
-            text.contains(
-                "
-a      2x2    1.5     7
-"
-            ),
-            "{text}"
-        );
-        assert!(
-            text.contains(&format!(
-                "
-bb     4x4  FAILED: {error}
-"
-            )),
-            "{text}"
-        );
+        assert!(text.contains("\nname  grid  value  more\n"), "{text}");
+        assert!(text.contains("\na      2x2    1.5     7\n"), "{text}");
+        let failed = format!("\nbb     4x4  FAILED: {error}\n");
+        assert!(text.contains(&failed), "{text}");
         // Markdown keeps one cell per column.
         let md = t.markdown();
         assert!(
