@@ -412,6 +412,7 @@ fn end_quietly_on_closed_pipe() {
 fn main() -> ExitCode {
     end_quietly_on_closed_pipe();
     quiet_mesa_wsi();
+    spread_software_gpu_threads();
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Validate { paths } => validate(&paths),
@@ -482,6 +483,24 @@ fn quiet_mesa_wsi() {
     if std::env::var_os("XDG_RUNTIME_DIR").is_none() {
         // SAFETY: called first thing in main, before any other thread exists.
         unsafe { std::env::set_var("XDG_RUNTIME_DIR", std::env::temp_dir()) };
+    }
+}
+
+/// Mesa's software GPU (llvmpipe, lavapipe) splits each pass among LP_NUM_THREADS threads,
+/// one per core unless set, and a pass waits for its slowest one. This process and the
+/// driver's queue share those cores: on 2 cores a descheduled thread now and then doubled a
+/// pass. Twice as many threads as cores halved the spread of the matrix's frame times
+/// (README). A value the user set is kept; other drivers ignore the variable.
+fn spread_software_gpu_threads() {
+    if std::env::var_os(clusterlab::gpu::SOFTWARE_GPU_THREADS).is_none() {
+        let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+        // SAFETY: called first thing in main, before any other thread exists.
+        unsafe {
+            std::env::set_var(
+                clusterlab::gpu::SOFTWARE_GPU_THREADS,
+                (2 * cores).to_string(),
+            )
+        };
     }
 }
 

@@ -227,3 +227,37 @@ fn adapters_names_the_one_a_run_uses() {
         "{text}"
     );
 }
+
+/// Mesa's software GPU splits each pass among twice as many threads as cores unless
+/// LP_NUM_THREADS says otherwise (`main.rs`); `adapters` names the count under each
+/// llvmpipe adapter (Vulkan or OpenGL), and under no other.
+#[test]
+fn a_software_gpu_splits_passes_among_twice_the_cores_unless_told() {
+    let adapters = |threads: Option<&str>| {
+        let mut command = std::process::Command::new(env!("CARGO_BIN_EXE_clusterlab"));
+        command.arg("adapters");
+        match threads {
+            Some(n) => command.env("LP_NUM_THREADS", n),
+            None => command.env_remove("LP_NUM_THREADS"),
+        };
+        let out = command.output().expect("clusterlab runs");
+        assert!(out.status.success());
+        String::from_utf8_lossy(&out.stdout).into_owned()
+    };
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    for (set, shown) in [
+        (None, (2 * cores).to_string()),
+        (Some("3"), "3".to_string()),
+    ] {
+        let text = adapters(set);
+        // Adapter headings: "N. NAME (backend, type)".
+        let software = text
+            .lines()
+            .filter_map(|l| l.split_once(". "))
+            .filter(|(n, name)| n.parse::<u32>().is_ok() && name.starts_with("llvmpipe"))
+            .count();
+        let line = format!("\n   threads per pass: {shown} (LP_NUM_THREADS)\n");
+        assert_eq!(text.matches(&line).count(), software, "{text}");
+        assert_eq!(text.matches("threads per pass").count(), software, "{text}");
+    }
+}

@@ -392,6 +392,11 @@ impl Survey {
                 }
             );
             let _ = writeln!(s, "   driver: {}", a.driver);
+            if a.name.starts_with("llvmpipe") {
+                let threads =
+                    crate::gpu::software_gpu_threads().unwrap_or_else(|| "one per core".into());
+                let _ = writeln!(s, "   threads per pass: {threads} (LP_NUM_THREADS)");
+            }
             let _ = writeln!(
                 s,
                 "   ids: vendor 0x{:04x}, device 0x{:04x}",

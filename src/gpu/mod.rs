@@ -60,6 +60,16 @@ pub enum GpuError {
     Lost(String),
 }
 
+/// The variable that sets how many threads Mesa's software GPU (llvmpipe, lavapipe) splits
+/// each pass among (`clusterlab` sets twice the cores unless it is set).
+pub const SOFTWARE_GPU_THREADS: &str = "LP_NUM_THREADS";
+
+/// The software GPU's thread count as this process has it, for the record: the variable's
+/// value, or None when unset (one thread per core).
+pub fn software_gpu_threads() -> Option<String> {
+    std::env::var(SOFTWARE_GPU_THREADS).ok()
+}
+
 /// How long one cell's GPU work may take by default (`--cell-timeout`).
 pub const DEFAULT_CELL_TIMEOUT: Duration = Duration::from_secs(600);
 

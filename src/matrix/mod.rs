@@ -151,6 +151,10 @@ pub struct Provenance {
     /// What the run spent and where (absent in results written before it was recorded).
     #[serde(default)]
     pub cost: Option<RunCost>,
+    /// LP_NUM_THREADS: the threads a software GPU split each pass among (absent when unset,
+    /// one per core, and in results written before it was recorded).
+    #[serde(default)]
+    pub software_gpu_threads: Option<String>,
 }
 
 /// What a run spent: wall-clock seconds over its cells, split as each cell's cost is, and
@@ -749,6 +753,7 @@ fn provenance(gpu: &Gpu, options: &MatrixOptions) -> Provenance {
             ),
         },
         cost: None,
+        software_gpu_threads: crate::gpu::software_gpu_threads(),
         shard: options.shard.map(|(k, n)| format!("{k}/{n}")),
         variant_files: options.variant_files.clone(),
         scenes: SCENES
