@@ -1,5 +1,7 @@
 //! A study's table as text: aligned for the terminal, and Markdown for README.
 
+use std::collections::BTreeMap;
+
 /// Rows of printed cells under a header. The numbers behind the cells go to CSV and JSON
 /// from each study's typed rows; this is only how they print.
 #[derive(Clone, Debug, Default)]
@@ -7,9 +9,9 @@ pub struct Table {
     pub title: String,
     pub columns: Vec<String>,
     pub rows: Vec<Vec<String>>,
-    /// For each row of `rows` that a failed run made, the index of its error cell: the
+    /// Rows a failed run made, by index, each with the index of its error cell: the
     /// terminal lets the error run on from there rather than widen its column.
-    failed: Vec<(usize, usize)>,
+    failed: BTreeMap<usize, usize>,
     /// Lines printed under the table: sources, conventions, caveats.
     pub notes: Vec<String>,
 }
@@ -30,7 +32,7 @@ impl Table {
 
     /// A row for a run that failed: the cells that name it, then the error, then blanks.
     pub fn failed_row(&mut self, names: Vec<String>, error: &str) {
-        self.failed.push((self.rows.len(), names.len()));
+        self.failed.insert(self.rows.len(), names.len());
         let blanks = self.columns.len().saturating_sub(names.len() + 1);
         let cells = names
             .into_iter()
@@ -38,11 +40,6 @@ impl Table {
             .chain(std::iter::repeat_n(String::new(), blanks))
             .collect();
         self.row(cells);
-    }
-
-    /// Where row `r`'s error cell is, if a failed run made it.
-    fn error_cell(&self, r: usize) -> Option<usize> {
-        self.failed.iter().find(|f| f.0 == r).map(|f| f.1)
     }
 
     fn widths(&self) -> Vec<usize> {
@@ -53,7 +50,7 @@ impl Table {
                 self.rows
                     .iter()
                     .enumerate()
-                    .filter(|&(r, _)| self.error_cell(r).is_none_or(|e| i < e))
+                    .filter(|&(r, _)| self.failed.get(&r).is_none_or(|&e| i < e))
                     .map(|(_, row)| row[i].chars().count())
                     .chain([c.chars().count()])
                     .max()
@@ -87,7 +84,7 @@ impl Table {
         out += &line(&rule);
         out.push('\n');
         for (i, r) in self.rows.iter().enumerate() {
-            match self.error_cell(i) {
+            match self.failed.get(&i).copied() {
                 // The naming cells aligned, then the error as it is.
                 Some(e) => {
                     let names = line(&r[..e]);
