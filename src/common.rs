@@ -51,6 +51,14 @@ pub struct Light {
     pub cos_inner: f32,
 }
 
+/// Largest light radius (range) clusterlab shades. Light assignment squares radii and widens
+/// them in single precision: at this radius the square is 1e36, below f32's 3.4e38 with room
+/// for the widening and the sum of three squared distances, so every test stays finite and
+/// exact; a larger radius is refused rather than risked.
+pub const MAX_LIGHT_RADIUS: f32 = 1e18;
+/// Why [`MAX_LIGHT_RADIUS`] is the limit, in a message's words.
+pub const MAX_LIGHT_RADIUS_WHY: &str = "its square must stay a finite single-precision number through the cluster tests; at that range a light's falloff is 1 to double precision within 1e9 of it";
+
 /// Largest outer cone half-angle a spot may have, in degrees (a wider cone is a point light
 /// with a dark half, which the cone culling does not model).
 pub const MAX_SPOT_ANGLE_DEGREES: f64 = 90.0;

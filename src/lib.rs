@@ -9,6 +9,7 @@ pub mod common;
 pub mod compose;
 pub mod cpu;
 pub mod explain;
+pub mod files;
 pub mod flip;
 pub mod gpu;
 pub mod matrix;

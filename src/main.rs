@@ -389,13 +389,17 @@ fn parse_range(s: &str) -> Result<(f32, f32), String> {
         .split_once(',')
         .ok_or_else(|| format!("`{s}` is not MIN,MAX, e.g. 1.0,3.0"))?;
     let n = |v: &str| match v.trim().parse::<f32>() {
-        Ok(x) if x.is_finite() => Ok(x),
-        Ok(_) => Err(format!(
-            "`{v}` in `{s}` is not a finite number (radii are world units, e.g. 1.0,3.0)"
-        )),
+        Ok(x) => match clusterlab::scene::radius_problem(x) {
+            Some(p) => Err(format!("`{v}` in `{s}`: {p}")),
+            None => Ok(x),
+        },
         Err(_) => Err(format!("`{v}` in `{s}` is not a number")),
     };
-    Ok((n(a)?, n(b)?))
+    let (min, max) = (n(a)?, n(b)?);
+    if min > max {
+        return Err(format!("`{s}`: MIN is above MAX"));
+    }
+    Ok((min, max))
 }
 
 /// Output piped into a reader that stops early (`clusterlab wgsl ... | head`) ends the
@@ -412,8 +416,14 @@ fn end_quietly_on_closed_pipe() {
 fn main() -> ExitCode {
     end_quietly_on_closed_pipe();
     quiet_mesa_wsi();
-    spread_software_gpu_threads();
     let cli = Cli::parse();
+    if let Err(message) =
+        clusterlab::gpu::check_environment().and_then(|()| clusterlab::compose::check_environment())
+    {
+        eprintln!("error: {message}");
+        return ExitCode::FAILURE;
+    }
+    spread_software_gpu_threads();
     let result = match cli.command {
         Command::Validate { paths } => validate(&paths),
         Command::Wgsl { variant, pass } => wgsl(&variant, pass.as_deref()),
@@ -494,7 +504,7 @@ fn quiet_mesa_wsi() {
 fn spread_software_gpu_threads() {
     if std::env::var_os(clusterlab::gpu::SOFTWARE_GPU_THREADS).is_none() {
         let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
-        // SAFETY: called first thing in main, before any other thread exists.
+        // SAFETY: called in main before any other thread exists.
         unsafe {
             std::env::set_var(
                 clusterlab::gpu::SOFTWARE_GPU_THREADS,
@@ -508,7 +518,7 @@ fn validate(paths: &[PathBuf]) -> Result<bool, String> {
     let composer = Composer::default();
     let (mut ok, mut failed) = (0, 0);
     for path in paths {
-        let files = variant::find_files(path).map_err(|e| e.to_string())?;
+        let files = variant::find_files(path)?;
         if files.is_empty() {
             return Err(format!("{}: no .ron variant files there", path.display()));
         }
@@ -613,10 +623,9 @@ fn export_scene(
     let scene = clusterlab::scene::generate(name, params).map_err(|e| e.to_string())?;
     let bytes = clusterlab::scene::export::to_glb(&scene).map_err(|e| format!("{name}: {e}"))?;
     if let Some(dir) = file.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir)
-            .map_err(|e| format!("{}: cannot create folder: {e}", dir.display()))?;
+        clusterlab::files::write::create_folder(dir)?;
     }
-    clusterlab::run::write_atomic(file, &bytes).map_err(|e| e.to_string())?;
+    clusterlab::files::write_file(file, &bytes)?;
     println!(
         "wrote {} ({} triangles, {} lights, {} bytes)",
         file.display(),
@@ -719,6 +728,13 @@ fn render(args: &RenderArgs) -> Result<bool, String> {
             println!("  wrote {}", image.display());
         }
     }
+    if let Some(why) = &r.failure {
+        eprintln!(
+            "FAILED: variant `{}` on scene `{}`: {why}",
+            loaded.name, args.scene
+        );
+        return Ok(false);
+    }
     Ok(true)
 }
 
@@ -804,11 +820,18 @@ fn matrix(args: &MatrixArgs) -> Result<bool, String> {
     let mut cells = matrix::expand(&studies)?;
     let variant_files = matrix::variant_files(&cells);
     if let Some(shard) = args.shard {
+        let planned = cells.len();
         cells = matrix::shard(cells, shard);
+        if cells.is_empty() {
+            return Err(format!(
+                "--shard {}/{}: the matrix has {planned} cells, so shard {} holds none; split it into at most {planned} shards",
+                shard.0, shard.1, shard.0
+            ));
+        }
     }
-    let mut gpu = args.gpu.open()?;
     // The run writes into a staging folder and swaps it in whole when it is done.
-    let folder = matrix::RunFolder::acquire(&args.out)?;
+    let folder = clusterlab::files::ResultFolder::acquire(&args.out)?;
+    let mut gpu = args.gpu.open()?;
     eprintln!(
         "{} cells on {} ({}, {}); writing to {}",
         cells.len(),
@@ -869,7 +892,7 @@ fn merge(
     allow_mixed: bool,
     prefer: Option<clusterlab::matrix::Prefer>,
 ) -> Result<bool, String> {
-    let folder = clusterlab::matrix::RunFolder::acquire(out)?;
+    let folder = clusterlab::files::ResultFolder::acquire(out)?;
     let results = clusterlab::matrix::merge(dirs, &folder.staging, allow_mixed, prefer)?;
     clusterlab::matrix::write_report(&folder.staging, &results)?;
     folder.commit()?;

@@ -63,6 +63,10 @@ pub struct RenderReport {
     pub images: Vec<PathBuf>,
     /// Where the cell's wall-clock time went.
     pub cost_ms: CellCost,
+    /// Why the frame means nothing, when it does not (NaN pixels, no geometry in view, no
+    /// light evaluated where the reference is lit): the cell fails, whatever its error figures.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub failure: Option<String>,
 }
 
 /// Wall-clock milliseconds of each part of a cell: what a run spends, and where.
@@ -161,6 +165,7 @@ pub fn run_scene(
     let out = options.out;
     let params = scene.params;
     gpu.check_size(params.width, params.height)?;
+    scene.check()?;
     let mut cost = CellCost::default();
     let mut clock = Instant::now();
     let mut lap = || {
@@ -212,6 +217,7 @@ pub fn run_scene(
     });
     let stats = stats?;
     cost.counters = lap();
+    let failure = meaningless(&reference, stats.as_ref(), error.as_ref());
     let images = match out {
         Some(dir) => write_images(
             dir,
@@ -259,6 +265,7 @@ pub fn run_scene(
         skipped_passes: frame.skipped.clone(),
         images,
         cost_ms: cost,
+        failure,
     };
     Ok(CellResult {
         report,
@@ -266,6 +273,41 @@ pub fn run_scene(
         reference,
         debug,
     })
+}
+
+/// Why a frame measures nothing, if it does not: a score for it would look perfect or
+/// plausible and mean nothing. Pixels that are not finite; a view with no geometry in it (a
+/// camera looking away, a near plane beyond the scene); and no light evaluated at all where
+/// the reference is lit (light lists that lost every light).
+pub fn meaningless(
+    reference: &ReferenceFrame,
+    stats: Option<&FrameStats>,
+    error: Option<&ErrorMetrics>,
+) -> Option<String> {
+    if let Some(e) = error
+        && e.nan_pixels > 0
+    {
+        return Some(format!(
+            "{} pixels of the image are NaN or infinite",
+            e.nan_pixels
+        ));
+    }
+    if reference.covered == 0 {
+        return Some(
+            "no geometry is in view (the camera looks away from the scene, or its near plane lies beyond it): a frame of nothing measures nothing"
+                .into(),
+        );
+    }
+    if let Some(s) = stats
+        && s.light_evals == 0
+        && reference.lit > 0
+    {
+        return Some(format!(
+            "no light was evaluated, yet {} pixels are lit in the reference: the frame lost every light",
+            reference.lit
+        ));
+    }
+    None
 }
 
 /// Render the frames `policy` asks for; returns the timed ones.
@@ -382,8 +424,7 @@ pub fn write_images(
     frame: &FrameOutput,
     reference: &ReferenceFrame,
 ) -> Result<Vec<PathBuf>, RunError> {
-    std::fs::create_dir_all(dir)
-        .map_err(|e| RunError::Io(format!("{}: cannot create folder: {e}", dir.display())))?;
+    crate::files::write::create_folder(dir).map_err(RunError::Io)?;
     let rgb: Vec<u8> = frame.ldr.iter().flat_map(|p| [p[0], p[1], p[2]]).collect();
     let image_path = dir.join(format!("{stem}.png"));
     let heat_path = dir.join(format!("{stem}.heat.png"));
@@ -397,25 +438,12 @@ pub fn write_images(
     Ok(vec![image_path, heat_path])
 }
 
-/// Write `bytes` to `path` through a temporary file in the same folder (named with this
-/// process's id), so an interrupted or failed write never leaves half a file.
-pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), RunError> {
-    let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("");
-    let tmp = path.with_extension(format!("{ext}.tmp{}", std::process::id()));
-    std::fs::write(&tmp, bytes)
-        .and_then(|()| std::fs::rename(&tmp, path))
-        .map_err(|e| {
-            let _ = std::fs::remove_file(&tmp);
-            RunError::Io(format!("{}: cannot write: {e}", path.display()))
-        })
-}
-
-/// Write an RGB8 PNG atomically.
+/// Write an RGB8 PNG (through `files::write_file`: whole or not at all).
 pub fn write_png(path: &Path, width: u32, height: u32, rgb: &[u8]) -> Result<(), RunError> {
     use image::ImageEncoder;
     let mut png = Vec::new();
     image::codecs::png::PngEncoder::new(&mut png)
         .write_image(rgb, width, height, image::ExtendedColorType::Rgb8)
         .map_err(|e| RunError::Io(format!("{}: cannot encode: {e}", path.display())))?;
-    write_atomic(path, &png)
+    crate::files::write_file(path, &png).map_err(RunError::Io)
 }

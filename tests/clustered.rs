@@ -6,6 +6,7 @@ mod common;
 
 use std::collections::BTreeSet;
 
+use clusterlab::common::MAX_LIGHT_RADIUS;
 use clusterlab::compose::Composer;
 use clusterlab::cpu::clusters::{self as cpu, Grid};
 use clusterlab::cpu::truth::RasterTruth;
@@ -657,6 +658,74 @@ fn counters_are_exact_where_they_can_be_computed() {
     }
 }
 
+/// Lights as large as clusterlab takes (`MAX_LIGHT_RADIUS`) stay in every culling method's
+/// lists: each variant's picture within its bound of naive forward and the reference, and
+/// its useful evaluations exactly naive forward's (both test the same distances in the same
+/// shading function; here every light reaches every covered pixel, so a list that lost one
+/// loses whole pixels of them). wgpu's OpenGL backend lost lights from a radius of about 5e7
+/// on: a tile span past i32's range was converted to an integer before it was clamped, which
+/// GLSL leaves undefined. A copy of the shaders that leaves lights over 1e7 out of their span
+/// (a deliberate break) must fail the count; a radius over the limit is refused.
+#[test]
+fn lights_up_to_the_largest_radius_are_in_every_list() {
+    let gpu = gpu();
+    let composer = Composer::default();
+    let mut params = small("atrium", 48, 27, Some(8));
+    params.radius_range = (MAX_LIGHT_RADIUS, MAX_LIGHT_RADIUS);
+    params.spots = 0.5;
+    let scene = scene::generate("atrium", params).unwrap();
+    let useful = |composer: &Composer, v: &Variant| {
+        let mut r = Renderer::new(&gpu, composer, v, &scene).unwrap_or_else(|e| panic!("{e}"));
+        let frame = r.render().unwrap();
+        (frame, r.stats().unwrap())
+    };
+    let mut naive_v = naive_twin(&exact_variants()[0].variant);
+    naive_v.depth_prepass = true;
+    let (_, naive_stats) = useful(&composer, &naive_v);
+    assert!(naive_stats.useful_light_evals > 0);
+    let mut variants = exact_variants();
+    variants.extend(spot_variants());
+    for v in &variants {
+        let (frame, stats) = useful(&composer, &v.variant);
+        let (reference, _) = reference_frame(&gpu, &composer, v, &scene).unwrap();
+        let what = format!("{} with lights of radius {MAX_LIGHT_RADIUS:e}", v.name);
+        let hidden_fragments =
+            v.variant.pipeline == Pipeline::ClusteredForward && !v.variant.depth_prepass;
+        if !hidden_fragments {
+            assert_eq!(
+                stats.useful_light_evals, naive_stats.useful_light_evals,
+                "{what}"
+            );
+        }
+        let overlap = naive_stats.max_useful_per_pixel;
+        // Naive forward shaded as this variant shades (its BRDF, its depth set-up).
+        let naive = render(&gpu, &naive_twin(&v.variant), &scene, 1);
+        assert_within_bound(&gpu, &v.variant, overlap, &frame, &naive, &reference, &what);
+    }
+    let broken = EditedShaders::of(
+        "clustering/light_range.wesl",
+        "huge-lights-dropped",
+        &[(
+            "if (c.z - r > -near) {",
+            "if (c.z - r > -near || r > 1e7) {",
+        )],
+    );
+    let forward_plus = clustered(Pipeline::ClusteredForward, ZSlicing::Exponential);
+    let (_, stats) = useful(&broken.composer, &forward_plus);
+    assert!(
+        stats.useful_light_evals < naive_stats.useful_light_evals,
+        "the break went unseen: {} of {}",
+        stats.useful_light_evals,
+        naive_stats.useful_light_evals
+    );
+    params.radius_range = (MAX_LIGHT_RADIUS, MAX_LIGHT_RADIUS * 2.0);
+    let refused = scene::generate("atrium", params).unwrap_err().to_string();
+    assert!(
+        refused.contains("over the largest light radius"),
+        "{refused}"
+    );
+}
+
 /// Lists longer than the first index buffer: the frame grows it and runs again, and the
 /// result is the CPU twin's lists and an exact picture, not truncated lists.
 #[test]
@@ -1283,15 +1352,17 @@ struct EditedShaders {
 
 impl EditedShaders {
     fn new(name: &str, edits: &[(&str, &str)]) -> Self {
+        Self::of("passes/light_assign.wesl", name, edits)
+    }
+
+    /// A copy with edits to `module` (a path under `shaders/`).
+    fn of(module: &str, name: &str, edits: &[(&str, &str)]) -> Self {
         let root = std::env::temp_dir().join(format!("clusterlab-{name}-{}", std::process::id()));
         copy_dir(Composer::default().shader_root(), &root);
-        let file = root.join("passes/light_assign.wesl");
+        let file = root.join(module);
         let mut source = std::fs::read_to_string(&file).unwrap();
         for (from, to) in edits {
-            assert!(
-                source.contains(from),
-                "light_assign.wesl no longer has `{from}`"
-            );
+            assert!(source.contains(from), "{module} no longer has `{from}`");
             source = source.replace(from, to);
         }
         std::fs::write(&file, source).unwrap();

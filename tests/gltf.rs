@@ -15,6 +15,7 @@ use clusterlab::run::{CellOptions, run_cell};
 use clusterlab::scene::{self, SCENES, Scene, SceneParams, export::to_glb};
 use clusterlab::variant::{DebugView, GBufferChannel};
 use common::{gpu, load, small};
+use glam::Vec3;
 use serde_json::json;
 
 /// A fresh folder for one test's files.
@@ -37,15 +38,13 @@ fn load_back(path: &Path, like: &Scene) -> Scene {
     let mut params = scene::defaults(name).expect("load");
     params.width = like.params.width;
     params.height = like.params.height;
-    if !like.lights.is_empty() {
-        assert_eq!(
-            params.lights as usize,
-            like.lights.len(),
-            "the file's lights"
-        );
-    }
-    // A file without lights gets seeded ones: none, when asked for none.
-    params.lights = like.lights.len() as u32;
+    // The file's own lights by default: none for a scene exported with none (a file without
+    // lights of its own, and without clusterlab's word that it has none, gets seeded ones).
+    assert_eq!(
+        params.lights as usize,
+        like.lights.len(),
+        "the file's lights"
+    );
     scene::generate(name, params).expect("load")
 }
 
@@ -87,6 +86,84 @@ fn every_built_in_scene_comes_back_from_gltf_bit_for_bit() {
             assert!(loaded.notes.is_empty(), "{what}: {:?}", loaded.notes);
         }
     }
+}
+
+/// The exported file read as another loader reads it, from the standard fields alone (the
+/// light's `extras` removed): every spot's axis within 1e-6 rad and its cosines within 1e-6
+/// of the exact ones (a unit quaternion and an angle rounded to single precision hold them to
+/// a few 1e-8). A file edited by another tool after the export (a spot turned 10 degrees, its
+/// extras left behind) is read from its data, not from the stale extras.
+#[test]
+fn another_loader_reads_the_standard_fields_to_single_precision() {
+    let dir = scratch("standard-fields");
+    let params = SceneParams {
+        lights: 64,
+        spots: 1.0,
+        ..scene::find_scene("atrium").unwrap().defaults
+    };
+    let built = scene::generate("atrium", params).unwrap();
+    let glb = to_glb(&built).unwrap();
+    let (mut json, bin) = common::split_glb(&glb);
+    let write = |name: &str, json: &serde_json::Value| {
+        let path = dir.join(name);
+        std::fs::write(&path, common::glb(&serde_json::to_vec(json).unwrap(), &bin)).unwrap();
+        let name = path.to_str().unwrap().to_string();
+        let p = SceneParams {
+            lights: 64,
+            ..scene::defaults(&name).unwrap()
+        };
+        scene::generate(&name, p).unwrap()
+    };
+    let lights = json["extensions"]["KHR_lights_punctual"]["lights"]
+        .as_array_mut()
+        .unwrap();
+    for l in lights.iter_mut() {
+        l.as_object_mut().unwrap().remove("extras");
+    }
+    let standard = write("standard.glb", &json);
+    let angle = |a: [f32; 3], b: [f32; 3]| {
+        let (a, b) = (Vec3::from(a).as_dvec3(), Vec3::from(b).as_dvec3());
+        a.angle_between(b)
+    };
+    let mut exact = 0;
+    for (b, s) in built.lights.iter().zip(&standard.lights) {
+        assert!(angle(b.direction, s.direction) < 1e-6, "{b:?} {s:?}");
+        assert!(
+            (b.cos_inner - s.cos_inner).abs() < 1e-6 && (b.cos_outer - s.cos_outer).abs() < 1e-6,
+            "{b:?} {s:?}"
+        );
+        exact += (b == s) as u32;
+    }
+    // Without the extras, some cones round off their exact values (else the extras would not
+    // be needed).
+    assert!(
+        exact < built.lights.len() as u32,
+        "every light exact without extras"
+    );
+    // Spot 0 turned by another tool: its node's rotation, not its stale extras, decides.
+    let mut json = common::split_glb(&glb).0;
+    let node = json["nodes"]
+        .as_array_mut()
+        .unwrap()
+        .iter_mut()
+        .find(|n| n["extensions"]["KHR_lights_punctual"]["light"] == 0)
+        .unwrap();
+    let q: Vec<f32> = node["rotation"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap() as f32)
+        .collect();
+    let turned = glam::Quat::from_rotation_x(10f32.to_radians())
+        * glam::Quat::from_xyzw(q[0], q[1], q[2], q[3]);
+    node["rotation"] = turned.to_array().to_vec().into();
+    let edited = write("edited.glb", &json);
+    let axis = (turned.as_dquat().normalize() * glam::DVec3::NEG_Z)
+        .as_vec3()
+        .to_array();
+    assert!(angle(axis, edited.lights[0].direction) < 1e-6);
+    assert!(angle(built.lights[0].direction, edited.lights[0].direction) > 1f64.to_radians());
+    assert_eq!(edited.lights[1..], built.lights[1..]);
 }
 
 #[test]

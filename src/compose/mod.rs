@@ -101,6 +101,26 @@ impl Default for Composer {
     }
 }
 
+/// Refuse `CLUSTERLAB_SHADERS` when it does not name a folder.
+pub fn check_environment() -> Result<(), String> {
+    let Some(dir) = std::env::var_os("CLUSTERLAB_SHADERS") else {
+        return Ok(());
+    };
+    let path = Path::new(&dir);
+    match std::fs::metadata(path) {
+        Ok(meta) if meta.is_dir() => Ok(()),
+        Ok(_) => Err(format!(
+            "CLUSTERLAB_SHADERS=`{}` is not a folder: give the shader folder (one like this repository's shaders/), or unset it",
+            path.display()
+        )),
+        Err(e) => Err(format!(
+            "CLUSTERLAB_SHADERS=`{}`: {}; give the shader folder (one like this repository's shaders/), or unset it",
+            path.display(),
+            crate::files::describe(&e)
+        )),
+    }
+}
+
 impl Composer {
     /// Compose from `shader_root`; messages name files relative to the current folder when
     /// they are under it.

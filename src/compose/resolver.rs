@@ -37,10 +37,17 @@ impl ShaderResolver {
 impl Resolver for ShaderResolver {
     fn resolve_source<'a>(&'a self, path: &ModulePath) -> Result<Cow<'a, str>, ResolveError> {
         if Self::is_constants(path) {
-            Ok(Cow::Borrowed(&self.constants))
-        } else {
-            self.files.resolve_source(path)
+            return Ok(Cow::Borrowed(&self.constants));
         }
+        // Read here rather than by wesl's resolver, which reads a file whole whatever it is
+        // (a named pipe in the shader folder would block the run).
+        let Some(file) = self.files.fs_path(path) else {
+            // No such file: wesl's own error says so.
+            return self.files.resolve_source(path);
+        };
+        crate::files::read_text(&file, crate::files::read::SHADER)
+            .map(Cow::Owned)
+            .map_err(|e| ResolveError::ModuleNotFound(path.clone(), e.to_string()))
     }
 
     fn display_name(&self, path: &ModulePath) -> Option<String> {

@@ -7,7 +7,7 @@ use rayon::prelude::*;
 use super::color::display8;
 use super::light_grid::LightGrid;
 use super::post::{Geometry, Image, PostParams};
-use super::shading::{ShadingParams, shade_lights};
+use super::shading::{ShadingParams, direct_light};
 use super::truth::RasterTruth;
 use crate::common::Light;
 
@@ -18,6 +18,10 @@ pub struct ReferenceFrame {
     pub height: u32,
     pub hdr: Vec<[f64; 3]>,
     pub ldr: Vec<[u8; 3]>,
+    /// Pixels the geometry covers.
+    pub covered: u64,
+    /// Covered pixels some light reaches with light (a radiance above 0 before post effects).
+    pub lit: u64,
 }
 
 /// Shade every covered pixel of `truth` with all `lights`; background stays black. Where a
@@ -35,29 +39,39 @@ pub fn shade_reference(
         .map(|i| truth.surface(i).position)
         .collect();
     let grid = LightGrid::new(&covered, lights).filter(|g| g.culls(&covered, lights.len()));
-    let hdr: Vec<[f64; 3]> = (0..truth.position.len())
+    // Each pixel's colour, and whether some light reaches it with light.
+    let shaded: Vec<([f64; 3], bool)> = (0..truth.position.len())
         .into_par_iter()
         .map(|i| {
             if !truth.covered(i) {
-                return [0.0; 3];
+                return ([0.0; 3], false);
             }
             let s = truth.surface(i);
-            match &grid {
+            let direct = match &grid {
                 Some(grid) => {
                     let near = grid.lights_at(s.position).iter();
-                    shade_lights(&s, eye, near.map(|&l| &lights[l as usize]), params)
+                    direct_light(&s, eye, near.map(|&l| &lights[l as usize]), params)
                 }
-                None => shade_lights(&s, eye, lights.iter(), params),
-            }
-            .to_array()
+                None => direct_light(&s, eye, lights.iter(), params),
+            };
+            // As `shade_lights` sums them, bit for bit.
+            let colour = direct + s.albedo * params.ambient;
+            (colour.to_array(), direct.max_element() > 0.0)
         })
         .collect();
+    let hdr: Vec<[f64; 3]> = shaded.iter().map(|s| s.0).collect();
     let ldr = hdr.iter().map(|&c| display8(c, exposure)).collect();
+    let covered = (0..truth.position.len())
+        .filter(|&i| truth.covered(i))
+        .count() as u64;
+    let lit = shaded.iter().filter(|s| s.1).count() as u64;
     ReferenceFrame {
         width: truth.width,
         height: truth.height,
         hdr,
         ldr,
+        covered,
+        lit,
     }
 }
 

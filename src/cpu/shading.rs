@@ -187,9 +187,18 @@ pub fn shade_lights<'a>(
     lights: impl Iterator<Item = &'a Light>,
     p: &ShadingParams,
 ) -> DVec3 {
+    direct_light(s, eye, lights, p) + s.albedo * p.ambient
+}
+
+/// The lights' part of [`shade_lights`]: their contributions summed, without the ambient term.
+pub fn direct_light<'a>(
+    s: &Surface,
+    eye: DVec3,
+    lights: impl Iterator<Item = &'a Light>,
+    p: &ShadingParams,
+) -> DVec3 {
     let to_eye = (eye - s.position).normalize_or_zero();
-    let direct: DVec3 = lights.map(|l| light_contribution(s, to_eye, l, p)).sum();
-    direct + s.albedo * p.ambient
+    lights.map(|l| light_contribution(s, to_eye, l, p)).sum()
 }
 
 #[cfg(test)]

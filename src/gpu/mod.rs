@@ -70,6 +70,13 @@ pub fn software_gpu_threads() -> Option<String> {
     std::env::var(SOFTWARE_GPU_THREADS).ok()
 }
 
+/// Bytes per pixel of the largest per-pixel storage buffer a frame binds: the counters of
+/// instrumented frames, a u32 each.
+const COUNTER_BYTES_PER_PIXEL: u64 = 4;
+/// Bytes per pixel of the widest image a frame reads back: rgba32float (the HDR target, the
+/// raster truth's positions).
+const READBACK_BYTES_PER_PIXEL: u64 = 16;
+
 /// How long one cell's GPU work may take by default (`--cell-timeout`).
 pub const DEFAULT_CELL_TIMEOUT: Duration = Duration::from_secs(600);
 
@@ -280,16 +287,44 @@ impl Gpu {
         Ok(())
     }
 
-    /// Check that a `width` x `height` frame fits the adapter's limits.
+    /// Check that a `width` x `height` frame fits the adapter's limits: each side within its
+    /// largest texture, the per-pixel counters within one storage binding, and the widest
+    /// image read back (the HDR target or the raster truth, rgba32float) within one buffer.
     pub fn check_size(&self, width: u32, height: u32) -> Result<(), GpuError> {
         let max = self.limits.max_texture_dimension_2d;
         if width == 0 || height == 0 || width > max || height > max {
             return Err(GpuError::TooLarge(format!(
-                "size {width}x{height} is outside what adapter `{}` can render: each side must be in 1..={max}",
+                "size {width}x{height} (`--size`) is outside what adapter `{}` can render: each side must be in 1..={max}",
                 self.adapter.name
             )));
         }
-        Ok(())
+        let storage = self.max_storage_bytes();
+        let buffer = self.limits.max_buffer_size;
+        let fits = |w: u64, h: u64| {
+            let row = (w * READBACK_BYTES_PER_PIXEL)
+                .next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT as u64);
+            w * h * COUNTER_BYTES_PER_PIXEL <= storage && row * h <= buffer
+        };
+        let (w, h) = (width as u64, height as u64);
+        if fits(w, h) {
+            return Ok(());
+        }
+        // The largest frame of the same shape that fits.
+        let scale = ((storage / COUNTER_BYTES_PER_PIXEL).min(buffer / READBACK_BYTES_PER_PIXEL)
+            as f64
+            / (w * h) as f64)
+            .sqrt();
+        let (mut fw, mut fh) = ((w as f64 * scale) as u64, (h as f64 * scale) as u64);
+        while fw > 1 && fh > 1 && !fits(fw, fh) {
+            (fw, fh) = (fw - fw.div_ceil(100), fh - fh.div_ceil(100));
+        }
+        Err(GpuError::TooLarge(format!(
+            "size {width}x{height} (`--size`) is more than adapter `{}` can hold: its {} pixels need per-pixel counters of {} bytes in one storage binding (at most {storage}) and a read-back of {} bytes per pixel in one buffer (at most {buffer}); the largest frame of this shape that fits is {fw}x{fh}",
+            self.adapter.name,
+            w * h,
+            w * h * COUNTER_BYTES_PER_PIXEL,
+            READBACK_BYTES_PER_PIXEL
+        )))
     }
 
     /// The limit on one cell's GPU work (`--cell-timeout`).
@@ -407,11 +442,54 @@ fn driver_string(info: &wgpu::AdapterInfo) -> String {
 /// bytes when that is set: to see what a scene needs of an adapter with smaller buffers
 /// (and to test the error a too-large mesh gets without writing gigabytes).
 fn with_buffer_cap(mut limits: wgpu::Limits) -> wgpu::Limits {
-    if let Some(cap) = std::env::var("CLUSTERLAB_MAX_BUFFER_SIZE")
-        .ok()
-        .and_then(|v| v.trim().parse::<u64>().ok())
-    {
+    if let Ok(Some(cap)) = buffer_cap() {
         limits.max_buffer_size = limits.max_buffer_size.min(cap);
     }
     limits
+}
+
+/// The variable that lowers the largest buffer a device is asked for (see `with_buffer_cap`).
+pub const MAX_BUFFER_SIZE_VAR: &str = "CLUSTERLAB_MAX_BUFFER_SIZE";
+
+/// `CLUSTERLAB_MAX_BUFFER_SIZE` in bytes, when set.
+fn buffer_cap() -> Result<Option<u64>, String> {
+    let Some(value) = std::env::var_os(MAX_BUFFER_SIZE_VAR) else {
+        return Ok(None);
+    };
+    let value = value.to_string_lossy();
+    value
+        .trim()
+        .parse::<u64>()
+        .ok()
+        .filter(|&n| n >= 4)
+        .map(Some)
+        .ok_or_else(|| {
+            format!(
+                "{MAX_BUFFER_SIZE_VAR}=`{value}` is not a number of bytes: give the largest buffer to allow, a whole number of at least 4 (e.g. 65536), or unset it"
+            )
+        })
+}
+
+/// Most threads `LP_NUM_THREADS` may ask of Mesa's software GPU (Mesa clamps to its own
+/// limit, 32 or 64 by version, below this).
+const MAX_SOFTWARE_GPU_THREADS: u32 = 256;
+
+/// Refuse environment variables with values the GPU layer cannot use, naming the variable
+/// and what would be valid (before anything reads them: Mesa would take a bad
+/// `LP_NUM_THREADS` without a word).
+pub fn check_environment() -> Result<(), String> {
+    buffer_cap()?;
+    if let Some(value) = std::env::var_os(SOFTWARE_GPU_THREADS) {
+        let value = value.to_string_lossy();
+        if !value
+            .trim()
+            .parse::<u32>()
+            .is_ok_and(|n| n <= MAX_SOFTWARE_GPU_THREADS)
+        {
+            return Err(format!(
+                "{SOFTWARE_GPU_THREADS}=`{value}` is not a thread count: give a whole number in 0..={MAX_SOFTWARE_GPU_THREADS} (0 runs Mesa's software GPU on one thread), or unset it (clusterlab then sets twice the cores)"
+            ));
+        }
+    }
+    Ok(())
 }

@@ -295,7 +295,7 @@ pub const COLUMNS: &[Column] = &[
     Column {
         key: "nan_pixels",
         heading: "NaN px",
-        shown: CSV_ONLY,
+        shown: EVERYWHERE,
         value: |m| m.error.map(|e| e.nan_pixels).into(),
         text: |m| or_dash(m.error, |e| e.nan_pixels.to_string()),
     },

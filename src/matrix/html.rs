@@ -198,22 +198,35 @@ fn summary(h: &mut String, results: &Results) {
         let _ = write!(h, "</tr>");
         for c in cells {
             let name = esc(&label(c));
-            if let Some(why) = &c.failure {
-                let _ = write!(
-                    h,
-                    "<tr class=\"failed\"><td class=\"name\">{name}</td><td colspan=\"{}\" class=\"name\"><span class=\"failure\">{}</span></td></tr>",
-                    cols.len(),
-                    esc(why)
-                );
+            let failure = |h: &mut String| {
+                if let Some(why) = &c.failure {
+                    let _ = write!(
+                        h,
+                        "<tr class=\"failed\"><td class=\"name\">{name}</td><td colspan=\"{}\" class=\"name\"><span class=\"failure\">{}</span></td></tr>",
+                        cols.len(),
+                        esc(why)
+                    );
+                }
+            };
+            if c.failure.is_some() && c.total_ms().is_none() {
+                failure(h);
                 continue;
             }
-            let class = if c.pareto { " class=\"pareto\"" } else { "" };
+            // A frame that rendered and means nothing: its figures, then why it failed.
+            let class = if c.failure.is_some() {
+                " class=\"failed\""
+            } else if c.pareto {
+                " class=\"pareto\""
+            } else {
+                ""
+            };
             let m = c.measured();
             let _ = write!(h, "<tr{class}><td class=\"name\">{name}</td>");
             for col in &cols {
                 let _ = write!(h, "<td>{}</td>", esc(&(col.text)(&m)));
             }
             let _ = write!(h, "</tr>");
+            failure(h);
         }
         let _ = write!(h, "</table>");
     }

@@ -4,15 +4,14 @@
 
 mod baseline;
 mod columns;
-mod folder;
 mod html;
 mod plan;
 mod plots;
 mod report;
+mod validate;
 
 pub use baseline::{RunComparison, compare_runs};
 pub use columns::{COLUMNS, Cell, Column, Measured, Shown, count};
-pub use folder::RunFolder;
 pub use plan::{
     CellSpec, ParamsRecord, PlannedCell, Study, Sweep, VariantEntry, expand, find_variants,
     parse_shard, parse_sweep, shard,
@@ -218,29 +217,36 @@ impl Results {
         self.cells.iter().filter(|c| !c.ok()).count()
     }
 
-    /// Read `results.json` (a file, or a folder holding one).
+    /// Read `results.json` (a file, or a folder holding one), and check every figure in it
+    /// (`merge` and `--baseline` compute with them).
     pub fn load(path: &Path) -> Result<Self, String> {
         let file = if path.is_dir() {
             path.join("results.json")
         } else {
             path.to_path_buf()
         };
-        if !file.exists() {
-            return Err(format!(
-                "{}: no such results file (give a matrix output folder or its results.json)",
-                path.display()
-            ));
-        }
-        let text = std::fs::read_to_string(&file)
-            .map_err(|e| format!("{}: cannot read: {e}", file.display()))?;
-        serde_json::from_str(&text).map_err(|e| {
+        let text = crate::files::read_text(&file, crate::files::read::RESULTS).map_err(|e| {
+            if e.missing {
+                format!(
+                    "{}: no such results file (give a matrix output folder or its results.json)",
+                    path.display()
+                )
+            } else {
+                e.to_string()
+            }
+        })?;
+        let results: Results = serde_json::from_str(&text).map_err(|e| {
             format!(
                 "{}:{}:{}: not a clusterlab results file: {e}",
                 file.display(),
                 e.line(),
                 e.column()
             )
-        })
+        })?;
+        results
+            .check()
+            .map_err(|e| format!("{}: {e}", file.display()))?;
+        Ok(results)
     }
 }
 
@@ -479,7 +485,8 @@ fn run_one(
     let r = c.report;
     CellRecord {
         spec,
-        failure: None,
+        // A frame that means nothing fails with its figures kept beside the reason.
+        failure: r.failure,
         gpu_ms: r.gpu_ms,
         gpu_ms_spread: r.gpu_ms_spread,
         timing_source: Some(r.timing_source.to_string()),
@@ -594,9 +601,7 @@ pub fn merge(
         provenance: Vec::new(),
         cells: Vec::new(),
     };
-    let images = out.join("images");
-    std::fs::create_dir_all(&images)
-        .map_err(|e| format!("{}: cannot create folder: {e}", images.display()))?;
+    crate::files::write::create_folder(&out.join("images"))?;
     for (dir, r) in loaded {
         merged.provenance.extend(r.provenance);
         for cell in r.cells {
@@ -604,12 +609,7 @@ pub fn merge(
                 .into_iter()
                 .flatten()
             {
-                let (from, to) = (dir.join(file), out.join(file));
-                if from != to {
-                    std::fs::copy(&from, &to).map_err(|e| {
-                        format!("copying {} to {}: {e}", from.display(), to.display())
-                    })?;
-                }
+                copy_image(dir, file, out).map_err(|e| format!("cell `{}`: {e}", cell.spec.id))?;
             }
             merged.cells.retain(|c| c.spec.id != cell.spec.id);
             merged.cells.push(cell);
@@ -617,6 +617,32 @@ pub fn merge(
     }
     derive(&mut merged.cells, None);
     Ok(merged)
+}
+
+/// Copy image `file` (`images/NAME.png`, checked when its results were read) of result
+/// folder `dir` into `out`: a regular file inside `dir`, never a link out of it.
+fn copy_image(dir: &Path, file: &str, out: &Path) -> Result<(), String> {
+    let from = dir.join(file);
+    match std::fs::symlink_metadata(&from) {
+        Ok(meta) if meta.file_type().is_file() => {}
+        Ok(meta) => {
+            return Err(format!(
+                "{} is {}: a result folder's images are regular files inside it",
+                from.display(),
+                crate::files::write::what_is(&meta)
+            ));
+        }
+        Err(e) => {
+            return Err(format!(
+                "{}: {}",
+                from.display(),
+                crate::files::describe(&e)
+            ));
+        }
+    }
+    let bytes =
+        crate::files::read(&from, crate::files::read::RESULT_IMAGE).map_err(|e| e.to_string())?;
+    crate::files::write_file(&out.join(file), &bytes)
 }
 
 /// Which copy of a cell `merge` keeps when folders overlap.
@@ -705,7 +731,7 @@ fn check_comparable(loaded: &[(&PathBuf, Results)]) -> Result<(), String> {
 pub fn variant_files(cells: &[PlannedCell]) -> BTreeMap<String, VariantFile> {
     let mut files = BTreeMap::new();
     for c in cells {
-        if let Ok(text) = std::fs::read(&c.spec.variant_path) {
+        if let Ok(text) = crate::files::read(&c.spec.variant_path, crate::files::read::VARIANT) {
             files
                 .entry(c.spec.variant.clone())
                 .or_insert_with(|| VariantFile {

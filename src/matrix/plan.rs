@@ -57,11 +57,14 @@ pub fn parse_sweep(s: &str) -> Result<Sweep, String> {
             .iter()
             .map(|v| {
                 let num = |x: &str| {
-                    x.trim()
+                    let r = x
+                        .trim()
                         .parse::<f32>()
-                        .ok()
-                        .filter(|r| r.is_finite() && *r >= 0.0)
-                        .ok_or_else(|| bad(v, "a radius >= 0 or a range MIN..MAX"))
+                        .map_err(|_| bad(v, "a radius or a range MIN..MAX"))?;
+                    match crate::scene::radius_problem(r) {
+                        Some(p) => Err(format!("`{v}` in `{s}`: {p}")),
+                        None => Ok(r),
+                    }
                 };
                 let (a, b) = match v.split_once("..") {
                     Some((a, b)) => (num(a)?, num(b)?),
@@ -140,7 +143,7 @@ pub fn find_variants(args: &[String]) -> Result<Vec<VariantEntry>, String> {
     let mut out = Vec::new();
     for arg in args {
         let path = variant::resolve(arg);
-        let files = variant::find_files(&path).map_err(|e| e.to_string())?;
+        let files = variant::find_files(&path)?;
         if files.is_empty() {
             return Err(format!("{}: no .ron variant files there", path.display()));
         }
@@ -293,7 +296,31 @@ pub fn expand(studies: &[Study]) -> Result<Vec<PlannedCell>, String> {
         }
     }
     add_baselines(&mut cells);
+    check_distinct_cells(&cells)?;
     Ok(cells)
+}
+
+/// Two cells never share an id or an image file name (two file scenes whose paths differ
+/// only in characters a file name cannot hold would).
+fn check_distinct_cells(cells: &[PlannedCell]) -> Result<(), String> {
+    let mut seen: BTreeMap<String, &CellSpec> = BTreeMap::new();
+    for c in cells {
+        for key in [c.spec.id.clone(), c.spec.file_stem()] {
+            if let Some(other) = seen.insert(key, &c.spec)
+                && !std::ptr::eq(other, &c.spec)
+            {
+                return Err(format!(
+                    "cells `{}` ({}) and `{}` ({}) would share the image file `{}.png`: rename one of the variant files or scenes",
+                    other.id,
+                    other.variant_path.display(),
+                    c.spec.id,
+                    c.spec.variant_path.display(),
+                    c.spec.file_stem()
+                ));
+            }
+        }
+    }
+    Ok(())
 }
 
 /// A cell's id starts with its variant's file stem: two different files with one stem
@@ -494,6 +521,11 @@ fn add_baselines(cells: &mut Vec<PlannedCell>) {
             if !parts.is_empty() {
                 id.push_str(&format!("[{}]", parts.join(",")));
             }
+        }
+        // A variant of the user's may already go by the baseline's name (a naive_forward.ron
+        // of their own with post effects, say): the added baseline then says what it is.
+        if cells.iter().any(|c| c.spec.id == id) {
+            id = format!("baseline-{id}");
         }
         let mut sweep = spec.sweep.clone();
         sweep.remove("grid");

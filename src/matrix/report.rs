@@ -8,24 +8,21 @@ use std::path::Path;
 use super::columns::{self, Measured};
 use super::{CellRecord, Results, html, plots};
 
-fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), String> {
-    crate::run::write_atomic(path, bytes).map_err(|e| e.to_string())
-}
+use crate::files::write_file;
 
 /// Write results.json, results.csv, the plots and index.html into `dir`.
 pub fn write_report(dir: &Path, results: &Results) -> Result<(), String> {
     let plot_dir = dir.join("plots");
-    std::fs::create_dir_all(&plot_dir)
-        .map_err(|e| format!("{}: cannot create folder: {e}", plot_dir.display()))?;
+    crate::files::write::create_folder(&plot_dir)?;
     let json = serde_json::to_string_pretty(results).map_err(|e| e.to_string())?;
-    write_atomic(&dir.join("results.json"), json.as_bytes())?;
-    write_atomic(&dir.join("results.csv"), &columns::csv(&results.cells)?)?;
+    write_file(&dir.join("results.json"), json.as_bytes())?;
+    write_file(&dir.join("results.csv"), &columns::csv(&results.cells)?)?;
     let plots = plots::all(results);
     for plot in &plots {
-        write_atomic(&plot_dir.join(&plot.file), plot.svg.as_bytes())?;
+        write_file(&plot_dir.join(&plot.file), plot.svg.as_bytes())?;
     }
     let page = html::page(results, &plots);
-    write_atomic(&dir.join("index.html"), page.as_bytes())
+    write_file(&dir.join("index.html"), page.as_bytes())
 }
 
 /// The variant with what was swept, apart from the light count (a column of its own).
@@ -92,15 +89,24 @@ pub fn table(results: &Results) -> String {
         for c in cells {
             let mark = if c.pareto { '*' } else { ' ' };
             let name = label(c);
-            if let Some(why) = &c.failure {
-                let first = why.lines().next().unwrap_or("");
+            let failed = c
+                .failure
+                .as_deref()
+                .map(|why| why.lines().next().unwrap_or(""));
+            if let Some(first) = failed
+                && c.total_ms().is_none()
+            {
                 let _ = writeln!(out, "  {name:<name_width$} FAILED: {first}");
                 continue;
             }
+            // A frame that rendered and means nothing: its figures, then why it failed.
             let m = c.measured();
             let _ = write!(out, "{mark} {name:<name_width$}");
             for (col, w) in cols.iter().zip(&widths) {
                 let _ = write!(out, " {:>w$}", (col.text)(&m));
+            }
+            if let Some(first) = failed {
+                let _ = write!(out, " FAILED: {first}");
             }
             let _ = writeln!(out);
         }

@@ -3,11 +3,15 @@
 //! material factors), the camera with its motion as a two-key animation, and the lights as
 //! `KHR_lights_punctual` nodes.
 //!
-//! Loading the file back ([`super::file`]) gives the same vertices, indices, lights and
-//! camera bit for bit: every number is written in the single precision the scene holds it
-//! in, a light's colour is split into a colour and a power-of-two intensity (exact to
-//! multiply back), and a spot's angles and rotation are chosen among their neighbouring
-//! single-precision values so that the loader's cosines and axis come out as the light's.
+//! The file is valid glTF 2.0 (the Khronos glTF Validator finds no error and no warning in
+//! it; CI runs it): rotations are unit quaternions, every vertex attribute's view says it is
+//! one. Loading it back ([`super::file`]) gives the same vertices, indices, lights and camera
+//! bit for bit: every number is written in the single precision the scene holds it in, a
+//! light's colour is split into a colour and a power-of-two intensity (exact to multiply
+//! back), and a spot's axis and cosines, which a unit quaternion and an angle in single
+//! precision hold only to about 1e-7, are also written exactly in the light's
+//! `extras.clusterlab` (the loader takes them where they agree with the rotation and angles;
+//! another loader reads the standard fields and gets the cone to within that rounding).
 
 use glam::{DQuat, DVec3, Quat, Vec3};
 use serde_json::{Value, json};
@@ -18,6 +22,12 @@ use super::{FRAME_DT, Scene};
 pub fn to_glb(scene: &Scene) -> Result<Vec<u8>, String> {
     if scene.textures.is_some() {
         return Err("a scene with textures cannot be exported (only built-in scenes can)".into());
+    }
+    if scene.prev_camera != scene.camera && scene.params.time < FRAME_DT {
+        return Err(format!(
+            "time {} s: a moving camera is exported as keys at the time and one frame ({FRAME_DT:.4} s) before it, and glTF key times are 0 or more",
+            scene.params.time
+        ));
     }
     let mut out = Writer::default();
     let primitives = out.mesh(scene);
@@ -41,9 +51,14 @@ pub fn to_glb(scene: &Scene) -> Result<Vec<u8>, String> {
             (scene.params.time - FRAME_DT) as f32,
             scene.params.time as f32,
         ];
-        let input = out.accessor_f32(&times, "SCALAR", true);
+        let input = out.accessor_f32(&times, "SCALAR", true, None);
         let prev = scene.prev_camera.eye.as_vec3();
-        let output = out.accessor_f32(&[prev.to_array(), eye.to_array()].concat(), "VEC3", false);
+        let output = out.accessor_f32(
+            &[prev.to_array(), eye.to_array()].concat(),
+            "VEC3",
+            false,
+            None,
+        );
         let mut samplers =
             vec![json!({ "input": input, "output": output, "interpolation": "LINEAR" })];
         let mut channels =
@@ -54,6 +69,7 @@ pub fn to_glb(scene: &Scene) -> Result<Vec<u8>, String> {
                 &[prev_rotation.to_array(), rotation.to_array()].concat(),
                 "VEC4",
                 false,
+                None,
             );
             samplers.push(json!({ "input": input, "output": output, "interpolation": "LINEAR" }));
             channels.push(
@@ -82,6 +98,11 @@ pub fn to_glb(scene: &Scene) -> Result<Vec<u8>, String> {
                 "innerConeAngle": angle_for_cosine(light.cos_inner),
                 "outerConeAngle": angle_for_cosine(light.cos_outer),
             });
+            l["extras"] = json!({ "clusterlab": {
+                "direction": light.direction,
+                "cos_inner": light.cos_inner,
+                "cos_outer": light.cos_outer,
+            } });
             node["rotation"] = rotation_for_axis(light.direction).to_array().into();
         } else {
             l["type"] = "point".into();
@@ -156,6 +177,10 @@ fn glb(mut json: Vec<u8>, mut bin: Vec<u8>) -> Result<Vec<u8>, String> {
     Ok(out)
 }
 
+/// A buffer view's `target` for vertex attributes and for indices (OpenGL's names).
+const ARRAY_BUFFER: u32 = 34962;
+const ELEMENT_ARRAY_BUFFER: u32 = 34963;
+
 /// The binary chunk being written and the JSON that describes it.
 #[derive(Default)]
 struct Writer {
@@ -180,14 +205,21 @@ impl Writer {
         self.views.len() - 1
     }
 
-    /// An accessor of f32 `values` (`kind` VEC3, VEC4 or SCALAR), with bounds if asked.
-    fn accessor_f32(&mut self, values: &[f32], kind: &str, bounds: bool) -> usize {
+    /// An accessor of f32 `values` (`kind` VEC3, VEC4 or SCALAR), with bounds if asked, in a
+    /// view of its own for GPU buffer `target` (vertex attributes), if any.
+    fn accessor_f32(
+        &mut self,
+        values: &[f32],
+        kind: &str,
+        bounds: bool,
+        target: Option<u32>,
+    ) -> usize {
         let n = match kind {
             "SCALAR" => 1,
             "VEC3" => 3,
             _ => 4,
         };
-        let view = self.view(bytemuck::cast_slice(values), None);
+        let view = self.view(bytemuck::cast_slice(values), target);
         let mut a = json!({
             "bufferView": view,
             "componentType": 5126,
@@ -248,10 +280,10 @@ impl Writer {
             let normals: Vec<f32> = verts.iter().flat_map(|v| v.normal).collect();
             let colors: Vec<f32> = verts.iter().flat_map(|v| v.albedo).collect();
             let indices: Vec<u32> = run.iter().flat_map(|t| t.iter().map(|i| i - lo)).collect();
-            let position = self.accessor_f32(&positions, "VEC3", true);
-            let normal = self.accessor_f32(&normals, "VEC3", false);
-            let color = self.accessor_f32(&colors, "VEC3", false);
-            let view = self.view(bytemuck::cast_slice(&indices), Some(34963));
+            let position = self.accessor_f32(&positions, "VEC3", true, Some(ARRAY_BUFFER));
+            let normal = self.accessor_f32(&normals, "VEC3", false, Some(ARRAY_BUFFER));
+            let color = self.accessor_f32(&colors, "VEC3", false, Some(ARRAY_BUFFER));
+            let view = self.view(bytemuck::cast_slice(&indices), Some(ELEMENT_ARRAY_BUFFER));
             self.accessors.push(json!({
                 "bufferView": view,
                 "componentType": 5125,
@@ -292,20 +324,10 @@ fn angle_for_cosine(cosine: f32) -> f32 {
         .unwrap_or(start)
 }
 
-/// A rotation taking -Z to `axis` whose axis, as the loader computes it, is `axis`. The
-/// loader normalises the quaternion, so any multiple of it is the same rotation: scaled
-/// copies round differently to single precision, and one of them lands on `axis` exactly.
+/// The unit rotation taking -Z to `axis`, rounded to single precision.
 fn rotation_for_axis(axis: [f32; 3]) -> Quat {
-    let target = Vec3::from(axis);
-    let exact = DQuat::from_rotation_arc(DVec3::NEG_Z, target.as_dvec3().normalize());
-    let axis_of = |q: Quat| {
-        let d = q.as_dquat().normalize() * DVec3::NEG_Z;
-        d.normalize_or(DVec3::NEG_Y).as_vec3()
-    };
-    (0..4096)
-        .map(|k| (exact * (1.0 - k as f64 / 8192.0)).as_quat())
-        .find(|&q| axis_of(q) == target)
-        .unwrap_or(exact.as_quat())
+    let axis = Vec3::from(axis).as_dvec3().normalize();
+    DQuat::from_rotation_arc(DVec3::NEG_Z, axis).as_quat()
 }
 
 /// `x` and the single-precision values up to 2 steps either side of it, nearest first.

@@ -8,6 +8,7 @@
 //! lights when the file has none or another count is asked for, the time at which the
 //! camera's animation is sampled).
 
+use std::cell::RefCell;
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex, OnceLock};
@@ -17,6 +18,7 @@ use sha2::{Digest, Sha256};
 
 use super::{Camera, FRAME_DT, Light, Scene, SceneError, SceneFile, SceneParams, TextureArray};
 use crate::common::{NO_TEXTURE, Vertex};
+use crate::files;
 
 /// Extensions that change how geometry is stored: clusterlab cannot read their data.
 const GEOMETRY_EXTENSIONS: [(&str, &str); 3] = [
@@ -62,6 +64,9 @@ pub struct FileScene {
     pub textures: Option<Arc<TextureArray>>,
     /// The file's point and spot lights, in node order.
     pub lights: Vec<Light>,
+    /// The file says it was written with no lights (clusterlab's export of a scene of 0
+    /// lights): it is rendered with none by default, not with seeded ones.
+    pub without_lights: bool,
     pub camera: Option<CameraTrack>,
     /// Bounds of every vertex, world space.
     pub bounds: (DVec3, DVec3),
@@ -122,9 +127,13 @@ pub fn load(path: &str) -> Result<Arc<FileScene>, SceneError> {
         path: path.to_string(),
         message,
     };
-    let meta = std::fs::metadata(path).map_err(|e| fail(format!("cannot read: {e}")))?;
+    let meta = std::fs::metadata(path)
+        .map_err(|e| fail(format!("cannot read: {}", files::describe(&e))))?;
     if !meta.is_file() {
-        return Err(fail("not a file".into()));
+        return Err(fail(
+            "not a regular file (a folder, device or pipe): a glTF scene is a .gltf or .glb file"
+                .into(),
+        ));
     }
     let stamp = (meta.len(), meta.modified().ok());
     let key = std::fs::canonicalize(path).unwrap_or_else(|_| PathBuf::from(path));
@@ -134,14 +143,7 @@ pub fn load(path: &str) -> Result<Arc<FileScene>, SceneError> {
     {
         return Ok(scene.clone());
     }
-    // The reader is not ours: a file it trips over must still be an error, not a crash.
-    let read = std::panic::catch_unwind(|| read_file(path)).unwrap_or_else(|_| {
-        Err(
-            "the glTF reader failed on this file (it is malformed in a way not checked above)"
-                .into(),
-        )
-    });
-    let scene = Arc::new(read.map_err(fail)?);
+    let scene = Arc::new(read_guarded(path).map_err(fail)?);
     cache
         .lock()
         .expect("scene cache")
@@ -149,8 +151,53 @@ pub fn load(path: &str) -> Result<Arc<FileScene>, SceneError> {
     Ok(scene)
 }
 
+thread_local! {
+    /// What this thread's glTF reading is at, while it reads a file (for the message of a
+    /// failure inside the gltf crate).
+    static READING: RefCell<Option<String>> = const { RefCell::new(None) };
+}
+
+/// Say what the reading is at now.
+fn reading(what: impl Into<String>) {
+    READING.with(|r| *r.borrow_mut() = Some(what.into()));
+}
+
+/// Read the file with the gltf crate's panics caught: the checks before each call into it
+/// cover what it is known to panic on, and anything else it trips over is an error naming
+/// what was being read, not a crash (and nothing is printed for it).
+fn read_guarded(path: &str) -> Result<FileScene, String> {
+    static QUIET: std::sync::Once = std::sync::Once::new();
+    QUIET.call_once(|| {
+        let previous = std::panic::take_hook();
+        std::panic::set_hook(Box::new(move |info| {
+            if READING.with(|r| r.borrow().is_none()) {
+                previous(info);
+            }
+        }));
+    });
+    reading("the file");
+    let read = std::panic::catch_unwind(|| read_file(path));
+    let at = READING.with(|r| r.borrow_mut().take()).unwrap_or_default();
+    read.unwrap_or_else(|panic| {
+        let why = panic
+            .downcast_ref::<String>()
+            .cloned()
+            .or_else(|| panic.downcast_ref::<&str>().map(|s| s.to_string()))
+            .unwrap_or_default();
+        Err(format!(
+            "the glTF reader (the gltf crate) failed on {at} ({why}): the file is malformed in a way clusterlab does not check before reading"
+        ))
+    })
+}
+
 fn read_file(path: &str) -> Result<FileScene, String> {
-    let bytes = std::fs::read(path).map_err(|e| format!("cannot read: {e}"))?;
+    let kind = if path.to_ascii_lowercase().ends_with(".glb") {
+        files::read::GLB
+    } else {
+        files::read::GLTF
+    };
+    let bytes = files::read(Path::new(path), kind).map_err(|e| e.why)?;
+    check_glb_header(&bytes)?;
     let parsed = gltf::Gltf::from_slice_without_validation(&bytes)
         .map_err(|e| format!("not a glTF 2.0 file: {}", reader_error(&e)))?;
     for ext in parsed.extensions_used().chain(parsed.extensions_required()) {
@@ -161,7 +208,7 @@ fn read_file(path: &str) -> Result<FileScene, String> {
         }
     }
     let gltf::Gltf { document, blob } = parsed;
-    check_position_indices(document.as_json())?;
+    check_unvalidated_indices(document.as_json())?;
     let gltf = Parsed {
         document: gltf::Document::from_json(document.into_json())
             .map_err(|e| format!("not a valid glTF 2.0 file: {}", reader_error(&e)))?,
@@ -171,6 +218,8 @@ fn read_file(path: &str) -> Result<FileScene, String> {
     let mut hash = Sha256::new();
     hash.update(&bytes);
     let buffers = read_buffers(&gltf, base, &mut hash)?;
+    reading("the accessors");
+    check_accessors(&gltf, &buffers)?;
     let scene = gltf
         .default_scene()
         .or_else(|| gltf.scenes().next())
@@ -207,13 +256,21 @@ fn read_file(path: &str) -> Result<FileScene, String> {
             meshes.push((mesh, world));
         }
         if let Some(light) = node.light() {
-            match file_light(&light, &world, &chain) {
+            reading(format!("light {} at node {}", light.index(), node.index()));
+            let place = |why: String| {
+                format!(
+                    "light {} at node {} (`extensions.KHR_lights_punctual.lights[{}]`): {why}",
+                    light.index(),
+                    node.index(),
+                    light.index()
+                )
+            };
+            match file_light(&light, &world, &chain).map_err(place)? {
                 Some(l) if finite_light(&l) => lights.push(l),
                 Some(_) => {
-                    return Err(format!(
-                        "light {} at node {} has a position, direction, colour or range that is not a finite number",
-                        light.index(),
-                        node.index()
+                    return Err(place(
+                        "its position or direction is not a finite number (its node's transform)"
+                            .into(),
                     ));
                 }
                 None => unsupported_lights += 1,
@@ -224,11 +281,16 @@ fn read_file(path: &str) -> Result<FileScene, String> {
         {
             match cam.projection() {
                 gltf::camera::Projection::Perspective(p) => {
+                    reading(format!("camera {}", cam.index()));
+                    check_perspective(cam.index(), p.yfov(), p.znear(), p.zfar())?;
                     camera = Some(CameraTrack {
                         fov_y: p.yfov(),
                         near: p.znear(),
                         far: p.zfar(),
-                        nodes: chain.iter().map(|n| node_track(&gltf, n, &buffers)).collect(),
+                        nodes: chain
+                            .iter()
+                            .map(|n| node_track(&gltf, n, &buffers))
+                            .collect::<Result<_, _>>()?,
                     });
                 }
                 gltf::camera::Projection::Orthographic(_) => notes.push(format!(
@@ -254,6 +316,11 @@ fn read_file(path: &str) -> Result<FileScene, String> {
     let mut indices = Vec::new();
     for (mesh, world) in &meshes {
         for primitive in mesh.primitives() {
+            reading(format!(
+                "mesh {} primitive {}",
+                mesh.index(),
+                primitive.index()
+            ));
             read_primitive(
                 &primitive,
                 world,
@@ -277,10 +344,9 @@ fn read_file(path: &str) -> Result<FileScene, String> {
             (lo.min(p), hi.max(p))
         },
     );
-    if !(bounds.0.is_finite() && bounds.1.is_finite()) {
-        return Err("a vertex position is not finite (NaN or infinity)".into());
-    }
+    let without_lights = lights.is_empty() && exported_light_count(&gltf) == Some(0);
     Ok(FileScene {
+        without_lights,
         file: SceneFile {
             path: path.to_string(),
             sha256: format!("{:x}", hash.finalize()),
@@ -295,9 +361,31 @@ fn read_file(path: &str) -> Result<FileScene, String> {
     })
 }
 
-/// The gltf crate's validation reads each POSITION accessor without checking its index (it
-/// panics on a bad one): check those indices first.
-fn check_position_indices(root: &gltf::json::Root) -> Result<(), String> {
+/// A .glb's header as the gltf crate reads it: it takes the header's 12 bytes from the length
+/// the header states without checking that length first.
+fn check_glb_header(bytes: &[u8]) -> Result<(), String> {
+    if !bytes.starts_with(b"glTF") {
+        return Ok(());
+    }
+    match bytes
+        .get(8..12)
+        .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+    {
+        Some(length) if length >= 12 => Ok(()),
+        Some(length) => Err(format!(
+            "not a glTF 2.0 file: its GLB header gives a length of {length} bytes, less than the 12-byte header itself"
+        )),
+        None => Err(
+            "not a glTF 2.0 file: its GLB header (magic, version, length: 12 bytes) is cut short"
+                .into(),
+        ),
+    }
+}
+
+/// What the gltf crate's validation does not check and its reader takes on trust (it panics
+/// on a bad one): each POSITION accessor's index, each image's source, and each animation
+/// channel's target.
+fn check_unvalidated_indices(root: &gltf::json::Root) -> Result<(), String> {
     let count = root.accessors.len();
     for (m, mesh) in root.meshes.iter().enumerate() {
         for (p, primitive) in mesh.primitives.iter().enumerate() {
@@ -309,6 +397,117 @@ fn check_position_indices(root: &gltf::json::Root) -> Result<(), String> {
                     "not a valid glTF 2.0 file: `meshes[{m}].primitives[{p}].attributes.POSITION` is accessor {}, and the file has {count} accessors",
                     index.value()
                 ));
+            }
+        }
+    }
+    // An image's source is read assuming glTF's rule: a `uri`, or a `bufferView` with a
+    // `mimeType`.
+    for (i, image) in root.images.iter().enumerate() {
+        let why = match (&image.buffer_view, &image.uri, &image.mime_type) {
+            (Some(_), _, None) => "has a `bufferView` and no `mimeType` (glTF requires both)",
+            (None, None, _) => "has neither a `uri` nor a `bufferView`",
+            _ => continue,
+        };
+        return Err(format!("not a valid glTF 2.0 file: `images[{i}]` {why}"));
+    }
+    // Its validation of an animation looks only at each channel's sampler index.
+    let nodes = root.nodes.len();
+    for (a, animation) in root.animations.iter().enumerate() {
+        for (c, channel) in animation.channels.iter().enumerate() {
+            let node = channel.target.node.value();
+            if node >= nodes {
+                return Err(format!(
+                    "not a valid glTF 2.0 file: `animations[{a}].channels[{c}].target.node` is node {node}, and the file has {nodes} nodes"
+                ));
+            }
+            if !matches!(
+                channel.target.path,
+                gltf::json::validation::Checked::Valid(_)
+            ) {
+                return Err(format!(
+                    "not a valid glTF 2.0 file: `animations[{a}].channels[{c}].target.path` is none of translation, rotation, scale, weights"
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Check every accessor against the buffers as read, as the gltf crate's reader does not: it
+/// slices by offsets, counts and strides it takes on trust (a count of 0 underflows, a stride
+/// shorter than an element overlaps, an accessor past its view panics or reads another's
+/// bytes).
+fn check_accessors(gltf: &gltf::Document, buffers: &[Vec<u8>]) -> Result<(), String> {
+    // The bytes `count` elements of `size` bytes, `stride` apart, take from `offset` on.
+    let span = |offset: usize, stride: usize, count: usize, size: usize| {
+        stride
+            .checked_mul(count.checked_sub(1)?)?
+            .checked_add(size)?
+            .checked_add(offset)
+    };
+    let view_bytes = |view: &gltf::buffer::View, what: &str| -> Result<usize, String> {
+        let buffer = buffers.get(view.buffer().index()).map_or(0, Vec::len);
+        let end = view.offset().checked_add(view.length());
+        if end.is_none_or(|end| end > buffer) {
+            return Err(format!(
+                "{what}: buffer view {} (bytes {}..+{}) lies outside buffer {}, which holds {buffer} bytes",
+                view.index(),
+                view.offset(),
+                view.length(),
+                view.buffer().index()
+            ));
+        }
+        Ok(view.length())
+    };
+    for a in gltf.accessors() {
+        let what = format!("accessor {}", a.index());
+        let (count, size) = (a.count(), a.size());
+        if count == 0 {
+            return Err(format!(
+                "{what} has `count` 0: glTF accessors hold at least one element"
+            ));
+        }
+        if let Some(view) = a.view() {
+            let length = view_bytes(&view, &what)?;
+            let stride = view.stride().unwrap_or(size);
+            if stride < size {
+                return Err(format!(
+                    "{what}: buffer view {} has `byteStride` {stride}, less than one element of {size} bytes",
+                    view.index()
+                ));
+            }
+            if span(a.offset(), stride, count, size).is_none_or(|end| end > length) {
+                return Err(format!(
+                    "{what}: {count} elements of {size} bytes, {stride} apart from byte {}, run past the {length} bytes of buffer view {}",
+                    a.offset(),
+                    view.index()
+                ));
+            }
+        }
+        if let Some(sparse) = a.sparse() {
+            let n = sparse.count();
+            if n == 0 || n > count {
+                return Err(format!(
+                    "{what}: its sparse `count` is {n}, outside 1..={count} (the accessor's count)"
+                ));
+            }
+            let (indices, values) = (sparse.indices(), sparse.values());
+            let index_size = indices.index_type().size();
+            let checks = [
+                (indices.view(), indices.offset(), index_size, "indices"),
+                (values.view(), values.offset(), size, "values"),
+            ];
+            for (view, offset, element, part) in checks {
+                let length = view_bytes(&view, &what)?;
+                let stride = view.stride().unwrap_or(element);
+                if stride < element
+                    || span(offset, stride, n, element).is_none_or(|end| end > length)
+                {
+                    return Err(format!(
+                        "{what}: its {n} sparse {part} run past the {length} bytes of buffer view {}",
+                        view.index()
+                    ));
+                }
             }
         }
     }
@@ -350,6 +549,9 @@ fn reader_error(e: &gltf::Error) -> String {
             json.line(),
             json.column()
         ),
+        gltf::Error::Binary(glb) => format!(
+            "its GLB container (12-byte header, then JSON and BIN chunks) is malformed: {glb}"
+        ),
         other => other.to_string(),
     }
 }
@@ -364,7 +566,14 @@ fn read_buffers(gltf: &Parsed, base: &Path, hash: &mut Sha256) -> Result<Vec<Vec
                 buffer.index()
             ))?,
             gltf::buffer::Source::Uri(uri) => {
-                read_uri(base, uri, &format!("buffer {}", buffer.index()), hash)?
+                reading(format!("buffer {}", buffer.index()));
+                read_uri(
+                    base,
+                    uri,
+                    &format!("buffer {}", buffer.index()),
+                    files::read::GLTF_BUFFER,
+                    hash,
+                )?
             }
         };
         if data.len() < buffer.length() {
@@ -380,9 +589,18 @@ fn read_buffers(gltf: &Parsed, base: &Path, hash: &mut Sha256) -> Result<Vec<Vec
     Ok(out)
 }
 
-/// The bytes a URI names: base64 data, or a file relative to the glTF's folder.
-/// Only files are hashed: data URIs are part of the glTF file itself.
-fn read_uri(base: &Path, uri: &str, what: &str, hash: &mut Sha256) -> Result<Vec<u8>, String> {
+/// The bytes a URI names: base64 data, or a file in the glTF's folder (`base`) or below it.
+/// glTF 2.0 URIs are relative references resolved against the file's folder; clusterlab
+/// follows nothing else: no scheme, no absolute path, no `..` segment (after decoding
+/// percent-escapes), no symbolic link whose target leaves the folder. Only files are hashed:
+/// data URIs are part of the glTF file itself.
+fn read_uri(
+    base: &Path,
+    uri: &str,
+    what: &str,
+    kind: files::Kind,
+    hash: &mut Sha256,
+) -> Result<Vec<u8>, String> {
     if let Some(rest) = uri.strip_prefix("data:") {
         let (_, data) = rest
             .split_once(";base64,")
@@ -392,28 +610,56 @@ fn read_uri(base: &Path, uri: &str, what: &str, hash: &mut Sha256) -> Result<Vec
             .decode(data)
             .map_err(|e| format!("{what}: its data URI is not valid base64: {e}"));
     }
-    if uri.contains("://") {
-        return Err(format!(
-            "{what} refers to `{uri}`: clusterlab reads files, not URLs; download it beside the .gltf"
-        ));
-    }
-    let decoded = urlencoding::decode(uri)
-        .map_err(|_| format!("{what}: `{uri}` is not valid UTF-8 once decoded"))?;
-    let file = base.join(&*decoded);
-    if file.exists() && !file.is_file() {
-        return Err(format!(
-            "{what} refers to `{uri}`, which is not a regular file at {} (a folder, device or pipe)",
-            file.display()
-        ));
-    }
-    let bytes = std::fs::read(&file).map_err(|e| {
+    let file = resolve_uri(base, uri).map_err(|why| format!("{what} refers to `{uri}`: {why}"))?;
+    let bytes = files::read(&file, kind).map_err(|e| {
         format!(
-            "{what} refers to `{uri}`, which cannot be read at {}: {e} (a .gltf file's buffers and images must sit where it says; a .glb holds them inside)",
-            file.display()
+            "{what} refers to `{uri}`, which cannot be read at {}: {} (a .gltf file's buffers and images must sit where it says; a .glb holds them inside)",
+            file.display(),
+            e.why.strip_prefix("cannot read: ").unwrap_or(&e.why)
         )
     })?;
     hash.update(&bytes);
     Ok(bytes)
+}
+
+/// The file a relative URI names in folder `base`, or why clusterlab does not read it.
+fn resolve_uri(base: &Path, uri: &str) -> Result<PathBuf, String> {
+    const RULE: &str = "a glTF file's buffers and images are read only from its own folder and the folders below it, by relative path";
+    let scheme = uri
+        .split_once(':')
+        .is_some_and(|(head, _)| !head.contains('/'));
+    if scheme {
+        return Err(format!(
+            "a URI with a scheme (a URL, `file:` or a drive letter), which clusterlab does not follow: {RULE}"
+        ));
+    }
+    let decoded =
+        urlencoding::decode(uri).map_err(|_| "not valid UTF-8 once decoded".to_string())?;
+    if decoded.starts_with('/') {
+        return Err(format!(
+            "an absolute path, which clusterlab does not follow: {RULE}"
+        ));
+    }
+    if decoded.contains('\\') || decoded.contains('\0') {
+        return Err(format!(
+            "a path with a backslash or NUL, which glTF URIs do not hold (they separate folders with `/`): {RULE}"
+        ));
+    }
+    if decoded.split('/').any(|segment| segment == "..") {
+        return Err(format!(
+            "a path with a `..` segment, which clusterlab does not follow: {RULE}"
+        ));
+    }
+    let file = base.join(&*decoded);
+    // Symbolic links may point anywhere: where the file really is must be inside the folder.
+    if let (Ok(real), Ok(folder)) = (std::fs::canonicalize(&file), std::fs::canonicalize(base))
+        && !real.starts_with(&folder)
+    {
+        return Err(format!(
+            "a symbolic link that leads out of the file's folder, which clusterlab does not follow: {RULE}"
+        ));
+    }
+    Ok(file)
 }
 
 /// A node's own static transform.
@@ -426,14 +672,16 @@ fn local_transform(node: &gltf::Node) -> DAffine3 {
     )
 }
 
-/// A `KHR_lights_punctual` point or spot light at a node (None for a directional light).
-/// A root node's own translation and rotation are used as they are (no matrix round trip),
-/// so an exported light comes back bit for bit.
+/// A `KHR_lights_punctual` point or spot light at a node (None for a directional light), or
+/// why its values are not a light's. A root node's own translation and rotation are used as
+/// they are (no matrix round trip), and where the light's `extras` hold clusterlab's exact
+/// axis and cosines that agree with its node and angles (a file clusterlab exported), those
+/// are taken: an exported light comes back bit for bit.
 fn file_light(
     light: &gltf::khr_lights_punctual::Light,
     world: &DAffine3,
     chain: &[gltf::Node],
-) -> Option<Light> {
+) -> Result<Option<Light>, String> {
     use gltf::khr_lights_punctual::Kind;
     let (position, direction) = match chain {
         [only] => {
@@ -445,30 +693,133 @@ fn file_light(
         }
         _ => (world.translation.as_vec3(), world.matrix3 * DVec3::NEG_Z),
     };
-    let intensity = light.intensity().max(0.0);
-    let color = light.color().map(|c| c.max(0.0));
+    let intensity = light.intensity();
+    if !(intensity.is_finite() && intensity >= 0.0) {
+        return Err(format!(
+            "its `intensity` is {intensity}: a light's intensity is a finite number, 0 or more"
+        ));
+    }
+    let color = light.color();
+    if !color.iter().all(|c| c.is_finite() && *c >= 0.0) {
+        return Err(format!(
+            "its `color` is {color:?}: a light's colour is linear RGB, each channel 0 or more"
+        ));
+    }
     let brightest = color.iter().fold(0.0f32, |a, &c| a.max(c)) * intensity;
-    let radius = light
-        .range()
-        .filter(|r| r.is_finite() && *r > 0.0)
-        .unwrap_or_else(|| ((brightest as f64 / RANGE_CUTOFF).sqrt() as f32).max(1e-3));
+    let radius = match light.range() {
+        Some(r) if !(r.is_finite() && r > 0.0) => {
+            return Err(format!(
+                "its `range` is {r}: a range is a positive distance (leave it out for a light without one, which clusterlab bounds where it falls to 1/256)"
+            ));
+        }
+        Some(r) => r,
+        None => ((brightest as f64 / RANGE_CUTOFF).sqrt() as f32).max(1e-3),
+    };
+    if let Some(p) = super::radius_problem(radius) {
+        let given = if light.range().is_some() {
+            "`range`"
+        } else {
+            "range (where its intensity falls to 1/256)"
+        };
+        return Err(format!("its {given}: {p}"));
+    }
     let position = position.to_array();
-    match light.kind() {
+    Ok(match light.kind() {
         Kind::Directional => None,
         Kind::Point => Some(Light::point(position, radius, color, intensity)),
         Kind::Spot {
-            inner_cone_angle,
-            outer_cone_angle,
-        } => Some(Light::spot_radians(
-            position,
-            radius,
-            color,
-            intensity,
-            direction.to_array(),
-            inner_cone_angle as f64,
-            outer_cone_angle as f64,
-        )),
+            inner_cone_angle: inner,
+            outer_cone_angle: outer,
+        } => {
+            // glTF's pi/2 is a single-precision number a hair above the real one.
+            let widest = std::f32::consts::FRAC_PI_2;
+            if !(outer.is_finite() && outer > 0.0 && outer <= widest) {
+                return Err(format!(
+                    "its `spot.outerConeAngle` is {outer}: glTF spot angles are radians in 0 < outer <= pi/2"
+                ));
+            }
+            if !(inner.is_finite() && (0.0..=outer).contains(&inner)) {
+                return Err(format!(
+                    "its `spot.innerConeAngle` is {inner}: glTF spot angles are radians in 0 <= inner <= outer ({outer})"
+                ));
+            }
+            let mut spot = Light::spot_radians(
+                position,
+                radius,
+                color,
+                intensity,
+                direction.to_array(),
+                inner as f64,
+                outer as f64,
+            );
+            if let Some(exact) = exact_spot(light.extras())
+                && exact.agrees_with(&spot)
+            {
+                (spot.direction, spot.cos_inner, spot.cos_outer) =
+                    (exact.direction, exact.cos_inner, exact.cos_outer);
+            }
+            Some(spot)
+        }
+    })
+}
+
+/// A spot's axis and cosines exactly as clusterlab holds them (`extras.clusterlab` of a light
+/// it exported).
+#[derive(serde::Deserialize)]
+struct ExactSpot {
+    direction: [f32; 3],
+    cos_inner: f32,
+    cos_outer: f32,
+}
+
+fn exact_spot(extras: &gltf::json::Extras) -> Option<ExactSpot> {
+    #[derive(serde::Deserialize)]
+    struct Extras {
+        clusterlab: ExactSpot,
     }
+    let raw = extras.as_ref()?;
+    serde_json::from_str::<Extras>(raw.get())
+        .ok()
+        .map(|e| e.clusterlab)
+}
+
+impl ExactSpot {
+    /// Whether these exact values are the ones the file's own data rounds to (a file edited
+    /// by another tool since it was exported has other angles or rotations: its extras are
+    /// stale and its data wins).
+    fn agrees_with(&self, spot: &Light) -> bool {
+        let near = |a: f32, b: f32| (a - b).abs() <= 1e-5;
+        (0..3).all(|i| near(self.direction[i], spot.direction[i]))
+            && near(self.cos_inner, spot.cos_inner)
+            && near(self.cos_outer, spot.cos_outer)
+    }
+}
+
+/// Refuse a perspective camera clusterlab cannot render: no field of view, a near plane at or
+/// behind the eye, a far plane not beyond the near one.
+fn check_perspective(index: usize, yfov: f32, znear: f32, zfar: Option<f32>) -> Result<(), String> {
+    let field = |name: &str| format!("camera {index} (`cameras[{index}].perspective.{name}`)");
+    if !(yfov.is_finite() && yfov > 0.0 && yfov < std::f32::consts::PI) {
+        return Err(format!(
+            "{} is {yfov}: a vertical field of view is radians strictly between 0 and pi",
+            field("yfov")
+        ));
+    }
+    if !(znear.is_finite() && znear > 0.0) {
+        return Err(format!(
+            "{} is {znear}: the near plane is a positive distance in front of the eye",
+            field("znear")
+        ));
+    }
+    if let Some(far) = zfar
+        && !(far.is_finite() && far > znear)
+    {
+        return Err(format!(
+            "{} is {far}: the far plane lies beyond the near plane ({znear}); leave it out for an infinite one",
+            field("zfar")
+        ));
+    }
+    Ok(())
 }
 
 fn finite_light(l: &Light) -> bool {
@@ -480,7 +831,10 @@ fn finite_light(l: &Light) -> bool {
         .all(|x| x.is_finite())
 }
 
-fn node_track(gltf: &Parsed, node: &gltf::Node, buffers: &[Vec<u8>]) -> NodeTrack {
+/// A node's transform and its channels in the file's first animation, each checked: keys
+/// that are finite and strictly increasing, values that are finite.
+fn node_track(gltf: &Parsed, node: &gltf::Node, buffers: &[Vec<u8>]) -> Result<NodeTrack, String> {
+    use gltf::accessor::{DataType as T, Dimensions as D};
     let (t, r, s) = node.transform().decomposed();
     let mut channels = Vec::new();
     if let Some(animation) = gltf.animations().next() {
@@ -489,12 +843,43 @@ fn node_track(gltf: &Parsed, node: &gltf::Node, buffers: &[Vec<u8>]) -> NodeTrac
                 continue;
             }
             use gltf::animation::Property as P;
-            let property = match channel.target().property() {
-                P::Translation => Property::Translation,
-                P::Rotation => Property::Rotation,
-                P::Scale => Property::Scale,
+            let (property, kinds, valid): (_, Vec<_>, _) = match channel.target().property() {
+                P::Translation => (
+                    Property::Translation,
+                    vec![(T::F32, D::Vec3)],
+                    "VEC3 of FLOAT",
+                ),
+                P::Scale => (Property::Scale, vec![(T::F32, D::Vec3)], "VEC3 of FLOAT"),
+                P::Rotation => (
+                    Property::Rotation,
+                    [T::F32, T::I8, T::U8, T::I16, T::U16]
+                        .map(|t| (t, D::Vec4))
+                        .to_vec(),
+                    "VEC4 of FLOAT, BYTE, UNSIGNED_BYTE, SHORT or UNSIGNED_SHORT",
+                ),
                 P::MorphTargetWeights => continue,
             };
+            let what = format!(
+                "animation {} channel {} (node {} {})",
+                animation.index(),
+                channel.index(),
+                node.index(),
+                format!("{property:?}").to_lowercase()
+            );
+            reading(what.clone());
+            let sampler = channel.sampler();
+            check_kind(
+                &sampler.input(),
+                &format!("{what}: its times"),
+                &[(T::F32, D::Scalar)],
+                "SCALAR of FLOAT",
+            )?;
+            check_kind(
+                &sampler.output(),
+                &format!("{what}: its values"),
+                &kinds,
+                valid,
+            )?;
             let reader = channel.reader(|b| buffers.get(b.index()).map(Vec::as_slice));
             let Some(times) = reader.read_inputs() else {
                 continue;
@@ -507,20 +892,41 @@ fn node_track(gltf: &Parsed, node: &gltf::Node, buffers: &[Vec<u8>]) -> NodeTrac
                 }
                 _ => continue,
             };
+            let times: Vec<f32> = times.collect();
+            if let Some(k) = times.iter().position(|t| !t.is_finite()) {
+                return Err(format!(
+                    "{what}: key {k}'s time is {}, not a finite number",
+                    times[k]
+                ));
+            }
+            if let Some(k) = (1..times.len()).find(|&k| times[k] <= times[k - 1]) {
+                return Err(format!(
+                    "{what}: key {k}'s time {} does not come after key {}'s {} (glTF key times increase strictly)",
+                    times[k],
+                    k - 1,
+                    times[k - 1]
+                ));
+            }
+            if let Some(at) = values.iter().position(|v| !v.is_finite()) {
+                return Err(format!(
+                    "{what}: value {at} is {}, not a finite number",
+                    values[at]
+                ));
+            }
             channels.push(Channel {
                 property,
-                interpolation: channel.sampler().interpolation(),
-                times: times.collect(),
+                interpolation: sampler.interpolation(),
+                times,
                 values,
             });
         }
     }
-    NodeTrack {
+    Ok(NodeTrack {
         translation: Vec3::from(t),
         rotation: Quat::from_array(r),
         scale: Vec3::from(s),
         channels,
-    }
+    })
 }
 
 impl Channel {
@@ -674,14 +1080,21 @@ impl BaseColorImages {
                 .nth(index)
                 .ok_or(format!("image {index} does not exist"))?;
             let what = format!("image {index}");
+            reading(what.clone());
             let bytes = match image.source() {
-                gltf::image::Source::Uri { uri, .. } => read_uri(base, uri, &what, hash)?,
+                gltf::image::Source::Uri { uri, .. } => {
+                    read_uri(base, uri, &what, files::read::GLTF_IMAGE, hash)?
+                }
                 gltf::image::Source::View { view, .. } => {
                     let data = buffers
                         .get(view.buffer().index())
                         .ok_or(format!("{what}: its buffer does not exist"))?;
-                    data.get(view.offset()..view.offset() + view.length())
-                        .ok_or(format!("{what}: its buffer view lies outside its buffer"))?
+                    let end = view.offset().checked_add(view.length());
+                    end.and_then(|end| data.get(view.offset()..end))
+                        .ok_or(format!(
+                            "{what}: its buffer view {} lies outside its buffer",
+                            view.index()
+                        ))?
                         .to_vec()
                 }
             };
@@ -719,6 +1132,38 @@ fn read_primitive(
         .get(&gltf::Semantic::Positions)
         .ok_or("it has no POSITION attribute")?;
     check_float_vec3(&positions, "POSITION")?;
+    {
+        use gltf::accessor::{DataType as T, Dimensions as D};
+        if let Some(a) = primitive.indices() {
+            let kinds = [(T::U8, D::Scalar), (T::U16, D::Scalar), (T::U32, D::Scalar)];
+            check_kind(
+                &a,
+                "its indices",
+                &kinds,
+                "SCALAR of UNSIGNED_BYTE, UNSIGNED_SHORT or UNSIGNED_INT",
+            )?;
+        }
+        if let Some(a) = primitive.get(&gltf::Semantic::Colors(0)) {
+            let kinds = [T::U8, T::U16, T::F32]
+                .map(|t| [(t, D::Vec3), (t, D::Vec4)])
+                .concat();
+            check_kind(
+                &a,
+                "COLOR_0",
+                &kinds,
+                "VEC3 or VEC4 of FLOAT, UNSIGNED_BYTE or UNSIGNED_SHORT",
+            )?;
+        }
+        if let Some(a) = primitive.get(&gltf::Semantic::TexCoords(0)) {
+            let kinds = [T::U8, T::U16, T::F32].map(|t| (t, D::Vec2));
+            check_kind(
+                &a,
+                "TEXCOORD_0",
+                &kinds,
+                "VEC2 of FLOAT, UNSIGNED_BYTE or UNSIGNED_SHORT",
+            )?;
+        }
+    }
     if vertices.len()
         + positions
             .count()
@@ -742,7 +1187,10 @@ fn read_primitive(
         None => (0..count as u32).collect(),
     };
     if let Some(bad) = corners.iter().find(|&&i| i as usize >= count) {
-        return Err(format!("index {bad} is past its {count} vertices"));
+        let accessor = primitive.indices().map_or(0, |a| a.index());
+        return Err(format!(
+            "index {bad} (indices accessor {accessor}) is past its {count} vertices"
+        ));
     }
     let triangles = triangle_list(mode, &corners);
     let normals: Option<Vec<[f32; 3]>> = match primitive.get(&gltf::Semantic::Normals) {
@@ -768,6 +1216,24 @@ fn read_primitive(
             && n != count
         {
             return Err(format!("{name} has {n} entries for {count} positions"));
+        }
+    }
+    // A NaN would pass every later check that compares (bounds fold past it): look here.
+    use gltf::Semantic as S;
+    let uv3: Option<Vec<[f32; 3]>> = uvs
+        .as_ref()
+        .map(|u| u.iter().map(|&[a, b]| [a, b, 0.0]).collect());
+    for (name, semantic, values) in [
+        ("POSITION", S::Positions, Some(&points)),
+        ("NORMAL", S::Normals, normals.as_ref()),
+        ("COLOR_0", S::Colors(0), colors.as_ref()),
+        ("TEXCOORD_0", S::TexCoords(0), uv3.as_ref()),
+    ] {
+        if let Some(at) = values.and_then(|v| first_non_finite(v)) {
+            let accessor = primitive.get(&semantic).map_or(0, |a| a.index());
+            return Err(format!(
+                "{name} (accessor {accessor}) holds a value that is not a finite number (NaN or infinity) at vertex {at}"
+            ));
         }
     }
 
@@ -877,6 +1343,15 @@ fn read_primitive(
             note_once(notes, "primitives without NORMAL are drawn flat".into());
         }
     }
+    let placed = &vertices[base as usize..];
+    if let Some(at) = placed
+        .iter()
+        .position(|v| !v.position.iter().chain(&v.normal).all(|x| x.is_finite()))
+    {
+        return Err(format!(
+            "vertex {at} is not a finite single-precision number once its node's transform places it (a scale or translation too large)"
+        ));
+    }
     Ok(())
 }
 
@@ -903,6 +1378,46 @@ fn triangle_list(mode: gltf::mesh::Mode, corners: &[u32]) -> Vec<[u32; 3]> {
     }
 }
 
+/// Refuse accessor `a` (what `name` calls it) unless its component type and dimensions are
+/// among `kinds` (`valid` says them in glTF's words): the gltf crate's reader panics on others.
+fn check_kind(
+    a: &gltf::Accessor,
+    name: &str,
+    kinds: &[(gltf::accessor::DataType, gltf::accessor::Dimensions)],
+    valid: &str,
+) -> Result<(), String> {
+    if kinds.contains(&(a.data_type(), a.dimensions())) {
+        return Ok(());
+    }
+    use gltf::accessor::{DataType as T, Dimensions as D};
+    let dimensions = match a.dimensions() {
+        D::Scalar => "SCALAR",
+        D::Vec2 => "VEC2",
+        D::Vec3 => "VEC3",
+        D::Vec4 => "VEC4",
+        D::Mat2 => "MAT2",
+        D::Mat3 => "MAT3",
+        D::Mat4 => "MAT4",
+    };
+    let component = match a.data_type() {
+        T::I8 => "BYTE",
+        T::U8 => "UNSIGNED_BYTE",
+        T::I16 => "SHORT",
+        T::U16 => "UNSIGNED_SHORT",
+        T::U32 => "UNSIGNED_INT",
+        T::F32 => "FLOAT",
+    };
+    Err(format!(
+        "{name} (accessor {}): {dimensions} of {component}, where clusterlab reads {valid} (glTF's types for them)",
+        a.index()
+    ))
+}
+
+/// The index of the first element of `values` that is not a finite number.
+fn first_non_finite<const N: usize>(values: &[[f32; N]]) -> Option<usize> {
+    values.iter().position(|v| !v.iter().all(|x| x.is_finite()))
+}
+
 fn check_float_vec3(a: &gltf::Accessor, name: &str) -> Result<(), String> {
     use gltf::accessor::{DataType, Dimensions};
     if a.data_type() != DataType::F32 || a.dimensions() != Dimensions::Vec3 || a.normalized() {
@@ -925,8 +1440,16 @@ fn note_once(notes: &mut Vec<String>, note: String) {
     }
 }
 
+/// How many lights clusterlab's exporter says it wrote (`asset.extras.clusterlab.lights`).
+fn exported_light_count(gltf: &gltf::Document) -> Option<u64> {
+    let raw = gltf.as_json().asset.extras.as_ref()?;
+    let extras: serde_json::Value = serde_json::from_str(raw.get()).ok()?;
+    extras["clusterlab"]["lights"].as_u64()
+}
+
 /// The default parameters of a file scene: 640x360, the file's lights (or 1024 seeded ones
-/// when it has none), light radii scaled to its bounds as the atrium's are to its hall.
+/// when it has none and does not say it was written without), light radii scaled to its
+/// bounds as the atrium's are to its hall.
 pub fn defaults(file: &FileScene) -> SceneParams {
     let diagonal = (file.bounds.1 - file.bounds.0).length().max(1e-3);
     let round3 = |x: f64| {
@@ -936,7 +1459,7 @@ pub fn defaults(file: &FileScene) -> SceneParams {
     SceneParams {
         width: 640,
         height: 360,
-        lights: if file.lights.is_empty() {
+        lights: if file.lights.is_empty() && !file.without_lights {
             1024
         } else {
             file.lights.len() as u32
@@ -954,7 +1477,8 @@ pub fn defaults(file: &FileScene) -> SceneParams {
 /// camera at `params.time` (and one frame earlier), else a camera framing the bounds.
 pub fn instantiate(file: &FileScene, params: SceneParams) -> Scene {
     let (lo, hi) = file.bounds;
-    let use_file_lights = !file.lights.is_empty() && params.lights as usize == file.lights.len();
+    let use_file_lights = (!file.lights.is_empty() || file.without_lights)
+        && params.lights as usize == file.lights.len();
     let lights = if use_file_lights {
         file.lights.clone()
     } else {

@@ -16,7 +16,7 @@ use std::sync::Arc;
 
 use glam::{DMat4, DVec3};
 
-use crate::common::DepthMapping;
+use crate::common::{DepthMapping, MAX_LIGHT_RADIUS, MAX_LIGHT_RADIUS_WHY};
 pub use crate::common::{Light, Vertex};
 
 /// A perspective camera, right-handed, looking from `eye` at `target`.
@@ -78,6 +78,60 @@ impl Camera {
     pub fn projection(&self, aspect: f64, mapping: DepthMapping) -> DMat4 {
         mapping.projection(self.fov_y, aspect, self.near, self.far)
     }
+
+    /// Why this camera cannot make a meaningful frame, if it cannot: no field of view, a near
+    /// plane at or behind the eye, a far plane not beyond it, a pose that is not finite, or a
+    /// view-projection that overflows single precision (what the GPU computes with).
+    pub fn problem(&self, aspect: f64) -> Option<String> {
+        if !(self.fov_y.is_finite() && self.fov_y > 0.0 && self.fov_y < std::f64::consts::PI) {
+            return Some(format!(
+                "its vertical field of view is {} rad: it lies strictly between 0 and pi",
+                self.fov_y
+            ));
+        }
+        if !(self.near.is_finite() && self.near > 0.0) {
+            return Some(format!(
+                "its near plane is at {}: it is a positive distance in front of the eye",
+                self.near
+            ));
+        }
+        if !(self.far.is_finite() && self.far > self.near) {
+            return Some(format!(
+                "its far plane, at {}, is not beyond its near plane, at {}",
+                self.far, self.near
+            ));
+        }
+        if ![self.eye, self.target, self.up]
+            .iter()
+            .all(|v| v.is_finite())
+        {
+            return Some(format!(
+                "its eye {:?} or direction is not finite",
+                self.eye.to_array()
+            ));
+        }
+        let clip = self.projection(aspect, DepthMapping::default()) * self.view();
+        if !clip.as_mat4().is_finite() {
+            return Some(format!(
+                "its view-projection is not finite in single precision (eye {:?}: too far out for the GPU's numbers)",
+                self.eye.to_array()
+            ));
+        }
+        None
+    }
+}
+
+/// Why `radius` is not a light radius clusterlab shades, if it is not: one in
+/// (0, MAX_LIGHT_RADIUS].
+pub fn radius_problem(radius: f32) -> Option<String> {
+    if !(radius.is_finite() && radius > 0.0) {
+        return Some(format!(
+            "{radius} is not a light radius: radii are positive distances of at most {MAX_LIGHT_RADIUS:e}"
+        ));
+    }
+    (radius > MAX_LIGHT_RADIUS).then(|| {
+        format!("{radius:e} is over the largest light radius, {MAX_LIGHT_RADIUS:e}: {MAX_LIGHT_RADIUS_WHY}")
+    })
 }
 
 /// What a scene generator is asked for.
@@ -142,6 +196,49 @@ impl Scene {
     }
 
     /// The far plane that encloses every vertex as seen from `eye`, with a margin.
+    /// Check what a frame is computed from: cameras that can render (now and one frame
+    /// earlier) and lights the cluster tests represent.
+    pub fn check(&self) -> Result<(), SceneError> {
+        let fail = |message: String| match &self.file {
+            Some(f) => SceneError::File {
+                path: f.path.clone(),
+                message,
+            },
+            None => SceneError::BadParam(format!("scene `{}`: {message}", self.name)),
+        };
+        let aspect = self.aspect();
+        if let Some(p) = self.camera.problem(aspect) {
+            return Err(fail(format!(
+                "the camera at time {} s: {p}",
+                self.params.time
+            )));
+        }
+        if let Some(p) = self.prev_camera.problem(aspect) {
+            return Err(fail(format!(
+                "the camera one frame earlier (time {} s): {p}",
+                self.params.time - FRAME_DT
+            )));
+        }
+        for (i, l) in self.lights.iter().enumerate() {
+            // A light of radius 0 lights nothing, exactly (a stress case has them).
+            if let Some(p) = radius_problem(l.radius).filter(|_| l.radius != 0.0) {
+                return Err(fail(format!("light {i}: {p}")));
+            }
+            if !l
+                .position
+                .iter()
+                .chain(&l.color)
+                .chain(&l.direction)
+                .all(|x| x.is_finite())
+            {
+                return Err(fail(format!(
+                    "light {i}: its position, colour or axis is not finite"
+                )));
+            }
+        }
+        Ok(())
+    }
+
     pub fn far_plane_for(vertices: &[Vertex], eye: DVec3) -> f64 {
         let furthest = vertices
             .iter()
@@ -192,11 +289,14 @@ pub fn file_of(name: &str) -> Result<Option<SceneFile>, SceneError> {
 /// Make scene `name` with `params`: a built-in scene, or a `.gltf` or `.glb` file.
 pub fn generate(name: &str, params: SceneParams) -> Result<Scene, SceneError> {
     check_params(&params)?;
-    if file::is_file(name) {
-        return Ok(file::instantiate(&*file::load(name)?, params));
-    }
-    let info = find_scene(name).ok_or_else(|| SceneError::Unknown(name.to_string()))?;
-    Ok((info.generate)(params))
+    let scene = if file::is_file(name) {
+        file::instantiate(&*file::load(name)?, params)
+    } else {
+        let info = find_scene(name).ok_or_else(|| SceneError::Unknown(name.to_string()))?;
+        (info.generate)(params)
+    };
+    scene.check()?;
+    Ok(scene)
 }
 
 fn check_params(params: &SceneParams) -> Result<(), SceneError> {
@@ -227,6 +327,11 @@ fn check_params(params: &SceneParams) -> Result<(), SceneError> {
     if !(lo > 0.0 && lo <= hi) {
         return Err(SceneError::BadParam(format!(
             "light radius range {lo}..{hi}: both ends must be positive and min <= max"
+        )));
+    }
+    if let Some(p) = radius_problem(hi) {
+        return Err(SceneError::BadParam(format!(
+            "light radius range {lo}..{hi}: {p}"
         )));
     }
     if !(params.time.is_finite() && (0.0..=MAX_TIME_S).contains(&params.time)) {

@@ -138,6 +138,13 @@ pub fn run_case(gpu: &Gpu, composer: &Composer, case: &Case, name: &str, v: &Var
         Err(e) => checks.push(check("renders", false, e.to_string())),
         Ok(cell) => {
             checks.push(check("renders", true, "no GPU validation error".into()));
+            checks.push(check(
+                "meaningful",
+                cell.report.failure.is_none(),
+                cell.report.failure.clone().unwrap_or_else(|| {
+                    "geometry in view, and lights evaluated where the reference is lit".into()
+                }),
+            ));
             let f = &cell.frame;
             let w = f.width as usize;
             let bad: Vec<usize> = (0..f.hdr.len())

@@ -289,8 +289,7 @@ pub fn write(
     adapter: &AdapterSummary,
     command: &str,
 ) -> Result<Vec<PathBuf>, StudyError> {
-    std::fs::create_dir_all(dir)
-        .map_err(|e| StudyError::Io(format!("cannot create {}: {e}", dir.display())))?;
+    crate::files::write::create_folder(dir).map_err(StudyError::Io)?;
     let name = out.name.as_str();
     let doc = serde_json::to_string_pretty(&json(out, adapter, command))
         .map_err(|e| StudyError::Io(e.to_string()))?;
@@ -310,8 +309,7 @@ pub fn write(
         files.push((dir.join(&p.file), p.svg.clone()));
     }
     for (path, text) in &files {
-        crate::run::write_atomic(path, text.as_bytes())
-            .map_err(|e| StudyError::Io(e.to_string()))?;
+        crate::files::write_file(path, text.as_bytes()).map_err(StudyError::Io)?;
     }
     Ok(files.into_iter().map(|(p, _)| p).collect())
 }

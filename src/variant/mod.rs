@@ -10,18 +10,14 @@ pub use schema::*;
 
 use std::path::{Path, PathBuf};
 
-/// Largest variant file read: 64 KiB, thirty times the largest shipped one.
-pub const MAX_VARIANT_BYTES: u64 = 64 * 1024;
+/// Largest variant file read.
+pub const MAX_VARIANT_BYTES: u64 = crate::files::read::VARIANT.limit;
 
 /// Why a variant file could not be used.
 #[derive(Debug, thiserror::Error)]
 pub enum VariantError {
-    #[error("{}: cannot read: {error}", path.display())]
-    Io {
-        path: PathBuf,
-        error: std::io::Error,
-    },
-    /// Not something to read as a variant: a device, pipe or folder, or too large.
+    /// Not something to read as a variant: missing, a device, pipe or folder, too large, or
+    /// not UTF-8 text.
     #[error("{}: {why}", path.display())]
     NotAVariantFile { path: PathBuf, why: String },
     /// The text is not a well-formed variant (RON syntax, unknown field or variant, wrong type).
@@ -74,33 +70,12 @@ pub struct LoadedVariant {
 
 /// Read, parse and check one variant file.
 pub fn load(path: &Path) -> Result<LoadedVariant, VariantError> {
-    let io = |error| VariantError::Io {
-        path: path.to_path_buf(),
-        error,
-    };
-    let refuse = |why: String| VariantError::NotAVariantFile {
-        path: path.to_path_buf(),
-        why,
-    };
-    let meta = std::fs::metadata(path).map_err(io)?;
-    if !meta.is_file() {
-        return Err(refuse(
-            "not a regular file (a folder, device or pipe); a variant is a .ron file".into(),
-        ));
-    }
-    if meta.len() > MAX_VARIANT_BYTES {
-        return Err(refuse(format!(
-            "{} bytes, over the {MAX_VARIANT_BYTES} bytes a variant file may have (the shipped ones are under 2 KiB)",
-            meta.len()
-        )));
-    }
-    // Read at most the limit, in case the file grew since.
-    let mut text = String::new();
-    std::io::Read::read_to_string(
-        &mut std::io::Read::take(std::fs::File::open(path).map_err(io)?, MAX_VARIANT_BYTES),
-        &mut text,
-    )
-    .map_err(io)?;
+    let text = crate::files::read_text(path, crate::files::read::VARIANT).map_err(|e| {
+        VariantError::NotAVariantFile {
+            path: path.to_path_buf(),
+            why: e.why,
+        }
+    })?;
     let variant = parse(path, &text)?;
     let name = path
         .file_stem()
@@ -120,11 +95,18 @@ pub fn parse(path: &Path, text: &str) -> Result<Variant, VariantError> {
         ron::Options::default().with_default_extension(ron::extensions::Extensions::IMPLICIT_SOME);
     let variant: Variant = options.from_str(text).map_err(|e| {
         let pos = e.span.start;
+        let mut message = e.code.to_string();
+        if e.code == ron::Error::IntegerOutOfBounds
+            && let Some(field) = field_before(text, pos.line, pos.col)
+            && let Some(range) = crate::explain::integer_range(&field)
+        {
+            message = format!("{message}: field `{field}` takes whole numbers in {range}");
+        }
         VariantError::Syntax {
             path: path.to_path_buf(),
             line: pos.line,
             column: pos.col,
-            message: e.code.to_string(),
+            message,
             snippet: caret_snippet(text, pos.line, pos.col),
         }
     })?;
@@ -158,22 +140,56 @@ pub fn resolve(arg: &str) -> PathBuf {
 }
 
 /// The variant files under `path` (a file, or a folder searched for `*.ron`), sorted.
-pub fn find_files(path: &Path) -> std::io::Result<Vec<PathBuf>> {
-    if path.is_dir() {
-        let mut files: Vec<PathBuf> = std::fs::read_dir(path)?
-            .filter_map(|e| e.ok().map(|e| e.path()))
-            .filter(|p| p.extension().is_some_and(|e| e == "ron"))
-            .collect();
-        files.sort();
-        Ok(files)
-    } else if path.exists() {
-        Ok(vec![path.to_path_buf()])
-    } else {
-        Err(std::io::Error::new(
-            std::io::ErrorKind::NotFound,
-            format!("{}: no such file or folder", path.display()),
-        ))
+pub fn find_files(path: &Path) -> Result<Vec<PathBuf>, String> {
+    let meta = std::fs::metadata(path).map_err(|e| {
+        if e.kind() == std::io::ErrorKind::NotFound {
+            format!("{}: no such file or folder", path.display())
+        } else {
+            format!(
+                "{}: cannot read: {}",
+                path.display(),
+                crate::files::describe(&e)
+            )
+        }
+    })?;
+    if !meta.is_dir() {
+        return Ok(vec![path.to_path_buf()]);
     }
+    let entries = std::fs::read_dir(path).map_err(|e| {
+        format!(
+            "{}: cannot read folder: {}",
+            path.display(),
+            crate::files::describe(&e)
+        )
+    })?;
+    let mut files: Vec<PathBuf> = entries
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|e| e == "ron"))
+        .collect();
+    files.sort();
+    Ok(files)
+}
+
+/// The name of the field whose value is at `line`:`col` (1-based): the last `name:` before
+/// it (a tuple's elements have no names of their own).
+fn field_before(text: &str, line: usize, col: usize) -> Option<String> {
+    let start: usize = text
+        .split_inclusive('\n')
+        .take(line - 1)
+        .map(str::len)
+        .sum();
+    let before = text.get(..start + col.saturating_sub(1))?;
+    let colon = before.rfind(':')?;
+    let name: String = before[..colon]
+        .trim_end()
+        .chars()
+        .rev()
+        .take_while(|c| c.is_alphanumeric() || *c == '_')
+        .collect::<Vec<_>>()
+        .into_iter()
+        .rev()
+        .collect();
+    (!name.is_empty()).then_some(name)
 }
 
 /// The source line with a caret under `col` (both 1-based), as compilers print it.

@@ -42,3 +42,34 @@ pub fn cell(gpu: &Gpu, v: &LoadedVariant, scene: &str, p: SceneParams) -> CellRe
     )
     .unwrap_or_else(|e| panic!("{} on {scene}: {e}", v.name))
 }
+
+/// A .glb file's JSON and binary chunk.
+pub fn split_glb(glb: &[u8]) -> (serde_json::Value, Vec<u8>) {
+    let word = |at: usize| u32::from_le_bytes(glb[at..at + 4].try_into().unwrap()) as usize;
+    let json_len = word(12);
+    let json = serde_json::from_slice(&glb[20..20 + json_len]).unwrap();
+    let bin_len = word(20 + json_len);
+    (json, glb[28 + json_len..28 + json_len + bin_len].to_vec())
+}
+
+/// A .glb file of `json` and binary chunk `bin`, each padded to 4 bytes.
+pub fn glb(json: &[u8], bin: &[u8]) -> Vec<u8> {
+    let pad = |b: &[u8], with: u8| {
+        let mut b = b.to_vec();
+        while !b.len().is_multiple_of(4) {
+            b.push(with);
+        }
+        b
+    };
+    let (json, bin) = (pad(json, b' '), pad(bin, 0));
+    let mut out = b"glTF".to_vec();
+    out.extend(2u32.to_le_bytes());
+    out.extend(((28 + json.len() + bin.len()) as u32).to_le_bytes());
+    out.extend((json.len() as u32).to_le_bytes());
+    out.extend(b"JSON");
+    out.extend(json);
+    out.extend((bin.len() as u32).to_le_bytes());
+    out.extend(b"BIN\0");
+    out.extend(bin);
+    out
+}

@@ -1,0 +1,211 @@
+//! What a results file may hold: `merge` and `--baseline` compute with every figure in it, so
+//! a figure a run could not have written (a negative or non-finite time, more useful light
+//! evaluations than evaluations, an image outside the folder's `images/`) is refused, naming
+//! the file's cell and field, before anything is computed or copied.
+
+use std::path::{Component, Path};
+
+use super::{CellRecord, Results};
+
+/// Most milliseconds a figure may hold: about 11 days, far past any cell's time limit.
+const MAX_MS: f64 = 1e9;
+
+impl Results {
+    /// Check the figures of every cell, and that the file says which run made it.
+    pub fn check(&self) -> Result<(), String> {
+        if self.provenance.is_empty() {
+            return Err(
+                "it has no provenance (the run, adapter and variant files that made it): not a file a matrix run wrote".into(),
+            );
+        }
+        if self.cells.is_empty() {
+            return Err(
+                "it holds no cells: a run that planned no cells wrote nothing to merge or compare"
+                    .into(),
+            );
+        }
+        let mut ids = std::collections::HashSet::new();
+        for cell in &self.cells {
+            if !ids.insert(cell.spec.id.as_str()) {
+                return Err(format!("cell `{}` appears twice", cell.spec.id));
+            }
+            check_cell(cell).map_err(|e| format!("cell `{}`: {e}", cell.spec.id))?;
+        }
+        Ok(())
+    }
+}
+
+fn check_cell(c: &CellRecord) -> Result<(), String> {
+    let p = &c.spec.params;
+    if p.width == 0 || p.height == 0 {
+        return Err(format!(
+            "`params` size {}x{} has no pixels",
+            p.width, p.height
+        ));
+    }
+    for (name, v) in &c.gpu_ms {
+        time(&format!("gpu_ms.{name}"), v.as_f64())?;
+    }
+    for (name, v) in &c.gpu_ms_spread {
+        let pair = v.as_array().filter(|a| a.len() == 2);
+        let field = format!("gpu_ms_spread.{name}");
+        let Some([lo, hi]) = pair.map(|a| [a[0].as_f64(), a[1].as_f64()]) else {
+            return Err(format!(
+                "`{field}` is {v}: a spread is [min, max] in milliseconds"
+            ));
+        };
+        let (lo, hi) = (time(&field, lo)?, time(&field, hi)?);
+        if lo > hi {
+            return Err(format!(
+                "`{field}` is [{lo}, {hi}]: its min is above its max"
+            ));
+        }
+    }
+    for (field, v) in [("wall_ms", c.wall_ms), ("reference_ms", c.reference_ms)] {
+        if let Some(v) = v {
+            time(field, Some(v))?;
+        }
+    }
+    if c.ok() {
+        if !c.gpu_ms.contains_key("total") {
+            return Err("it ran (no `failure`) but has no `gpu_ms.total`".into());
+        }
+        if c.frames == 0 {
+            return Err("it ran (no `failure`) but timed 0 `frames`".into());
+        }
+    }
+    if let Some(s) = c.speedup_vs_naive
+        && !(s.is_finite() && s > 0.0)
+    {
+        return Err(format!(
+            "`speedup_vs_naive` is {s}: a ratio of times is finite and above 0"
+        ));
+    }
+    let pixels = p.width as u64 * p.height as u64;
+    if let Some(e) = &c.error {
+        if e.max_abs_8bit > 255 {
+            return Err(format!(
+                "`error.max_abs_8bit` is {}: 8-bit differences are 0 to 255",
+                e.max_abs_8bit
+            ));
+        }
+        for (field, v, max) in [
+            ("error.rmse", e.rmse, f64::MAX),
+            ("error.rmse_8bit", e.rmse_8bit, 255.0),
+            ("error.max_abs_hdr", e.max_abs_hdr, f64::MAX),
+            ("error.flip_mean", e.flip_mean, 1.0),
+        ] {
+            if !(v.is_finite() && (0.0..=max).contains(&v)) {
+                return Err(format!(
+                    "`{field}` is {v}: it is a finite figure in 0..={max}"
+                ));
+            }
+        }
+        if let Some(psnr) = e.psnr_db
+            && !(psnr.is_finite() && psnr >= 0.0)
+        {
+            return Err(format!(
+                "`error.psnr_db` is {psnr}: a PSNR is finite and 0 or more (null when the images are identical)"
+            ));
+        }
+        for (field, n) in [
+            ("error.pixels_over_1lsb", e.pixels_over_1lsb),
+            ("error.nan_pixels", e.nan_pixels),
+        ] {
+            if n > pixels {
+                return Err(format!(
+                    "`{field}` is {n}, more than the cell's {pixels} pixels"
+                ));
+            }
+        }
+    }
+    if let Some(s) = &c.stats {
+        if s.useful_light_evals > s.light_evals {
+            return Err(format!(
+                "`stats.useful_light_evals` is {}, more than the {} light evaluations performed",
+                s.useful_light_evals, s.light_evals
+            ));
+        }
+        if s.active_clusters > s.clusters || s.assigned_clusters > s.clusters {
+            return Err(format!(
+                "`stats` has {} active and {} assigned clusters of {}",
+                s.active_clusters, s.assigned_clusters, s.clusters
+            ));
+        }
+        let mean = s.mean_lights_per_visible_cluster;
+        if !(mean.is_finite() && mean >= 0.0) {
+            return Err(format!(
+                "`stats.mean_lights_per_visible_cluster` is {mean}: it is finite and 0 or more"
+            ));
+        }
+        if let Some([near, far]) = s.z_range
+            && !(near.is_finite() && far.is_finite() && 0.0 < near && near <= far)
+        {
+            return Err(format!(
+                "`stats.z_range` is [{near}, {far}]: a depth range has 0 < near <= far"
+            ));
+        }
+    }
+    for (field, path) in [
+        ("images.image", &c.images.image),
+        ("images.heat", &c.images.heat),
+        ("images.debug", &c.images.debug),
+    ] {
+        if let Some(path) = path {
+            image_path(path).map_err(|why| format!("`{field}` is `{path}`: {why}"))?;
+        }
+    }
+    Ok(())
+}
+
+/// A time in milliseconds: finite, 0 or more, at most [`MAX_MS`].
+fn time(field: &str, v: Option<f64>) -> Result<f64, String> {
+    match v {
+        Some(ms) if ms.is_finite() && (0.0..=MAX_MS).contains(&ms) => Ok(ms),
+        Some(ms) => Err(format!(
+            "`{field}` is {}: a time is a finite number of milliseconds in 0..={MAX_MS:e}",
+            if ms.abs() >= MAX_MS {
+                format!("{ms:e}")
+            } else {
+                ms.to_string()
+            }
+        )),
+        None => Err(format!("`{field}` is not a number of milliseconds")),
+    }
+}
+
+/// An image path as a run writes it: `images/NAME.png`, nothing else (no `..`, no absolute
+/// path, no folder other than `images`).
+pub fn image_path(path: &str) -> Result<(), String> {
+    let parts: Vec<Component> = Path::new(path).components().collect();
+    let plain = matches!(parts.as_slice(), [Component::Normal(dir), Component::Normal(name)]
+        if *dir == "images" && name.to_str().is_some_and(|n| n.ends_with(".png") && !n.contains('\\')));
+    if plain && !path.contains("//") && !path.ends_with('/') {
+        Ok(())
+    } else {
+        Err("an image of a result folder is `images/NAME.png`, inside that folder".into())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::image_path;
+
+    #[test]
+    fn only_plain_image_paths_pass() {
+        assert!(image_path("images/a@b.png").is_ok());
+        for bad in [
+            "../../x/y.png",
+            "/etc/passwd",
+            "images/../results.json",
+            "images/../../x.png",
+            "images/sub/a.png",
+            "plots/a.png",
+            "images/a.svg",
+            "./images/a.png",
+            "images//a.png",
+        ] {
+            assert!(image_path(bad).is_err(), "{bad}");
+        }
+    }
+}
