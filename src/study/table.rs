@@ -1,4 +1,4 @@
-//! A study's table as text: aligned for the terminal, and Markdown for README.
+//! A study's table as text: aligned for the terminal, and Markdown for the studies' write-up (`docs/STUDIES.md`).
 
 use std::collections::BTreeMap;
 
