@@ -334,3 +334,12 @@ impl ZSlicing {
             .collect()
     }
 }
+
+/// What a caught panic said (its message, when it has one).
+pub fn panic_message(payload: &(dyn std::any::Any + Send)) -> String {
+    payload
+        .downcast_ref::<String>()
+        .cloned()
+        .or_else(|| payload.downcast_ref::<&str>().map(|s| s.to_string()))
+        .unwrap_or_else(|| "unknown panic".into())
+}

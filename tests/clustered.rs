@@ -1358,7 +1358,7 @@ impl EditedShaders {
     /// A copy with edits to `module` (a path under `shaders/`).
     fn of(module: &str, name: &str, edits: &[(&str, &str)]) -> Self {
         let root = std::env::temp_dir().join(format!("clusterlab-{name}-{}", std::process::id()));
-        copy_dir(Composer::default().shader_root(), &root);
+        common::copy_tree(Composer::default().shader_root(), &root);
         let file = root.join(module);
         let mut source = std::fs::read_to_string(&file).unwrap();
         for (from, to) in edits {
@@ -1374,18 +1374,5 @@ impl EditedShaders {
 impl Drop for EditedShaders {
     fn drop(&mut self) {
         let _ = std::fs::remove_dir_all(&self.root);
-    }
-}
-
-fn copy_dir(from: &std::path::Path, to: &std::path::Path) {
-    std::fs::create_dir_all(to).unwrap();
-    for entry in std::fs::read_dir(from).unwrap() {
-        let entry = entry.unwrap();
-        let target = to.join(entry.file_name());
-        if entry.file_type().unwrap().is_dir() {
-            copy_dir(&entry.path(), &target);
-        } else {
-            std::fs::copy(entry.path(), target).unwrap();
-        }
     }
 }

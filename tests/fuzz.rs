@@ -16,6 +16,7 @@ mod common;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
+use clusterlab::scene::export::glb;
 use clusterlab::variant::{self, VariantError};
 use proptest::prelude::*;
 use proptest::test_runner::{Config, TestRunner};
@@ -402,7 +403,7 @@ fn mutated_gltf_files_never_panic_hang_or_give_unlocated_errors() {
             let n = next.get();
             next.set(n + 1);
             let (path, mut bytes) = if as_glb {
-                let bytes = common::glb(&serde_json::to_vec(&json).unwrap(), &seed_bin);
+                let bytes = glb(serde_json::to_vec(&json).unwrap(), seed_bin.clone()).unwrap();
                 (dir.join(format!("case-{n}.glb")), bytes)
             } else {
                 let buffer = json.get_mut("buffers").and_then(|b| b.get_mut(0));

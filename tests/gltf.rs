@@ -106,7 +106,11 @@ fn another_loader_reads_the_standard_fields_to_single_precision() {
     let (mut json, bin) = common::split_glb(&glb);
     let write = |name: &str, json: &serde_json::Value| {
         let path = dir.join(name);
-        std::fs::write(&path, common::glb(&serde_json::to_vec(json).unwrap(), &bin)).unwrap();
+        std::fs::write(
+            &path,
+            clusterlab::scene::export::glb(serde_json::to_vec(json).unwrap(), bin.clone()).unwrap(),
+        )
+        .unwrap();
         let name = path.to_str().unwrap().to_string();
         let p = SceneParams {
             lights: 64,

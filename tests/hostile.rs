@@ -927,7 +927,7 @@ fn no_read_is_unbounded_or_blocks() {
             .env("CLUSTERLAB_SHADERS", "shaders")
             .expect("shaders/common/view.wesl: not a regular file"),
             |s| {
-                copy_tree(Path::new("shaders"), &s.path("project/shaders"));
+                common::copy_tree(Path::new("shaders"), &s.path("project/shaders"));
                 let module = s.path("project/shaders/common/view.wesl");
                 std::fs::remove_file(&module).unwrap();
                 s.fifo("project/shaders/common/view.wesl");
@@ -947,19 +947,6 @@ fn baseline_args(baseline: &'static str) -> Vec<&'static str> {
     let mut args = tiny_matrix("out");
     args.extend(["--baseline", baseline]);
     args
-}
-
-fn copy_tree(from: &Path, to: &Path) {
-    std::fs::create_dir_all(to).unwrap();
-    for e in std::fs::read_dir(from).unwrap() {
-        let e = e.unwrap();
-        let target = to.join(e.file_name());
-        if e.file_type().unwrap().is_dir() {
-            copy_tree(&e.path(), &target);
-        } else {
-            std::fs::copy(e.path(), target).unwrap();
-        }
-    }
 }
 
 #[test]

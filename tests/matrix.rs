@@ -2,6 +2,8 @@
 //! the others, every report file is written, shards merge back into the whole, and a
 //! baseline run shows each cell's change.
 
+mod common;
+
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -173,19 +175,6 @@ fn speedups_and_pareto_front_follow_from_the_cells(r: &Results, printed: &str) {
     }
 }
 
-/// Copy folder `from` into `to`, recursively.
-fn copy_tree(from: &Path, to: &Path) {
-    std::fs::create_dir_all(to).unwrap();
-    for e in std::fs::read_dir(from).unwrap().flatten() {
-        let target = to.join(e.file_name());
-        if e.path().is_dir() {
-            copy_tree(&e.path(), &target);
-        } else {
-            std::fs::copy(e.path(), &target).unwrap();
-        }
-    }
-}
-
 fn matrix_with(args: &[&str], env: (&str, &str)) -> (i32, String) {
     let out = Command::new(env!("CARGO_BIN_EXE_clusterlab"))
         .args(args)
@@ -243,7 +232,7 @@ fn cells_that_fail_from_a_shader_error_or_an_adapter_limit_fail_alone() {
     let dir = scratch("failing");
     // A syntax error in the resolve pass, which only deferred variants compose.
     let shaders = dir.join("shaders");
-    copy_tree(Path::new("shaders"), &shaders);
+    common::copy_tree(Path::new("shaders"), &shaders);
     let resolve = shaders.join("passes/resolve.wesl");
     let text = std::fs::read_to_string(&resolve).unwrap();
     std::fs::write(&resolve, text.replacen("fn ", "fn broken ", 1)).unwrap();

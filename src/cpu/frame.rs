@@ -40,7 +40,7 @@ pub fn shade_reference(
         .collect();
     let grid = LightGrid::new(&covered, lights).filter(|g| g.culls(&covered, lights.len()));
     // Each pixel's colour, and whether some light reaches it with light.
-    let shaded: Vec<([f64; 3], bool)> = (0..truth.position.len())
+    let (hdr, lit): (Vec<[f64; 3]>, Vec<bool>) = (0..truth.position.len())
         .into_par_iter()
         .map(|i| {
             if !truth.covered(i) {
@@ -58,13 +58,10 @@ pub fn shade_reference(
             let colour = direct + s.albedo * params.ambient;
             (colour.to_array(), direct.max_element() > 0.0)
         })
-        .collect();
-    let hdr: Vec<[f64; 3]> = shaded.iter().map(|s| s.0).collect();
+        .unzip();
     let ldr = hdr.iter().map(|&c| display8(c, exposure)).collect();
-    let covered = (0..truth.position.len())
-        .filter(|&i| truth.covered(i))
-        .count() as u64;
-    let lit = shaded.iter().filter(|s| s.1).count() as u64;
+    let covered = covered.len() as u64;
+    let lit = lit.iter().filter(|&&l| l).count() as u64;
     ReferenceFrame {
         width: truth.width,
         height: truth.height,

@@ -371,8 +371,10 @@ fn take_lock(lock: &Path, target: &Path) -> Result<(), String> {
 }
 
 /// What process `pid` (gone) left of a run into `target`, each part only when its marker
-/// names `pid`: its staging folder goes, and the previous run it had moved aside goes back in
-/// place (or goes, when its finished run was already in place).
+/// names `pid`: its staging folder goes (the process made it, exclusively, and wrote into it,
+/// temporary files of cut-short writes included), and the previous run it had moved aside
+/// goes back in place (or goes, when its finished run was already in place and the old folder
+/// holds nothing but what a run writes).
 fn undo_leftovers(target: &Path, pid: u32) {
     let left_by_pid = |dir: &Path| {
         std::fs::symlink_metadata(dir).is_ok_and(|m| m.is_dir())
@@ -384,10 +386,11 @@ fn undo_leftovers(target: &Path, pid: u32) {
     }
     let old = sibling(target, &format!(".old-{pid}"));
     if left_by_pid(&old) {
-        if target.exists() {
-            let _ = std::fs::remove_dir_all(&old);
-        } else {
+        if !target.exists() {
             let _ = std::fs::rename(&old, target);
+        } else if matches!(owner(&old), Ok(Owner::Run(_))) {
+            // Removed only while it holds nothing but what a run writes.
+            let _ = std::fs::remove_dir_all(&old);
         }
     }
     let lock_tmp = sibling(&sibling(target, ".lock"), &format!("-{pid}"));
@@ -405,6 +408,20 @@ mod tests {
         let _ = std::fs::remove_dir_all(&dir);
         std::fs::create_dir_all(&dir).unwrap();
         std::fs::canonicalize(dir).unwrap()
+    }
+
+    /// The lock of a clusterlab process `pid` that is gone.
+    fn stale_lock(pid: u32) -> String {
+        format!("{LOCK_HEADER}\nprocess {pid}\ncommand clusterlab matrix\n")
+    }
+
+    /// Give `dir` the marker of process `pid`.
+    fn mark(dir: &Path, pid: u32) {
+        std::fs::write(
+            dir.join(MARKER_NAME),
+            format!("{MARKER_HEADER}\nprocess {pid}\n"),
+        )
+        .unwrap();
     }
 
     #[test]
@@ -460,27 +477,18 @@ mod tests {
         let out = dir.join("out");
         // A process that is gone (pid_max on Linux is at most 2^22).
         let dead = 4_194_304 + 17;
-        let lock = format!("{LOCK_HEADER}\nprocess {dead}\ncommand clusterlab matrix\n");
-        std::fs::write(dir.join("out.lock"), lock).unwrap();
+        std::fs::write(dir.join("out.lock"), stale_lock(dead)).unwrap();
         // Its staging folder (marked) and a look-alike of another dead process (unmarked).
         let staging = dir.join(format!("out.staging-{dead}"));
         std::fs::create_dir(&staging).unwrap();
-        std::fs::write(
-            staging.join(MARKER_NAME),
-            format!("{MARKER_HEADER}\nprocess {dead}\n"),
-        )
-        .unwrap();
+        mark(staging.as_path(), dead);
         let look_alike = dir.join(format!("out.staging-{}", dead + 1));
         std::fs::create_dir(&look_alike).unwrap();
         std::fs::write(look_alike.join("thesis.tex"), "mine").unwrap();
         // The previous run it had moved aside.
         let old = dir.join(format!("out.old-{dead}"));
         std::fs::create_dir(&old).unwrap();
-        std::fs::write(
-            old.join(MARKER_NAME),
-            format!("{MARKER_HEADER}\nprocess {dead}\n"),
-        )
-        .unwrap();
+        mark(old.as_path(), dead);
         std::fs::write(old.join("results.json"), "{}").unwrap();
 
         let folder = ResultFolder::acquire(&out).unwrap();
@@ -495,6 +503,21 @@ mod tests {
         );
         drop(folder);
         assert!(!dir.join("out.lock").exists());
+    }
+
+    #[test]
+    fn a_moved_aside_run_with_something_of_the_users_in_it_is_kept() {
+        let dir = scratch("old-with-notes");
+        let dead = 4_194_304 + 18;
+        std::fs::write(dir.join("out.lock"), stale_lock(dead)).unwrap();
+        std::fs::create_dir(dir.join("out")).unwrap();
+        std::fs::write(dir.join("out/results.json"), "{}").unwrap();
+        let old = dir.join(format!("out.old-{dead}"));
+        std::fs::create_dir(&old).unwrap();
+        mark(old.as_path(), dead);
+        std::fs::write(old.join("notes.txt"), "mine").unwrap();
+        drop(ResultFolder::acquire(&dir.join("out")).unwrap());
+        assert!(old.join("notes.txt").is_file());
     }
 
     #[test]

@@ -385,11 +385,7 @@ fn run_guarded(
         run_one(gpu, composer, cell, options, images, references)
     }))
     .unwrap_or_else(|panic| {
-        let why = panic
-            .downcast_ref::<String>()
-            .cloned()
-            .or_else(|| panic.downcast_ref::<&str>().map(|s| s.to_string()))
-            .unwrap_or_else(|| "unknown panic".into());
+        let why = crate::common::panic_message(panic.as_ref());
         CellRecord::failed(cell.spec.clone(), format!("panicked: {why}"))
     })
 }

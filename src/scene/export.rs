@@ -154,7 +154,7 @@ pub fn to_glb(scene: &Scene) -> Result<Vec<u8>, String> {
 }
 
 /// The GLB container: header, JSON chunk, binary chunk, each padded to 4 bytes.
-fn glb(mut json: Vec<u8>, mut bin: Vec<u8>) -> Result<Vec<u8>, String> {
+pub fn glb(mut json: Vec<u8>, mut bin: Vec<u8>) -> Result<Vec<u8>, String> {
     while !json.len().is_multiple_of(4) {
         json.push(b' ');
     }

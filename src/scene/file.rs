@@ -179,11 +179,7 @@ fn read_guarded(path: &str) -> Result<FileScene, String> {
     let read = std::panic::catch_unwind(|| read_file(path));
     let at = READING.with(|r| r.borrow_mut().take()).unwrap_or_default();
     read.unwrap_or_else(|panic| {
-        let why = panic
-            .downcast_ref::<String>()
-            .cloned()
-            .or_else(|| panic.downcast_ref::<&str>().map(|s| s.to_string()))
-            .unwrap_or_default();
+        let why = crate::common::panic_message(panic.as_ref());
         Err(format!(
             "the glTF reader (the gltf crate) failed on {at} ({why}): the file is malformed in a way clusterlab does not check before reading"
         ))
@@ -1418,20 +1414,14 @@ fn first_non_finite<const N: usize>(values: &[[f32; N]]) -> Option<usize> {
     values.iter().position(|v| !v.iter().all(|x| x.is_finite()))
 }
 
+/// Refuse a POSITION or NORMAL accessor that is not float VEC3 (what clusterlab reads).
 fn check_float_vec3(a: &gltf::Accessor, name: &str) -> Result<(), String> {
-    use gltf::accessor::{DataType, Dimensions};
-    if a.data_type() != DataType::F32 || a.dimensions() != Dimensions::Vec3 || a.normalized() {
-        return Err(format!(
-            "{name} (accessor {}) is {:?} {:?}: clusterlab reads float VEC3 (quantized attributes come from KHR_mesh_quantization: write floats instead, e.g. `gltf-transform dequantize IN OUT`)",
-            a.index(),
-            a.dimensions(),
-            a.data_type()
-        ));
-    }
-    if a.count() == 0 {
-        return Err(format!("{name} (accessor {}) is empty", a.index()));
-    }
-    Ok(())
+    use gltf::accessor::{DataType as T, Dimensions as D};
+    check_kind(a, name, &[(T::F32, D::Vec3)], "VEC3 of FLOAT").map_err(|e| {
+        format!(
+            "{e}; quantized attributes come from KHR_mesh_quantization: write floats instead, e.g. `gltf-transform dequantize IN OUT`"
+        )
+    })
 }
 
 fn note_once(notes: &mut Vec<String>, note: String) {

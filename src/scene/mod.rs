@@ -129,6 +129,11 @@ pub fn radius_problem(radius: f32) -> Option<String> {
             "{radius} is not a light radius: radii are positive distances of at most {MAX_LIGHT_RADIUS:e}"
         ));
     }
+    over_radius_limit(radius)
+}
+
+/// Why `radius` is over `MAX_LIGHT_RADIUS`, if it is.
+fn over_radius_limit(radius: f32) -> Option<String> {
     (radius > MAX_LIGHT_RADIUS).then(|| {
         format!("{radius:e} is over the largest light radius, {MAX_LIGHT_RADIUS:e}: {MAX_LIGHT_RADIUS_WHY}")
     })
@@ -220,8 +225,13 @@ impl Scene {
             )));
         }
         for (i, l) in self.lights.iter().enumerate() {
-            // A light of radius 0 lights nothing, exactly (a stress case has them).
-            if let Some(p) = radius_problem(l.radius).filter(|_| l.radius != 0.0) {
+            // A scene made in code may hold lights of radius 0: they light nothing, exactly
+            // (a stress case has them). A radius given by a user is positive (`radius_problem`).
+            let problem = match l.radius {
+                r if r >= 0.0 => over_radius_limit(r),
+                r => Some(format!("its radius {r} is negative or not a number")),
+            };
+            if let Some(p) = problem {
                 return Err(fail(format!("light {i}: {p}")));
             }
             if !l

@@ -52,24 +52,16 @@ pub fn split_glb(glb: &[u8]) -> (serde_json::Value, Vec<u8>) {
     (json, glb[28 + json_len..28 + json_len + bin_len].to_vec())
 }
 
-/// A .glb file of `json` and binary chunk `bin`, each padded to 4 bytes.
-pub fn glb(json: &[u8], bin: &[u8]) -> Vec<u8> {
-    let pad = |b: &[u8], with: u8| {
-        let mut b = b.to_vec();
-        while !b.len().is_multiple_of(4) {
-            b.push(with);
+/// Copy folder `from` into `to`, recursively.
+pub fn copy_tree(from: &Path, to: &Path) {
+    std::fs::create_dir_all(to).unwrap();
+    for entry in std::fs::read_dir(from).unwrap() {
+        let entry = entry.unwrap();
+        let target = to.join(entry.file_name());
+        if entry.file_type().unwrap().is_dir() {
+            copy_tree(&entry.path(), &target);
+        } else {
+            std::fs::copy(entry.path(), target).unwrap();
         }
-        b
-    };
-    let (json, bin) = (pad(json, b' '), pad(bin, 0));
-    let mut out = b"glTF".to_vec();
-    out.extend(2u32.to_le_bytes());
-    out.extend(((28 + json.len() + bin.len()) as u32).to_le_bytes());
-    out.extend((json.len() as u32).to_le_bytes());
-    out.extend(b"JSON");
-    out.extend(json);
-    out.extend((bin.len() as u32).to_le_bytes());
-    out.extend(b"BIN\0");
-    out.extend(bin);
-    out
+    }
 }
