@@ -307,7 +307,11 @@ fn parse_size(s: &str) -> Result<(u32, u32), String> {
         .split_once(['x', 'X'])
         .ok_or_else(|| format!("`{s}` is not WIDTHxHEIGHT, e.g. 640x360"))?;
     let n = |v: &str| parse_whole(v.trim(), s, u32::MAX as u64).map(|n| n as u32);
-    Ok((n(w)?, n(h)?))
+    let (w, h) = (n(w)?, n(h)?);
+    if w == 0 || h == 0 {
+        return Err(format!("`{s}`: width and height must be at least 1"));
+    }
+    Ok((w, h))
 }
 
 /// A whole number `v` (part of the argument `arg`) of at most `max`: an error says whether
@@ -353,35 +357,14 @@ fn parse_samples(s: &str) -> Result<usize, String> {
 const MAX_SAMPLES: usize = 1 << 26;
 use clusterlab::scene::MAX_TIME_S;
 
-/// Debug views by their command-line names.
-const DEBUG_VIEWS: [(&str, DebugView); 8] = {
-    use clusterlab::variant::GBufferChannel as C;
-    [
-        ("off", DebugView::Off),
-        ("cluster-index", DebugView::ClusterIndex),
-        ("lights-per-cluster", DebugView::LightsPerCluster),
-        ("z-slice", DebugView::ZSlice),
-        (
-            "gbuffer-position",
-            DebugView::GBuffer {
-                channel: C::Position,
-            },
-        ),
-        ("gbuffer-normal", DebugView::GBuffer { channel: C::Normal }),
-        ("gbuffer-albedo", DebugView::GBuffer { channel: C::Albedo }),
-        ("gbuffer-depth", DebugView::GBuffer { channel: C::Depth }),
-    ]
-};
-
 fn parse_debug_view(s: &str) -> Result<DebugView, String> {
-    DEBUG_VIEWS
-        .iter()
-        .find(|(name, _)| *name == s)
-        .map(|(_, v)| *v)
-        .ok_or_else(|| {
-            let names: Vec<&str> = DEBUG_VIEWS.iter().map(|(n, _)| *n).collect();
-            format!("`{s}` is not a debug view; use one of {}", names.join(", "))
-        })
+    DebugView::named(s).ok_or_else(|| {
+        let names: Vec<String> = DebugView::every()
+            .into_iter()
+            .map(DebugView::name)
+            .collect();
+        format!("`{s}` is not a debug view; use one of {}", names.join(", "))
+    })
 }
 
 fn parse_range(s: &str) -> Result<(f32, f32), String> {
@@ -657,7 +640,7 @@ fn render(args: &RenderArgs) -> Result<bool, String> {
         if let Some(p) = problems.first() {
             return Err(format!("--debug-view: {} {}", p.field, p.message));
         }
-        loaded.name = format!("{}+{}", loaded.name, debug_view_name(view));
+        loaded.name = format!("{}+{}", loaded.name, view.name());
     }
     let mut params = clusterlab::scene::defaults(&args.scene).map_err(|e| e.to_string())?;
     if let Some((w, h)) = args.size {
@@ -668,12 +651,6 @@ fn render(args: &RenderArgs) -> Result<bool, String> {
     params.radius_range = args.radius.unwrap_or(params.radius_range);
     params.time = args.time.unwrap_or(params.time);
     params.spots = args.spots.unwrap_or(params.spots);
-    if params.width == 0 || params.height == 0 {
-        return Err(format!(
-            "size {}x{}: width and height must be at least 1",
-            params.width, params.height
-        ));
-    }
     let gpu = args.gpu.open()?;
     gpu.begin_cell();
     let cell = clusterlab::run::run_cell(
@@ -738,46 +715,10 @@ fn render(args: &RenderArgs) -> Result<bool, String> {
     Ok(true)
 }
 
-fn debug_view_name(view: DebugView) -> &'static str {
-    DEBUG_VIEWS
-        .iter()
-        .find(|(_, v)| *v == view)
-        .map_or("debug", |(name, _)| *name)
-}
-
-/// The default study: every variant on every scene, and the light-count sweep.
-fn default_studies() -> Result<Vec<clusterlab::matrix::Study>, String> {
-    use clusterlab::matrix::{Study, Sweep, find_variants};
-    let scenes: Vec<String> = clusterlab::scene::SCENES
-        .iter()
-        .map(|s| s.name.to_string())
-        .collect();
-    Ok(vec![
-        Study {
-            name: "variants".into(),
-            variants: find_variants(&["variants".into()])?,
-            scenes,
-            sweeps: vec![],
-            size: None,
-        },
-        Study {
-            name: "lights".into(),
-            variants: find_variants(&[
-                "naive_forward".into(),
-                "forward_plus".into(),
-                "clustered_deferred_16x16x24".into(),
-            ])?,
-            scenes: vec!["atrium".into()],
-            sweeps: vec![Sweep::Lights(vec![64, 256, 1024, 5000, 16384])],
-            size: Some((256, 144)),
-        },
-    ])
-}
-
 fn matrix(args: &MatrixArgs) -> Result<bool, String> {
-    use clusterlab::matrix::{self, MatrixOptions, Study};
+    use clusterlab::matrix::{self, Group, MatrixOptions};
     let custom = !args.variants.is_empty() || !args.scenes.is_empty() || !args.sweep.is_empty();
-    let mut studies = if custom {
+    let mut groups = if custom {
         let variants = if args.variants.is_empty() {
             vec!["variants".to_string()]
         } else {
@@ -791,7 +732,7 @@ fn matrix(args: &MatrixArgs) -> Result<bool, String> {
         } else {
             args.scenes.clone()
         };
-        vec![Study {
+        vec![Group {
             name: "custom".into(),
             variants: matrix::find_variants(&variants)?,
             scenes,
@@ -799,17 +740,11 @@ fn matrix(args: &MatrixArgs) -> Result<bool, String> {
             size: None,
         }]
     } else {
-        default_studies()?
+        matrix::default_groups()?
     };
     if let Some(size) = args.size {
-        if size.0 == 0 || size.1 == 0 {
-            return Err(format!(
-                "--size {}x{}: width and height must be at least 1",
-                size.0, size.1
-            ));
-        }
-        for s in &mut studies {
-            s.size = Some(size);
+        for g in &mut groups {
+            g.size = Some(size);
         }
     }
     let baseline = args
@@ -817,7 +752,7 @@ fn matrix(args: &MatrixArgs) -> Result<bool, String> {
         .as_deref()
         .map(matrix::Results::load)
         .transpose()?;
-    let mut cells = matrix::expand(&studies)?;
+    let mut cells = matrix::expand(&groups)?;
     let variant_files = matrix::variant_files(&cells);
     if let Some(shard) = args.shard {
         let planned = cells.len();

@@ -4,41 +4,20 @@
 //! `stress FILTER --json` (exit code 1 when a check fails), and `CLUSTERLAB_TIMING` with the
 //! `timing_source` it chooses.
 
-mod common;
-
 use std::path::Path;
-use std::process::Command;
+
+use crate::common::{Ran, cli};
 
 use clusterlab::compose::{self, Composer};
-
-/// Run the binary: exit code, stdout, stderr.
-fn clusterlab(args: &[&str]) -> (Option<i32>, String, String) {
-    clusterlab_with(args, &[])
-}
-
-/// Run the binary with environment variables `env` set (an empty value removes one).
-fn clusterlab_with(args: &[&str], env: &[(&str, &str)]) -> (Option<i32>, String, String) {
-    let mut command = Command::new(env!("CARGO_BIN_EXE_clusterlab"));
-    command.args(args);
-    for (k, v) in env {
-        if v.is_empty() {
-            command.env_remove(k);
-        } else {
-            command.env(k, v);
-        }
-    }
-    let out = command.output().expect("clusterlab runs");
-    (
-        out.status.code(),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
-}
 
 #[test]
 fn validate_prints_one_line_per_variant_and_fails_on_any_bad_one() {
     let files = clusterlab::variant::find_files(Path::new("variants")).expect("variants/");
-    let (code, out, err) = clusterlab(&["validate"]);
+    let Ran {
+        code,
+        stdout: out,
+        stderr: err,
+    } = cli(["validate"]).run();
     assert_eq!(code, Some(0), "{out}{err}");
     let lines: Vec<&str> = out.lines().collect();
     // One `ok` line per file, then the summary.
@@ -59,7 +38,9 @@ fn validate_prints_one_line_per_variant_and_fails_on_any_bad_one() {
     // A bad file among good ones: the good one is still validated, the bad one is named
     // with its place, and the exit code is 1.
     let bad = "tests/bad_variants/unknown_field.ron";
-    let (code, out, _) = clusterlab(&["validate", "variants/forward_plus.ron", bad]);
+    let Ran {
+        code, stdout: out, ..
+    } = cli(["validate", "variants/forward_plus.ron", bad]).run();
     assert_eq!(code, Some(1), "{out}");
     assert!(
         out.lines().any(|l| l.starts_with("ok    forward_plus")),
@@ -101,7 +82,11 @@ fn schema_words(v: &serde_json::Value, fields: &mut Vec<String>, choices: &mut V
 
 #[test]
 fn explain_names_every_field_and_every_choice_of_the_schema() {
-    let (code, out, err) = clusterlab(&["explain"]);
+    let Ran {
+        code,
+        stdout: out,
+        stderr: err,
+    } = cli(["explain"]).run();
     assert_eq!(code, Some(0), "{err}");
     let (mut fields, mut choices) = (Vec::new(), Vec::new());
     schema_words(&clusterlab::explain::schema(), &mut fields, &mut choices);
@@ -126,7 +111,11 @@ fn wgsl_pass_prints_that_pass_as_the_library_composes_it() {
     let composer = Composer::default();
     let passes = compose::passes(&v.variant);
     for pass in &passes {
-        let (code, out, err) = clusterlab(&["wgsl", path, "--pass", pass.name()]);
+        let Ran {
+            code,
+            stdout: out,
+            stderr: err,
+        } = cli(["wgsl", path, "--pass", pass.name()]).run();
         assert_eq!(code, Some(0), "{err}");
         let want = composer.compose(&v.variant, pass).expect("composes").wgsl;
         let header = format!(
@@ -136,11 +125,13 @@ fn wgsl_pass_prints_that_pass_as_the_library_composes_it() {
         assert_eq!(out, format!("{header}\n{want}\n"), "{}", pass.name());
     }
     // Without --pass: every pass, in order.
-    let (_, all, _) = clusterlab(&["wgsl", path]);
+    let Ran { stdout: all, .. } = cli(["wgsl", path]).run();
     let headers: Vec<&str> = all.lines().filter(|l| l.starts_with("// ---- ")).collect();
     assert_eq!(headers.len(), passes.len(), "{headers:?}");
     // A pass the variant does not have: an error that lists the ones it has.
-    let (code, _, err) = clusterlab(&["wgsl", path, "--pass", "resolve"]);
+    let Ran {
+        code, stderr: err, ..
+    } = cli(["wgsl", path, "--pass", "resolve"]).run();
     assert_eq!(code, Some(1));
     let names: Vec<&str> = passes.iter().map(|p| p.name()).collect();
     assert!(err.contains(&names.join(", ")), "{err}");
@@ -148,7 +139,11 @@ fn wgsl_pass_prints_that_pass_as_the_library_composes_it() {
 
 #[test]
 fn scenes_lists_every_built_in_scene_with_its_defaults() {
-    let (code, out, err) = clusterlab(&["scenes"]);
+    let Ran {
+        code,
+        stdout: out,
+        stderr: err,
+    } = cli(["scenes"]).run();
     assert_eq!(code, Some(0), "{err}");
     for s in clusterlab::scene::SCENES {
         let d = &s.defaults;
@@ -178,7 +173,11 @@ fn scenes_lists_every_built_in_scene_with_its_defaults() {
 
 #[test]
 fn stress_json_exits_1_when_a_check_fails_and_0_when_all_pass() {
-    let (code, out, err) = clusterlab(&["stress", "one_light", "--json"]);
+    let Ran {
+        code,
+        stdout: out,
+        stderr: err,
+    } = cli(["stress", "one_light", "--json"]).run();
     assert_eq!(code, Some(0), "{err}");
     let runs: serde_json::Value = serde_json::from_str(&out).expect("JSON on stdout");
     let runs = runs.as_array().expect("a list of runs");
@@ -191,7 +190,9 @@ fn stress_json_exits_1_when_a_check_fails_and_0_when_all_pass() {
     assert_eq!(runs.len(), listed);
     assert!(runs.iter().all(|r| r["ok"] == true));
     // No GPU work finishes in a microsecond: every run fails its `renders` check.
-    let (code, out, _) = clusterlab(&["stress", "one_light", "--json", "--cell-timeout", "1e-6"]);
+    let Ran {
+        code, stdout: out, ..
+    } = cli(["stress", "one_light", "--json", "--cell-timeout", "1e-6"]).run();
     assert_eq!(code, Some(1));
     let runs: serde_json::Value = serde_json::from_str(&out).expect("JSON on stdout");
     for r in runs.as_array().expect("a list of runs") {
@@ -208,7 +209,7 @@ fn stress_json_exits_1_when_a_check_fails_and_0_when_all_pass() {
 
 #[test]
 fn clusterlab_timing_chooses_the_timing_source_and_refuses_other_values() {
-    let (_, report, _) = clusterlab(&["adapters", "--json"]);
+    let Ran { stdout: report, .. } = cli(["adapters", "--json"]).run();
     let report: serde_json::Value = serde_json::from_str(&report).expect("adapters JSON");
     let chosen = &report["adapters"][report["chosen"].as_u64().expect("an adapter") as usize];
     let software = chosen["device_type"] == "Cpu";
@@ -230,7 +231,11 @@ fn clusterlab_timing_chooses_the_timing_source_and_refuses_other_values() {
         "--json",
     ];
     let source_and_passes = |timing: &str| {
-        let (code, out, err) = clusterlab_with(&render, &[("CLUSTERLAB_TIMING", timing)]);
+        let Ran {
+            code,
+            stdout: out,
+            stderr: err,
+        } = cli(render).envs(&[("CLUSTERLAB_TIMING", timing)]).run();
         assert_eq!(code, Some(0), "CLUSTERLAB_TIMING={timing}: {err}");
         let r: serde_json::Value = serde_json::from_str(&out).expect("render JSON");
         let passes: Vec<String> = r["gpu_ms"]
@@ -262,7 +267,11 @@ fn clusterlab_timing_chooses_the_timing_source_and_refuses_other_values() {
     // Each way times the same passes.
     assert_eq!(passes, wall_passes);
     assert_eq!(passes, forced_passes);
-    let (code, _, err) = clusterlab_with(&render, &[("CLUSTERLAB_TIMING", "sometimes")]);
+    let Ran {
+        code, stderr: err, ..
+    } = cli(render)
+        .envs(&[("CLUSTERLAB_TIMING", "sometimes")])
+        .run();
     assert_eq!(code, Some(1));
     assert!(
         err.contains("`sometimes` (from CLUSTERLAB_TIMING)")

@@ -2,16 +2,15 @@
 //! enumerable in one place (the schema's enums), and each place that must handle all of them
 //! does. A test here fails naming what is missing.
 
-mod common;
-
 use std::path::Path;
 
+use crate::common;
 use clusterlab::compose::{Composer, PassId, passes};
 use clusterlab::cpu::normals;
 use clusterlab::cpu::zslice::Slices;
+use clusterlab::kernels::{gpu_codecs, gpu_zslices};
 use clusterlab::stress;
 use clusterlab::study::{codecs, slicing};
-use clusterlab::twins::{gpu_codecs, gpu_zslices};
 use clusterlab::variant::{self, NormalCodec, Pipeline, PostEffect, ZSlicing};
 use strum::IntoEnumIterator;
 
@@ -24,7 +23,7 @@ fn stress_case(name: &str) -> Option<stress::Case> {
 }
 
 #[test]
-fn every_z_slicing_scheme_has_an_example_a_twin_kernel_check_a_stress_case_and_a_study_row() {
+fn every_z_slicing_scheme_has_an_example_a_kernel_check_a_stress_case_and_a_study_row() {
     let gpu = common::gpu();
     let composer = Composer::default();
     let every = ZSlicing::every(NEAR, FAR);
@@ -87,7 +86,7 @@ fn every_z_slicing_scheme_has_an_example_a_twin_kernel_check_a_stress_case_and_a
 }
 
 #[test]
-fn every_normal_codec_has_a_twin_kernel_check_a_stress_run_and_a_study_row() {
+fn every_normal_codec_has_a_kernel_check_a_stress_run_and_a_study_row() {
     let gpu = common::gpu();
     let composer = Composer::default();
     let packed = NormalCodec::packed(32);

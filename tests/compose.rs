@@ -74,7 +74,7 @@ fn composed_wgsl_of_every_distinct_pass() {
     assert!(
         stale_headers.is_empty(),
         "snapshot headers that do not list the variants sharing the shader (rewrite them \
-         with `INSTA_FORCE_UPDATE=1 INSTA_UPDATE=always cargo test --test compose`): {stale_headers:?}"
+         with `INSTA_FORCE_UPDATE=1 INSTA_UPDATE=always cargo test compose::`): {stale_headers:?}"
     );
     // No snapshot is left that no shader produces.
     let stale: Vec<String> = std::fs::read_dir("snapshots/wgsl")

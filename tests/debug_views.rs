@@ -3,15 +3,13 @@
 //! of each pixel, and each G-buffer channel. The lights-per-cluster view is held to the
 //! debug variant's own frame in `tests/measure.rs`.
 
-mod common;
-
+use crate::common::{gpu, load, small};
 use clusterlab::compose::Composer;
 use clusterlab::cpu::clusters::Grid;
 use clusterlab::cpu::truth::RasterTruth;
 use clusterlab::render::{Renderer, raster_truth};
 use clusterlab::scene::{self, Scene};
 use clusterlab::variant::{DebugView, DepthFormat, GBufferChannel, Variant};
-use common::{gpu, load, small};
 use glam::{DVec3, DVec4};
 
 /// The debug pass's colour of an index (`index_color` in `shaders/passes/debug_view.wesl`).

@@ -2,14 +2,14 @@
 //! replaced before the next, and GPU work past the cell limit fails that cell alone, naming
 //! the limit.
 
-mod common;
+use crate::common::{self, cli, scratch};
 
 use std::sync::OnceLock;
 use std::time::{Duration, Instant};
 
 use clusterlab::compose::Composer;
 use clusterlab::gpu::{Gpu, GpuError};
-use clusterlab::matrix::{self, CellSpec, MatrixOptions, Study, Sweep};
+use clusterlab::matrix::{self, CellSpec, Group, MatrixOptions, Sweep};
 use clusterlab::render::{RenderError, Renderer};
 use clusterlab::scene;
 
@@ -25,7 +25,7 @@ fn destroy_device_in_chosen_cell(gpu: &Gpu, spec: &CellSpec) {
 #[test]
 fn a_cell_that_breaks_the_device_fails_alone_and_later_cells_get_a_new_one() {
     let mut gpu = common::gpu();
-    let studies = [Study {
+    let groups = [Group {
         name: "device".into(),
         variants: matrix::find_variants(&["forward_plus".into(), "naive_forward".into()])
             .expect("variants"),
@@ -33,12 +33,13 @@ fn a_cell_that_breaks_the_device_fails_alone_and_later_cells_get_a_new_one() {
         sweeps: vec![Sweep::Lights(vec![1, 3])],
         size: Some((48, 27)),
     }];
-    let cells = matrix::expand(&studies).expect("cells");
+    let cells = matrix::expand(&groups).expect("cells");
     assert_eq!(cells.len(), 4);
     // The first cell: every other cell runs after the break.
     let broken = cells[0].spec.id.clone();
     BREAK.set(broken.clone()).expect("set once");
-    let out = std::env::temp_dir().join(format!("clusterlab-device-{}", std::process::id()));
+    let dir = scratch("broken");
+    let out = dir.join("results");
     let options = MatrixOptions {
         frames: clusterlab::measure::Frames::exact(0, 1),
         out: out.clone(),
@@ -49,7 +50,7 @@ fn a_cell_that_breaks_the_device_fails_alone_and_later_cells_get_a_new_one() {
         before_cell: Some(destroy_device_in_chosen_cell),
     };
     let results = matrix::run(&mut gpu, &Composer::default(), &cells, &options);
-    let _ = std::fs::remove_dir_all(&out);
+    let _ = std::fs::remove_dir_all(&dir);
     for c in &results.cells {
         if c.spec.id == broken {
             let why = c.failure.as_deref().expect("the broken cell fails");
@@ -127,17 +128,6 @@ fn work_past_the_cell_limit_fails_naming_the_limit_and_the_device_is_renewed() {
     gpu.check_health().expect("the new device works");
 }
 
-fn clusterlab(args: &[&str], env: &[(&str, &str)]) -> (i32, String) {
-    let out = std::process::Command::new(env!("CARGO_BIN_EXE_clusterlab"))
-        .args(args)
-        .envs(env.iter().copied())
-        .output()
-        .expect("clusterlab runs");
-    let text =
-        String::from_utf8_lossy(&out.stdout).into_owned() + &String::from_utf8_lossy(&out.stderr);
-    (out.status.code().unwrap_or(-1), text)
-}
-
 /// No adapter is a failure with the install hint, never a silent pass. Metal has no adapter
 /// on Linux.
 #[cfg(target_os = "linux")]
@@ -156,8 +146,8 @@ fn no_adapter_fails_with_the_install_hint() {
         (&render[..], vec![("WGPU_BACKEND", "metal")]),
         (&["adapters", "--backend", "metal"][..], vec![]),
     ] {
-        let (code, text) = clusterlab(args, &env);
-        assert_eq!(code, 1, "{args:?}: {text}");
+        let (code, text) = cli(args).envs(&env).run().outcome();
+        assert_eq!(code, Some(1), "{args:?}: {text}");
         assert!(
             text.contains("no GPU adapter found")
                 && text.contains("apt-get install mesa-vulkan-drivers")
@@ -173,25 +163,27 @@ fn no_adapter_fails_with_the_install_hint() {
 
 #[test]
 fn a_bad_backend_name_is_named_with_where_it_came_from() {
-    let (code, text) = clusterlab(&["adapters"], &[("WGPU_BACKEND", "vulcan")]);
-    assert_eq!(code, 1, "{text}");
+    let (code, text) = cli(["adapters"])
+        .envs(&[("WGPU_BACKEND", "vulcan")])
+        .run()
+        .outcome();
+    assert_eq!(code, Some(1), "{text}");
     assert!(
         text.contains("`vulcan` (from WGPU_BACKEND) is not a backend"),
         "{text}"
     );
-    let (code, text) = clusterlab(
-        &[
-            "render",
-            "--variant",
-            "forward_plus",
-            "--scene",
-            "one_light",
-            "--backend",
-            "vulkan,glx",
-        ],
-        &[],
-    );
-    assert_eq!(code, 1, "{text}");
+    let (code, text) = cli([
+        "render",
+        "--variant",
+        "forward_plus",
+        "--scene",
+        "one_light",
+        "--backend",
+        "vulkan,glx",
+    ])
+    .run()
+    .outcome();
+    assert_eq!(code, Some(1), "{text}");
     assert!(
         text.contains("`glx` (from --backend) is not a backend"),
         "{text}"
@@ -200,8 +192,8 @@ fn a_bad_backend_name_is_named_with_where_it_came_from() {
 
 #[test]
 fn adapters_names_the_one_a_run_uses() {
-    let (code, text) = clusterlab(&["adapters", "--json"], &[]);
-    assert_eq!(code, 0, "{text}");
+    let (code, text) = cli(["adapters", "--json"]).run().outcome();
+    assert_eq!(code, Some(0), "{text}");
     let survey: serde_json::Value = serde_json::from_str(&text).expect("JSON");
     let chosen = survey["chosen"].as_u64().expect("an adapter is chosen") as usize;
     let adapter = &survey["adapters"][chosen];
@@ -220,8 +212,8 @@ fn adapters_names_the_one_a_run_uses() {
     for c in required {
         assert_eq!(c["present"], true, "the chosen adapter lacks {}", c["name"]);
     }
-    let (code, text) = clusterlab(&["adapters"], &[]);
-    assert_eq!(code, 0);
+    let (code, text) = cli(["adapters"]).run().outcome();
+    assert_eq!(code, Some(0));
     assert!(
         text.contains(&format!("uses: {}. {}", chosen + 1, gpu.adapter.name)),
         "{text}"
@@ -234,15 +226,11 @@ fn adapters_names_the_one_a_run_uses() {
 #[test]
 fn a_software_gpu_splits_passes_among_twice_the_cores_unless_told() {
     let adapters = |threads: Option<&str>| {
-        let mut command = std::process::Command::new(env!("CARGO_BIN_EXE_clusterlab"));
-        command.arg("adapters");
-        match threads {
-            Some(n) => command.env("LP_NUM_THREADS", n),
-            None => command.env_remove("LP_NUM_THREADS"),
-        };
-        let out = command.output().expect("clusterlab runs");
-        assert!(out.status.success());
-        String::from_utf8_lossy(&out.stdout).into_owned()
+        let out = cli(["adapters"])
+            .env("LP_NUM_THREADS", threads.unwrap_or(""))
+            .run();
+        assert_eq!(out.code, Some(0), "{}", out.stderr);
+        out.stdout
     };
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
     for (set, shown) in [

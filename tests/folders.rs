@@ -5,16 +5,10 @@
 
 use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
-use std::process::{Child, Command, Stdio};
+use std::process::{Child, Command};
 use std::time::Duration;
 
-fn scratch(name: &str) -> PathBuf {
-    let dir =
-        std::env::temp_dir().join(format!("clusterlab-folders-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).expect("scratch folder");
-    dir
-}
+use crate::common::{cli, scratch};
 
 /// A matrix of every variant on one_light at `size` into `out` (about 40 cells: long
 /// enough to interrupt, short enough for a test).
@@ -22,40 +16,26 @@ fn start(dir: &Path, size: &str, out: &str) -> Child {
     start_timing(dir, size, out, "1")
 }
 
-/// A run with `frames` timed frames per cell (more: a longer run to interrupt). SIGINT
-/// stops it whatever the test inherited: a shell starts a background job with SIGINT
-/// ignored, and its children would ignore it too.
+/// A run with `frames` timed frames per cell (more: a longer run to interrupt).
 fn start_timing(dir: &Path, size: &str, out: &str, frames: &str) -> Child {
-    use std::os::unix::process::CommandExt;
     let variants = std::fs::canonicalize("variants").unwrap();
-    let mut command = Command::new(env!("CARGO_BIN_EXE_clusterlab"));
-    // SAFETY: signal() is async-signal-safe, as pre_exec requires.
-    unsafe {
-        command.pre_exec(|| {
-            libc::signal(libc::SIGINT, libc::SIG_DFL);
-            Ok(())
-        });
-    }
-    command
-        .current_dir(dir)
-        .args([
-            "matrix",
-            "--scenes",
-            "one_light",
-            "--size",
-            size,
-            "--frames",
-            frames,
-            "--warmup",
-            "0",
-        ])
-        .arg("--variants")
-        .arg(&variants)
-        .args(["--out", out])
-        .stdout(Stdio::null())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("start clusterlab")
+    cli([
+        "matrix",
+        "--scenes",
+        "one_light",
+        "--size",
+        size,
+        "--frames",
+        frames,
+        "--warmup",
+        "0",
+    ])
+    .arg("--variants")
+    .arg(&variants)
+    .arg("--out")
+    .arg(out)
+    .dir(dir)
+    .spawn()
 }
 
 /// Width and height of a PNG file.

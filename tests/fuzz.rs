@@ -6,16 +6,15 @@
 //! and `line:column`, or the field, object or accessor it is about; a glTF file must never
 //! reach a panic inside the gltf crate (clusterlab checks what it would panic on first).
 //!
-//! `cargo test --test fuzz` runs 20,000 variant cases and 3,000 glTF cases;
-//! `CLUSTERLAB_FUZZ_CASES=1000000 cargo test --release --test fuzz -- --nocapture` runs a
+//! `cargo test fuzz::` runs 20,000 variant cases and 3,000 glTF cases;
+//! `CLUSTERLAB_FUZZ_CASES=1000000 cargo test --release fuzz:: -- --nocapture` runs a
 //! million and a fifth of that and prints the rates. Inputs that ever failed are kept in
 //! `tests/fuzz.proptest-regressions` and run first.
-
-mod common;
 
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
+use crate::common;
 use clusterlab::scene::export::glb;
 use clusterlab::variant::{self, VariantError};
 use proptest::prelude::*;
@@ -371,9 +370,7 @@ fn mutated_gltf_files_never_panic_hang_or_give_unlocated_errors() {
         .ok()
         .and_then(|v| v.parse().ok())
         .map_or(3000, |n: u32| n / 5);
-    let dir = std::env::temp_dir().join(format!("clusterlab-fuzz-gltf-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = common::scratch("gltf");
     let (seed_json, seed_bin) = gltf_seed();
     let tokens = json_tokens();
     let mut runner = runner(cases);

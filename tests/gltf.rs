@@ -4,28 +4,18 @@
 //!
 //! Every file here is written by the test itself.
 
-mod common;
+use std::path::Path;
 
-use std::path::{Path, PathBuf};
-use std::process::Command;
-
+use crate::common::{self, cli, gpu, load, scratch, small};
 use base64::Engine;
 use clusterlab::compose::Composer;
 use clusterlab::run::{CellOptions, run_cell};
 use clusterlab::scene::{self, SCENES, Scene, SceneParams, export::to_glb};
 use clusterlab::variant::{DebugView, GBufferChannel};
-use common::{gpu, load, small};
 use glam::Vec3;
 use serde_json::json;
 
 /// A fresh folder for one test's files.
-fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("clusterlab-gltf-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).expect("scratch folder");
-    dir
-}
-
 fn export(name: &str, params: SceneParams, path: &Path) -> Scene {
     let scene = scene::generate(name, params).expect("built-in scene");
     std::fs::write(path, to_glb(&scene).expect("export")).expect("write .glb");
@@ -447,29 +437,23 @@ fn the_matrix_runs_a_file_beside_a_built_in_scene() {
     let params = small("one_light", 64, 36, None);
     export("one_light", params, &dir.join("one_light.glb"));
     let out = dir.join("results");
-    let status = Command::new(env!("CARGO_BIN_EXE_clusterlab"))
-        .args([
-            "matrix",
-            "--variants",
-            "forward_plus",
-            "--size",
-            "64x36",
-            "--frames",
-            "1",
-            "--warmup",
-            "0",
-        ])
-        .arg("--scenes")
-        .arg(format!("one_light,{}", dir.join("one_light.glb").display()))
-        .arg("--out")
-        .arg(&out)
-        .output()
-        .expect("run clusterlab");
-    assert!(
-        status.status.success(),
-        "{}",
-        String::from_utf8_lossy(&status.stderr)
-    );
+    let ran = cli([
+        "matrix",
+        "--variants",
+        "forward_plus",
+        "--size",
+        "64x36",
+        "--frames",
+        "1",
+        "--warmup",
+        "0",
+    ])
+    .arg("--scenes")
+    .arg(format!("one_light,{}", dir.join("one_light.glb").display()))
+    .arg("--out")
+    .arg(&out)
+    .run();
+    assert_eq!(ran.code, Some(0), "{}", ran.stderr);
     let results: serde_json::Value =
         serde_json::from_slice(&std::fs::read(out.join("results.json")).unwrap()).unwrap();
     let cells = results["cells"].as_array().expect("cells");
@@ -574,25 +558,23 @@ fn bad_files_exit_1_with_a_clear_message() {
     }
     let variant = std::fs::canonicalize("variants/forward_plus.ron").unwrap();
     let run = |scene: &str, envs: &[(&str, &str)]| {
-        let out = Command::new(env!("CARGO_BIN_EXE_clusterlab"))
-            .current_dir(&dir)
-            .envs(envs.iter().copied())
-            .args([
-                "render",
-                "--size",
-                "32x18",
-                "--no-stats",
-                "--scene",
-                scene,
-                "--out",
-                "images",
-            ])
-            .arg("--variant")
-            .arg(&variant)
-            .output()
-            .expect("run clusterlab");
-        assert_eq!(out.status.code(), Some(1), "{scene}: exit status");
-        let text = String::from_utf8_lossy(&out.stderr).into_owned();
+        let out = cli([
+            "render",
+            "--size",
+            "32x18",
+            "--no-stats",
+            "--scene",
+            scene,
+            "--out",
+            "images",
+        ])
+        .arg("--variant")
+        .arg(&variant)
+        .dir(&dir)
+        .envs(envs)
+        .run();
+        assert_eq!(out.code, Some(1), "{scene}: exit status");
+        let text = out.stderr;
         // The adapter's name is the one part that depends on the machine.
         match text.split_once("adapter `") {
             Some((head, tail)) => format!(

@@ -8,12 +8,10 @@
 //! `CLUSTERLAB_UNDER_TEST=PATH` runs the cases against another build of the binary: the code
 //! before a fix, to see them fail on it.
 
-mod common;
-
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Stdio};
-use std::time::{Duration, Instant};
+
+use crate::common::{self, cli, scratch};
 
 use clusterlab::scene::{self, export::to_glb};
 use serde_json::{Value, json};
@@ -37,24 +35,9 @@ struct Sandbox {
 /// (it is a valid buffer, so a reader that follows the reference renders with it).
 const SECRET: &[u8] = b"SECRET-BYTES-";
 
-/// Longest a case may take before it counts as a hang (a pipe read, a device read whole).
-const HANG: Duration = Duration::from_secs(180);
-
-fn binary() -> PathBuf {
-    std::env::var_os("CLUSTERLAB_UNDER_TEST")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from(env!("CARGO_BIN_EXE_clusterlab")))
-}
-
 impl Sandbox {
     fn new(case: &str) -> Sandbox {
-        let root =
-            std::env::temp_dir().join(format!("clusterlab-hostile-{case}-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&root);
-        let root = {
-            std::fs::create_dir_all(&root).unwrap();
-            std::fs::canonicalize(&root).unwrap()
-        };
+        let root = std::fs::canonicalize(scratch(case)).unwrap();
         let s = Sandbox { root };
         s.write("project/src/main.rs", b"fn main() {}\n");
         s.write("project/src/lib.rs", b"pub fn thesis() {}\n");
@@ -120,33 +103,8 @@ impl Sandbox {
     /// Run the binary in `cwd` (relative to the root): its exit code and everything it
     /// printed, with the sandbox's path shown as `SANDBOX`.
     fn run(&self, cwd: &str, args: &[&str], env: &[(&str, &str)]) -> (Option<i32>, String) {
-        let mut child = Command::new(binary())
-            .current_dir(self.path(cwd))
-            .args(args)
-            .envs(env.iter().copied())
-            .stdin(Stdio::null())
-            .stdout(Stdio::piped())
-            .stderr(Stdio::piped())
-            .spawn()
-            .expect("start clusterlab");
-        let start = Instant::now();
-        while child.try_wait().unwrap().is_none() {
-            if start.elapsed() > HANG {
-                let _ = child.kill();
-                panic!(
-                    "`clusterlab {}` hung: still running after {HANG:?}",
-                    args.join(" ")
-                );
-            }
-            std::thread::sleep(Duration::from_millis(20));
-        }
-        let out = child.wait_with_output().unwrap();
-        let text = String::from_utf8_lossy(&out.stdout).into_owned()
-            + &String::from_utf8_lossy(&out.stderr);
-        (
-            out.status.code(),
-            text.replace(self.root.to_str().unwrap(), "SANDBOX"),
-        )
+        let (code, text) = cli(args).dir(self.path(cwd)).envs(env).run().outcome();
+        (code, text.replace(self.root.to_str().unwrap(), "SANDBOX"))
     }
 }
 
@@ -1060,11 +1018,8 @@ fn bad_input_is_named_with_what_would_be_valid() {
 /// its storage binding (4 bytes a pixel of counters) and buffer (16 bytes a pixel read back,
 /// rows padded to 256 bytes): `clusterlab adapters --json`.
 fn largest_texture_frame() -> (u64, bool) {
-    let out = Command::new(binary())
-        .args(["adapters", "--json"])
-        .output()
-        .unwrap();
-    let survey: Value = serde_json::from_slice(&out.stdout).unwrap();
+    let out = cli(["adapters", "--json"]).run();
+    let survey: Value = serde_json::from_str(&out.stdout).unwrap();
     let a = &survey["adapters"][survey["chosen"].as_u64().unwrap() as usize];
     let number = |key: &str| a[key].as_u64().unwrap_or_else(|| panic!("{key}: {a}"));
     let (side, buffer) = (number("max_texture_side"), number("max_buffer_bytes"));

@@ -6,14 +6,12 @@
 //! A failing image leaves `NAME.snap.new.png` (review it with `cargo insta review`) and
 //! `NAME.diff.png` (where it differs) in snapshots/images/.
 
-mod common;
-
 use std::path::{Path, PathBuf};
 
+use crate::common::{gpu, small};
 use clusterlab::compose::Composer;
 use clusterlab::gpu::expect::{self, Allowance, Check};
 use clusterlab::run::{CellOptions, run_cell};
-use common::{gpu, small};
 
 /// Per-channel difference tolerated: two colours less than an LSB apart round to 8-bit
 /// values at most 1 apart.

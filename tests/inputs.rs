@@ -2,28 +2,7 @@
 //! where it came from and what would be valid (snapshotted in `snapshots/errors/input_*`),
 //! and no case gives a wrong answer with exit 0.
 
-use std::path::PathBuf;
-use std::process::Command;
-
-/// A fresh folder for this test's files.
-fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("clusterlab-inputs-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).expect("scratch folder");
-    dir
-}
-
-/// Run clusterlab in `dir` with `args`: its exit code and what it printed.
-fn run(dir: &PathBuf, args: &[&str]) -> (Option<i32>, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_clusterlab"))
-        .current_dir(dir)
-        .args(args)
-        .output()
-        .expect("run clusterlab");
-    let mut text = String::from_utf8_lossy(&out.stdout).into_owned();
-    text.push_str(&String::from_utf8_lossy(&out.stderr));
-    (out.status.code(), text)
-}
+use crate::common::{cli, scratch};
 
 #[test]
 fn bad_values_are_refused_with_what_would_be_valid() {
@@ -135,8 +114,7 @@ fn bad_values_are_refused_with_what_would_be_valid() {
     settings.set_prepend_module_to_snapshot(false);
     settings.bind(|| {
         for (name, args, code) in &cases {
-            let args: Vec<&str> = args.iter().map(String::as_str).collect();
-            let (got, text) = run(&dir, &args);
+            let (got, text) = cli(args).dir(&dir).run().outcome();
             assert_eq!(got, Some(*code), "{name}: {text}");
             insta::assert_snapshot!(format!("input_{name}"), text.replace(variant, "VARIANT"));
         }
@@ -148,28 +126,19 @@ fn a_debug_view_reports_no_error_figure() {
     let dir = scratch("debug");
     let variant = std::fs::canonicalize("variants/forward_plus.ron").unwrap();
     let render = |extra: &[&str]| {
-        Command::new(env!("CARGO_BIN_EXE_clusterlab"))
-            .current_dir(&dir)
-            .args(["render", "--scene", "one_light", "--size", "32x18"])
-            .args(["--debug-view", "lights-per-cluster"])
-            .args(extra)
-            .arg("--variant")
-            .arg(&variant)
-            .output()
-            .expect("run clusterlab")
+        let mut args = vec!["render", "--scene", "one_light", "--size", "32x18"];
+        args.extend(["--debug-view", "lights-per-cluster"]);
+        args.extend(extra);
+        cli(args).arg("--variant").arg(&variant).dir(&dir).run()
     };
     let out = render(&["--json"]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let report: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(out.code, Some(0), "{}", out.stderr);
+    let report: serde_json::Value = serde_json::from_str(&out.stdout).unwrap();
     assert!(report["error"].is_null(), "{}", report["error"]);
     // And the summary shows no error columns for it.
     let out = render(&[]);
-    let text = String::from_utf8_lossy(&out.stdout);
-    assert!(out.status.success());
+    let text = &out.stdout;
+    assert_eq!(out.code, Some(0), "{}", out.stderr);
     assert!(!text.contains("PSNR") && !text.contains("max8"), "{text}");
 }
 
@@ -196,7 +165,7 @@ fn identities_are_unique_and_merges_refuse_what_they_would_lose() {
         args.extend_from_slice(variants);
         args.extend_from_slice(&tiny);
         args.extend(["--out", out]);
-        run(&dir, &args)
+        cli(&args).dir(&dir).run().outcome()
     };
     let mut settings = insta::Settings::clone_current();
     settings.set_snapshot_path("../snapshots/errors");
@@ -214,10 +183,16 @@ fn identities_are_unique_and_merges_refuse_what_they_would_lose() {
         assert_eq!(code, Some(0), "{text}");
         let (code, text) = matrix(&["a/dup.ron"], "second");
         assert_eq!(code, Some(0), "{text}");
-        let (code, text) = run(&dir, &["merge", "first", "first/", "--out", "merged"]);
+        let (code, text) = cli(["merge", "first", "first/", "--out", "merged"])
+            .dir(&dir)
+            .run()
+            .outcome();
         assert_eq!(code, Some(1), "{text}");
         insta::assert_snapshot!("input_merge_with_itself", text);
-        let (code, text) = run(&dir, &["merge", "first", "second", "--out", "merged"]);
+        let (code, text) = cli(["merge", "first", "second", "--out", "merged"])
+            .dir(&dir)
+            .run()
+            .outcome();
         assert_eq!(code, Some(1), "{text}");
         insta::assert_snapshot!("input_merge_overlapping", text);
     });
@@ -233,12 +208,12 @@ fn identities_are_unique_and_merges_refuse_what_they_would_lose() {
     assert_ne!(wall("first"), wall("second"));
     for (prefer, from) in [("first", "first"), ("last", "second")] {
         let out = format!("merged-{prefer}");
-        let (code, text) = run(
-            &dir,
-            &[
-                "merge", "first", "second", "--prefer", prefer, "--out", &out,
-            ],
-        );
+        let (code, text) = cli([
+            "merge", "first", "second", "--prefer", prefer, "--out", &out,
+        ])
+        .dir(&dir)
+        .run()
+        .outcome();
         assert_eq!(code, Some(0), "{text}");
         assert_eq!(wall(&out), wall(from), "--prefer {prefer}");
     }
@@ -268,11 +243,11 @@ fn a_baseline_from_another_adapter_is_said_to_be_one() {
         args
     };
     let args = with(&["--out", "base"]);
-    let (code, text) = run(&dir, &args.iter().map(String::as_str).collect::<Vec<_>>());
+    let (code, text) = cli(&args).dir(&dir).run().outcome();
     assert_eq!(code, Some(0), "{text}");
     // The same adapter: no warning.
     let args = with(&["--out", "again", "--baseline", "base"]);
-    let (code, text) = run(&dir, &args.iter().map(String::as_str).collect::<Vec<_>>());
+    let (code, text) = cli(&args).dir(&dir).run().outcome();
     assert_eq!(code, Some(0), "{text}");
     assert!(!text.contains("warning"), "{text}");
     // The baseline's adapter renamed, as if it ran elsewhere: the run says so.
@@ -281,7 +256,7 @@ fn a_baseline_from_another_adapter_is_said_to_be_one() {
     r["provenance"][0]["adapter"]["name"] = "Another GPU".into();
     std::fs::write(&path, serde_json::to_vec(&r).unwrap()).unwrap();
     let args = with(&["--out", "again", "--baseline", "base"]);
-    let (code, text) = run(&dir, &args.iter().map(String::as_str).collect::<Vec<_>>());
+    let (code, text) = cli(&args).dir(&dir).run().outcome();
     assert_eq!(code, Some(0), "{text}");
     assert!(
         text.contains("warning: the baseline ran on Another GPU")

@@ -2,19 +2,11 @@
 //! the others, every report file is written, shards merge back into the whole, and a
 //! baseline run shows each cell's change.
 
-mod common;
-
 use std::path::{Path, PathBuf};
-use std::process::Command;
+
+use crate::common::{self, cli, scratch};
 
 use clusterlab::matrix::{Results, compare_runs};
-
-fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("clusterlab-matrix-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).expect("scratch folder");
-    dir
-}
 
 /// A folder with a good variant and a broken one.
 fn variants(dir: &Path) -> PathBuf {
@@ -29,17 +21,7 @@ fn variants(dir: &Path) -> PathBuf {
     v
 }
 
-fn matrix(args: &[&str]) -> (i32, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_clusterlab"))
-        .args(args)
-        .output()
-        .expect("clusterlab runs");
-    let text =
-        String::from_utf8_lossy(&out.stdout).into_owned() + &String::from_utf8_lossy(&out.stderr);
-    (out.status.code().unwrap_or(-1), text)
-}
-
-fn run(variants: &Path, out: &Path, extra: &[&str]) -> (i32, String) {
+fn run(variants: &Path, out: &Path, extra: &[&str]) -> (Option<i32>, String) {
     let mut args = vec![
         "matrix",
         "--variants",
@@ -58,7 +40,7 @@ fn run(variants: &Path, out: &Path, extra: &[&str]) -> (i32, String) {
         out.to_str().unwrap(),
     ];
     args.extend_from_slice(extra);
-    matrix(&args)
+    cli(&args).run().outcome()
 }
 
 fn ids(r: &Results) -> Vec<String> {
@@ -73,7 +55,7 @@ fn a_broken_variant_fails_its_cells_and_the_rest_run_and_report() {
     let v = variants(&dir);
     let out = dir.join("all");
     let (code, text) = run(&v, &out, &[]);
-    assert_eq!(code, 1, "a failed cell makes exit code 1\n{text}");
+    assert_eq!(code, Some(1), "a failed cell makes exit code 1\n{text}");
     assert!(text.contains("FAILED"), "{text}");
 
     let r = Results::load(&out).expect("results.json");
@@ -175,17 +157,6 @@ fn speedups_and_pareto_front_follow_from_the_cells(r: &Results, printed: &str) {
     }
 }
 
-fn matrix_with(args: &[&str], env: (&str, &str)) -> (i32, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_clusterlab"))
-        .args(args)
-        .env(env.0, env.1)
-        .output()
-        .expect("clusterlab runs");
-    let text =
-        String::from_utf8_lossy(&out.stdout).into_owned() + &String::from_utf8_lossy(&out.stderr);
-    (out.status.code().unwrap_or(-1), text)
-}
-
 /// Run `matrix ARGS` on one_light (48x27, one frame) into `out` with `env` set: the exit
 /// code is 1, the cells `fails` picks fail with a message holding every one of `says`, and
 /// every other cell runs. Returns the results.
@@ -210,8 +181,8 @@ fn only_some_cells_fail(
         "--out",
     ]);
     all.push(out.to_str().unwrap());
-    let (code, text) = matrix_with(&all, env);
-    assert_eq!(code, 1, "{text}");
+    let (code, text) = cli(&all).env(env.0, env.1).run().outcome();
+    assert_eq!(code, Some(1), "{text}");
     let r = Results::load(out).expect("results.json");
     for c in &r.cells {
         if fails(c) {
@@ -310,16 +281,18 @@ fn shards_merge_into_the_whole_and_a_baseline_shows_changes() {
     std::fs::create_dir_all(&v).unwrap();
     std::fs::copy("variants/forward_plus.ron", v.join("forward_plus.ron")).unwrap();
     let (a, b, merged) = (dir.join("a"), dir.join("b"), dir.join("merged"));
-    assert_eq!(run(&v, &a, &["--shard", "1/2"]).0, 0);
-    assert_eq!(run(&v, &b, &["--shard", "2/2"]).0, 0);
-    let (code, text) = matrix(&[
+    assert_eq!(run(&v, &a, &["--shard", "1/2"]).0, Some(0));
+    assert_eq!(run(&v, &b, &["--shard", "2/2"]).0, Some(0));
+    let (code, text) = cli([
         "merge",
         a.to_str().unwrap(),
         b.to_str().unwrap(),
         "--out",
         merged.to_str().unwrap(),
-    ]);
-    assert_eq!(code, 0, "{text}");
+    ])
+    .run()
+    .outcome();
+    assert_eq!(code, Some(0), "{text}");
     let (ra, rb, rm) = (
         Results::load(&a).unwrap(),
         Results::load(&b).unwrap(),
@@ -340,7 +313,7 @@ fn shards_merge_into_the_whole_and_a_baseline_shows_changes() {
         &dir.join("again"),
         &["--baseline", merged.join("results.json").to_str().unwrap()],
     );
-    assert_eq!(code, 0, "{text}");
+    assert_eq!(code, Some(0), "{text}");
     assert!(text.contains("vs baseline"), "{text}");
     let again = Results::load(&dir.join("again")).unwrap();
     assert!(again.cells.iter().all(|c| c.vs_baseline.is_some()));
@@ -402,17 +375,19 @@ fn shards_merge_into_the_whole_and_a_baseline_shows_changes() {
 
 #[test]
 fn bad_arguments_are_named() {
-    let (code, text) = matrix(&["matrix", "--sweep", "lights=lots"]);
-    assert_eq!(code, 2, "{text}");
+    let (code, text) = cli(["matrix", "--sweep", "lights=lots"]).run().outcome();
+    assert_eq!(code, Some(2), "{text}");
     assert!(
         text.contains("`lots` in `lights=lots` is not a whole number"),
         "{text}"
     );
-    let (code, text) = matrix(&["matrix", "--scenes", "moon", "--out", "/nonexistent/x"]);
-    assert_eq!(code, 1);
+    let (code, text) = cli(["matrix", "--scenes", "moon", "--out", "/nonexistent/x"])
+        .run()
+        .outcome();
+    assert_eq!(code, Some(1));
     assert!(text.contains("unknown scene `moon`"), "{text}");
-    let (code, text) = matrix(&["merge", "/nonexistent/results"]);
-    assert_eq!(code, 1);
+    let (code, text) = cli(["merge", "/nonexistent/results"]).run().outcome();
+    assert_eq!(code, Some(1));
     assert!(
         text.contains("/nonexistent/results: no such results file"),
         "{text}"
@@ -427,7 +402,7 @@ fn frames_by_budget_are_the_default_and_every_cell_says_how_many_it_took() {
     std::fs::copy("variants/forward_plus.ron", v.join("forward_plus.ron")).unwrap();
     let out = dir.join("out");
     // A budget no frame spends: cells stop on precision (3 frames at least) or the cap.
-    let (code, text) = matrix(&[
+    let (code, text) = cli([
         "matrix",
         "--variants",
         v.to_str().unwrap(),
@@ -443,8 +418,10 @@ fn frames_by_budget_are_the_default_and_every_cell_says_how_many_it_took() {
         "6",
         "--out",
         out.to_str().unwrap(),
-    ]);
-    assert_eq!(code, 0, "{text}");
+    ])
+    .run()
+    .outcome();
+    assert_eq!(code, Some(0), "{text}");
     assert!(
         text.contains("run: ") && text.contains("pipelines compiled"),
         "{text}"
@@ -493,8 +470,8 @@ fn frames_by_budget_are_the_default_and_every_cell_says_how_many_it_took() {
         let mut args = vec!["matrix", "--scenes", "one_light", "--out"];
         args.push(out.to_str().unwrap());
         args.extend_from_slice(bad);
-        let (code, text) = matrix(&args);
-        assert_eq!(code, 2, "{bad:?}: {text}");
+        let (code, text) = cli(&args).run().outcome();
+        assert_eq!(code, Some(2), "{bad:?}: {text}");
     }
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -3,15 +3,13 @@
 //! frame instead of a frame of its own, and instrumented frames that only count, on the
 //! timed frame's depth and lists.
 
-mod common;
-
+use crate::common::{gpu, load, small};
 use clusterlab::compose::Composer;
 use clusterlab::measure::Frames;
 use clusterlab::render::Renderer;
 use clusterlab::run::{CellOptions, run_cell};
 use clusterlab::scene;
 use clusterlab::variant::{DebugView, DepthRangeSource, ZSlicing};
-use common::{gpu, load, small};
 
 #[test]
 fn a_second_renderer_of_the_same_passes_compiles_nothing_and_renders_the_same() {
@@ -144,7 +142,7 @@ fn frames_by_budget_time_a_long_frame_once_and_short_ones_until_precise() {
 }
 
 #[test]
-fn naive_counters_from_the_clustered_twin_equal_naive_forwards_own() {
+fn naive_counters_from_the_clustered_stand_in_equal_naive_forwards_own() {
     let gpu = gpu();
     let composer = Composer::default();
     let mut prepass = load("naive_forward").variant;

@@ -1,12 +1,9 @@
 //! Naive forward against the CPU f64 reference, and the command line's handling of bad
 //! requests.
 
-mod common;
-
-use std::process::Command;
-
 use clusterlab::scene::SCENES;
-use common::{cell, gpu, load, small};
+
+use crate::common::{Ran, cell, cli, gpu, load, scratch, small};
 
 #[test]
 fn naive_forward_is_within_one_lsb_of_the_reference_on_every_scene() {
@@ -57,39 +54,27 @@ fn an_empty_scene_is_ambient_only_and_a_lit_one_is_not() {
     assert!(brightest(&lit) > 0.5, "{}", brightest(&lit));
 }
 
-fn clusterlab(args: &[&str], env: &[(&str, &str)]) -> (i32, String, String) {
-    let mut cmd = Command::new(env!("CARGO_BIN_EXE_clusterlab"));
-    cmd.args(args);
-    for (k, v) in env {
-        cmd.env(k, v);
-    }
-    let out = cmd.output().expect("the binary runs");
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
-}
-
 #[test]
 fn render_prints_the_json_report() {
-    let out = std::env::temp_dir().join("clusterlab-test-json");
-    let (code, stdout, stderr) = clusterlab(
-        &[
-            "render",
-            "--variant",
-            "naive_forward",
-            "--scene",
-            "one_light",
-            "--size",
-            "64x48",
-            "--json",
-            "--out",
-            out.to_str().unwrap(),
-        ],
-        &[],
-    );
-    assert_eq!(code, 0, "{stderr}");
+    let out = scratch("json").join("images");
+    let Ran {
+        code,
+        stdout,
+        stderr,
+    } = cli([
+        "render",
+        "--variant",
+        "naive_forward",
+        "--scene",
+        "one_light",
+        "--size",
+        "64x48",
+        "--json",
+        "--out",
+        out.to_str().unwrap(),
+    ])
+    .run();
+    assert_eq!(code, Some(0), "{stderr}");
     let json: serde_json::Value = serde_json::from_str(&stdout).expect("one JSON object");
     for key in [
         "variant", "scene", "adapter", "size", "lights", "gpu_ms", "wall_ms", "error",
@@ -124,23 +109,26 @@ fn render_prints_the_json_report() {
 /// The smoke test on OpenGL (llvmpipe): the same command, another backend.
 #[test]
 fn render_runs_on_opengl_too() {
-    let out = std::env::temp_dir().join("clusterlab-test-gl");
-    let (code, stdout, stderr) = clusterlab(
-        &[
-            "render",
-            "--variant",
-            "naive_forward",
-            "--scene",
-            "atrium",
-            "--size",
-            "96x54",
-            "--json",
-            "--out",
-            out.to_str().unwrap(),
-        ],
-        &[("WGPU_BACKEND", "gl")],
-    );
-    assert_eq!(code, 0, "{stderr}");
+    let out = scratch("gl").join("images");
+    let Ran {
+        code,
+        stdout,
+        stderr,
+    } = cli([
+        "render",
+        "--variant",
+        "naive_forward",
+        "--scene",
+        "atrium",
+        "--size",
+        "96x54",
+        "--json",
+        "--out",
+        out.to_str().unwrap(),
+    ])
+    .envs(&[("WGPU_BACKEND", "gl")])
+    .run();
+    assert_eq!(code, Some(0), "{stderr}");
     let json: serde_json::Value = serde_json::from_str(&stdout).expect("one JSON object");
     assert_eq!(json["adapter"]["backend"], "gl");
     assert!(
@@ -154,7 +142,7 @@ fn render_runs_on_opengl_too() {
 
 #[test]
 fn bad_requests_get_a_clear_message_and_exit_code_1() {
-    // Our own checks exit with 1; argument syntax errors are clap's (exit 2).
+    // Our own checks exit with 1; argument syntax and value errors are clap's (exit 2).
     let cases: [(&[&str], &str, i32); 6] = [
         (
             &["--scene", "atrum"],
@@ -163,8 +151,8 @@ fn bad_requests_get_a_clear_message_and_exit_code_1() {
         ),
         (
             &["--scene", "atrium", "--size", "0x0"],
-            "width and height must be at least 1",
-            1,
+            "`0x0`: width and height must be at least 1",
+            2,
         ),
         (
             &["--scene", "atrium", "--size", "100000x100000"],
@@ -190,8 +178,8 @@ fn bad_requests_get_a_clear_message_and_exit_code_1() {
     for (args, expected, exit_code) in cases {
         let mut all = vec!["render", "--variant", "naive_forward"];
         all.extend_from_slice(args);
-        let (code, _, stderr) = clusterlab(&all, &[]);
-        assert_eq!(code, exit_code, "{args:?}: {stderr}");
+        let Ran { code, stderr, .. } = cli(&all).run();
+        assert_eq!(code, Some(exit_code), "{args:?}: {stderr}");
         assert!(stderr.contains(expected), "{args:?}: {stderr}");
         assert!(!stderr.contains("panicked"), "{args:?} panicked: {stderr}");
     }

@@ -2,20 +2,18 @@
 //! input, naive and separable bloom against each other, the whole chain against the
 //! reference, and no pass or code for an effect a variant does not have.
 
-mod common;
-
 use std::path::Path;
 
+use crate::common::{cell, gpu, load, small};
 use clusterlab::compose::{self, Composer};
 use clusterlab::cpu::post::{self, CameraPair, Geometry, Image, PostParams};
 use clusterlab::gpu::Gpu;
+use clusterlab::kernels;
 use clusterlab::reference::{ReferenceCache, reference_frame};
 use clusterlab::render::Renderer;
 use clusterlab::scene::{self, Scene};
-use clusterlab::twins;
 use clusterlab::variant::PostEffect;
 use clusterlab::variant::*;
-use common::{cell, gpu, load, small};
 use glam::DVec3;
 
 /// The post variants in variants/, each with one effect or the write-ups' combinations.
@@ -50,7 +48,7 @@ fn run_chain(gpu: &Gpu, v: &Variant, scene: &Scene) -> ChainRun {
     let (w, h) = (frame.width, frame.height);
     // Read by a compute pass: OpenGL cannot copy a depth texture to a buffer.
     let cam = &scene.camera;
-    let depth = twins::gpu_depth_samples(
+    let depth = kernels::gpu_depth_samples(
         gpu,
         &composer,
         &v,

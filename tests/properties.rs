@@ -1,14 +1,13 @@
 //! Property tests (proptest) on the CPU twins and, through the twin kernels, the GPU: codec
 //! round trips, z-slicing, cluster bounds and the light-cluster test, for any input.
 
-mod common;
-
+use crate::common;
 use clusterlab::compose::Composer;
 use clusterlab::cpu::clusters::{self as cpu, Grid};
 use clusterlab::cpu::normals as codec;
 use clusterlab::cpu::zslice::Slices;
+use clusterlab::kernels::{gpu_codecs, gpu_zslices};
 use clusterlab::scene::Light;
-use clusterlab::twins::{gpu_codecs, gpu_zslices};
 use clusterlab::variant::{Culling, NormalCodec, SpotTest, ZSlicing};
 use glam::DVec3;
 use proptest::prelude::*;
@@ -41,7 +40,7 @@ fn step_degrees(bits: u32) -> f64 {
 
 /// The worst angle `codec` may turn a normal by at `bits` bits per component. On the GPU
 /// (`gpu`), each value an encoder quantises is within E = 2^-20 of the twin's (the bound
-/// `tests/twins.rs` holds the GPU's codes to): a code then differs from the twin's only next
+/// `tests/kernels.rs` holds the GPU's codes to): a code then differs from the twin's only next
 /// to a rounding tie, where both codes are as close, and the f32 decode adds a few 2^-24
 /// rad, so the bound grows by 2E rad (1.1e-4 degrees), not by a step.
 /// The spheremap is singular at (0, 0, -1) (a normal facing straight away from the camera),
@@ -503,7 +502,7 @@ fn the_round_trip_bound_rejects_the_old_acos_polar_encoder() {
         .collect();
     let zeros = vec![[0u32; 2]; normals.len()];
     let polar = NormalCodec::Polar { bits: 32 };
-    let old = clusterlab::twins::gpu_codecs_old_acos_polar(&gpu, &composer, 16, &input, &zeros)
+    let old = clusterlab::kernels::gpu_codecs_old_acos_polar(&gpu, &composer, 16, &input, &zeros)
         .expect("codec kernel")
         .codes;
     let decoded = gpu_codecs(&gpu, &composer, polar, &input, &old)

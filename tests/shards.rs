@@ -3,44 +3,28 @@
 //! calls. The merge must equal one unsharded run of the same matrix, times aside, and merge
 //! must refuse shards from different adapters or variant files unless told to mix them.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::Command;
+
+use crate::common::{self, cli, scratch};
 
 use clusterlab::matrix::Results;
 
-const BIN: &str = env!("CARGO_BIN_EXE_clusterlab");
 /// The matrix every shard runs: 3 variants x 2 scenes x 2 light counts, 12 cells.
 const MATRIX_ARGS: &str = "--variants naive_forward forward_plus clustered_deferred_16x16x24 \
                            --scenes one_light,spheres --size 64x36 --sweep lights=4,32 \
                            --frames 1 --warmup 0";
 
-fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("clusterlab-shards-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).expect("scratch folder");
-    dir
-}
-
 /// Run a script of examples/ with bash and the environment a user would set.
 fn script(path: &str, out: &Path, env: &[(&str, String)]) -> (bool, String) {
     let run = Command::new("bash")
         .arg(path)
-        .env("CLUSTERLAB", BIN)
+        .env("CLUSTERLAB", common::binary())
         .env("OUT", out)
         .env("CLUSTERLAB_MATRIX_ARGS", MATRIX_ARGS)
         .envs(env.iter().map(|(k, v)| (k, v)))
         .output()
         .expect("bash runs");
-    let text =
-        String::from_utf8_lossy(&run.stdout).into_owned() + &String::from_utf8_lossy(&run.stderr);
-    (run.status.success(), text)
-}
-
-fn clusterlab(args: &[&str]) -> (bool, String) {
-    let run = Command::new(BIN)
-        .args(args)
-        .output()
-        .expect("clusterlab runs");
     let text =
         String::from_utf8_lossy(&run.stdout).into_owned() + &String::from_utf8_lossy(&run.stderr);
     (run.status.success(), text)
@@ -72,7 +56,7 @@ fn the_examples_shard_and_merge_into_the_unsharded_run() {
     let whole = dir.join("whole");
     let mut args = vec!["matrix", "--out", whole.to_str().unwrap()];
     args.extend(MATRIX_ARGS.split_whitespace());
-    let (ok, text) = clusterlab(&args);
+    let (ok, text) = cli(&args).run().succeeded();
     assert!(ok, "unsharded: {text}");
 
     let merged = Results::load(&shards.join("merged")).expect("merged results");
@@ -131,7 +115,7 @@ fn merge_refuses_mixed_adapters_and_variant_files_unless_told() {
     let (a, b) = (dir.join("a"), dir.join("b"));
     for (k, out) in [(1, &a), (2, &b)] {
         let shard = format!("{k}/2");
-        let (ok, text) = clusterlab(&[
+        let (ok, text) = cli([
             "matrix",
             "--variants",
             "forward_plus",
@@ -147,7 +131,9 @@ fn merge_refuses_mixed_adapters_and_variant_files_unless_told() {
             &shard,
             "--out",
             out.to_str().unwrap(),
-        ]);
+        ])
+        .run()
+        .succeeded();
         assert!(ok, "{text}");
     }
     let merge = |extra: &[&str]| {
@@ -160,7 +146,7 @@ fn merge_refuses_mixed_adapters_and_variant_files_unless_told() {
             out.to_str().unwrap(),
         ];
         args.extend_from_slice(extra);
-        clusterlab(&args)
+        cli(&args).run().succeeded()
     };
     assert!(merge(&[]).0, "same adapter and files merge");
 

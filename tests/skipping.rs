@@ -2,13 +2,11 @@
 //! taken where it applies, listed in the frame, and the image equals the one rendered with
 //! `skip_unneeded: false`.
 
-mod common;
-
+use crate::common::{cli, gpu, load, scratch, small};
 use clusterlab::compose::Composer;
 use clusterlab::render::{FrameOutput, Renderer};
 use clusterlab::scene::{self, Scene};
 use clusterlab::variant::*;
-use common::{gpu, load, small};
 
 /// The third frame (skips that wait for a settled frame have begun), with skipping on and
 /// off.
@@ -155,33 +153,28 @@ fn a_scene_without_spots_shades_without_the_cone() {
 #[test]
 fn the_skipping_sweep_puts_both_settings_side_by_side() {
     use clusterlab::matrix::Results;
-    let out = std::env::temp_dir().join(format!("clusterlab-skipping-{}", std::process::id()));
-    let status = std::process::Command::new(env!("CARGO_BIN_EXE_clusterlab"))
-        .args([
-            "matrix",
-            "--variants",
-            "forward_plus",
-            "clustered_deferred_bloom_separable",
-            "--scenes",
-            "empty,one_light",
-            "--size",
-            "48x27",
-            "--sweep",
-            "skipping=on,off",
-            "--frames",
-            "2",
-            "--warmup",
-            "0",
-            "--out",
-        ])
-        .arg(&out)
-        .output()
-        .expect("clusterlab runs");
-    assert!(
-        status.status.success(),
-        "{}",
-        String::from_utf8_lossy(&status.stderr)
-    );
+    let dir = scratch("sweep");
+    let out = dir.join("results");
+    let ran = cli([
+        "matrix",
+        "--variants",
+        "forward_plus",
+        "clustered_deferred_bloom_separable",
+        "--scenes",
+        "empty,one_light",
+        "--size",
+        "48x27",
+        "--sweep",
+        "skipping=on,off",
+        "--frames",
+        "2",
+        "--warmup",
+        "0",
+        "--out",
+    ])
+    .arg(&out)
+    .run();
+    assert_eq!(ran.code, Some(0), "{}", ran.stderr);
     let r = Results::load(&out).expect("results.json");
     for variant in ["forward_plus", "clustered_deferred_bloom_separable"] {
         for scene in ["empty", "one_light"] {
@@ -228,5 +221,5 @@ fn the_skipping_sweep_puts_both_settings_side_by_side() {
             }
         }
     }
-    let _ = std::fs::remove_dir_all(&out);
+    let _ = std::fs::remove_dir_all(&dir);
 }

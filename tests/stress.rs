@@ -1,8 +1,7 @@
 //! The stress suite at its small sizes (as CI runs it): every adversarial case on every
 //! pipeline it applies to passes every check.
 
-mod common;
-
+use crate::common;
 use clusterlab::compose::Composer;
 use clusterlab::stress;
 
@@ -10,7 +9,7 @@ use clusterlab::stress;
 fn the_stress_suite_passes() {
     let mut gpu = common::gpu();
     let runs = stress::run(&mut gpu, &Composer::default(), None, &|_| {});
-    // Every case of the list ran, on every variant it lists, and README states those counts.
+    // Every case of the list ran, on every variant it lists, and the guide states those counts.
     let listed = stress::cases();
     let ran: Vec<(&str, &str)> = runs
         .iter()
@@ -25,14 +24,17 @@ fn the_stress_suite_passes() {
         })
         .collect();
     assert_eq!(ran, expected);
-    let readme = std::fs::read_to_string("README.md").expect("README.md");
-    let readme = readme.split_whitespace().collect::<Vec<_>>().join(" ");
+    let guide = std::fs::read_to_string("docs/guide.md").expect("docs/guide.md");
+    let guide = guide.split_whitespace().collect::<Vec<_>>().join(" ");
     let claim = format!(
         "runs {} adversarial cases on every pipeline each applies to ({} runs",
         listed.len(),
         expected.len()
     );
-    assert!(readme.contains(&claim), "README does not say `{claim}`");
+    assert!(
+        guide.contains(&claim),
+        "docs/guide.md does not say `{claim}`"
+    );
     for pipeline in [
         "naive_forward",
         "forward_plus",

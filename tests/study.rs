@@ -2,9 +2,7 @@
 //! twin and the published octahedral figures, depth comes back as Reed's model says, the
 //! slicing study counts what shading does, and the command writes every file.
 
-mod common;
-
-use std::process::Command;
+use crate::common::{self, cli, scratch};
 
 use clusterlab::compose::Composer;
 use clusterlab::gpu::expect::{self, Allowance, Check};
@@ -327,15 +325,12 @@ fn culling_counts_what_shading_does() {
 
 #[test]
 fn the_study_command_writes_every_file() {
-    let dir = std::env::temp_dir().join(format!("clusterlab-study-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    let out = Command::new(env!("CARGO_BIN_EXE_clusterlab"))
-        .args(["study", "codecs", "--samples", "2000", "--json", "--out"])
+    let dir = scratch("codecs").join("results");
+    let out = cli(["study", "codecs", "--samples", "2000", "--json", "--out"])
         .arg(&dir)
-        .output()
-        .expect("clusterlab runs");
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    let doc: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON on stdout");
+        .run();
+    let stderr = &out.stderr;
+    let doc: serde_json::Value = serde_json::from_str(&out.stdout).expect("JSON on stdout");
     assert_eq!(doc["study"], "codecs");
     // 4 codecs x 4 bit counts x GPU and CPU, the f32 row, plain octahedral on cube sampling.
     assert_eq!(
@@ -353,15 +348,12 @@ fn the_study_command_writes_every_file() {
         "{csv}"
     );
     // A bad study name is named with the valid ones.
-    let bad = Command::new(env!("CARGO_BIN_EXE_clusterlab"))
-        .args(["study", "colours"])
-        .output()
-        .expect("clusterlab runs");
-    assert!(!bad.status.success());
-    let msg = String::from_utf8_lossy(&bad.stderr);
+    let bad = cli(["study", "colours"]).run();
+    assert_ne!(bad.code, Some(0));
+    let msg = &bad.stderr;
     assert!(
         msg.contains("codecs") && msg.contains("depth") && msg.contains("slicing"),
         "{msg}"
     );
-    let _ = std::fs::remove_dir_all(&dir);
+    let _ = std::fs::remove_dir_all(dir.parent().unwrap());
 }

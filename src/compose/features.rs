@@ -7,7 +7,36 @@ use strum::IntoEnumIterator;
 
 use crate::variant::*;
 
-/// The feature flags of `v` with some set otherwise: `stats` for the instrumented twin of a
+/// Lights per row of the per-light dispatches: a dispatch dimension holds at most 65535
+/// workgroups (`clustering/assignment.wesl`, `passes/zbin_assign.wesl`).
+pub const LIGHTS_PER_ROW: u32 = 32768;
+/// Invocations of one prefix-sum workgroup (`clustering/lists.wesl`).
+pub const SCAN_LANES: u32 = 256;
+/// Clusters one scan invocation adds up in turn before the workgroup scan: a software GPU
+/// pays for every invocation at every barrier, so fewer invocations with more clusters each
+/// scan faster there.
+pub const CLUSTERS_PER_LANE: u32 = 4;
+/// Clusters of one prefix-sum block: a workgroup of the first level each.
+pub const SCAN_BLOCK: u32 = SCAN_LANES * CLUSTERS_PER_LANE;
+
+/// The flags a frame sets over its variant's: `spot_lights` (a scene without spots needs no
+/// cone in its light loops: on a software rasteriser, which runs both sides of a branch, the
+/// cone costs point lights about half again), `base_color_texture`, and for an instrumented
+/// frame `stats` with `count_every_light` (`Some`: whether it counts every light, as the
+/// clustered stand-in of naive forward does).
+pub fn frame_features(
+    spots: bool,
+    textures: bool,
+    instrumented: Option<bool>,
+) -> Vec<(&'static str, bool)> {
+    let mut flags = vec![("spot_lights", spots), ("base_color_texture", textures)];
+    if let Some(count_every_light) = instrumented {
+        flags.extend([("stats", true), ("count_every_light", count_every_light)]);
+    }
+    flags
+}
+
+/// The feature flags of `v` with some set otherwise: `stats` for an instrumented frame of a
 /// pass, or what a scene needs (`spot_lights` off without spots, `base_color_texture` on
 /// with textures).
 pub fn features_with(v: &Variant, overrides: &[(&str, bool)]) -> Vec<(&'static str, bool)> {
@@ -25,6 +54,13 @@ pub fn features_with(v: &Variant, overrides: &[(&str, bool)]) -> Vec<(&'static s
 pub fn feature_flags(v: &Variant) -> Vec<(&'static str, bool)> {
     let p = v.pipeline;
     let clusters = v.clusters();
+    // Each light-assignment method's flag, from the one method the variant's fields choose.
+    let (zbinning, two_level, raster_binning) = match clusters.method() {
+        CullingMethod::OneLevel => (false, false, false),
+        CullingMethod::TwoLevel { .. } => (false, true, false),
+        CullingMethod::ZBinning => (true, false, false),
+        CullingMethod::Rasterised => (false, false, true),
+    };
     let codec = v.normal_codec();
     let layout = v.gbuffer().layout;
     let deferred = p.is_deferred();
@@ -57,19 +93,10 @@ pub fn feature_flags(v: &Variant) -> Vec<(&'static str, bool)> {
         ),
         ("active_clusters", clusters.active_clusters),
         ("sample_bounds", clusters.sample_bounds),
-        ("depth_mask", clusters.culling == Culling::DepthMask),
-        (
-            "zbinning",
-            p.is_clustered() && clusters.culling == Culling::ZBinning,
-        ),
-        (
-            "two_level",
-            p.is_clustered() && clusters.big_tiles.is_some(),
-        ),
-        (
-            "raster_binning",
-            p.is_clustered() && clusters.culling == Culling::Rasterised,
-        ),
+        ("depth_mask", clusters.culling.marks_depth_cells()),
+        ("zbinning", p.is_clustered() && zbinning),
+        ("two_level", p.is_clustered() && two_level),
+        ("raster_binning", p.is_clustered() && raster_binning),
         ("gbuffer_wide", deferred && layout == GBufferLayout::Wide),
         (
             "gbuffer_packed",
@@ -105,9 +132,9 @@ pub fn feature_flags(v: &Variant) -> Vec<(&'static str, bool)> {
             toon.is_some_and(|t| t.mode == ToonMode::PostProcess),
         ),
         ("outlines", toon.is_some_and(|t| t.outlines.is_some())),
-        // On only in instrumented compositions (`Composer::compose_instrumented`).
+        // On only in instrumented frames (`Composer::compose_with`, from `Renderer::build_renderer`).
         ("stats", false),
-        // On only in the counting twin of naive forward (`render::stats`): a clustered
+        // On only in the clustered stand-in that naive forward counts on (`render::stats`): a clustered
         // frame that counts every light as evaluated, as naive forward evaluates them.
         ("count_every_light", false),
         (
@@ -157,7 +184,12 @@ pub fn constants_module(v: &Variant) -> String {
         _ => 0,
     };
 
+    use crate::cpu::{clusters as twin, shading};
     let u32s = [
+        ("LIGHTS_PER_ROW", LIGHTS_PER_ROW),
+        ("DEPTH_CELLS", twin::DEPTH_CELLS),
+        ("SCAN_LANES", SCAN_LANES),
+        ("CLUSTERS_PER_LANE", CLUSTERS_PER_LANE),
         ("GRID_X", clusters.grid.0),
         ("GRID_Y", clusters.grid.1),
         ("GRID_Z", clusters.grid.2),
@@ -169,7 +201,17 @@ pub fn constants_module(v: &Variant) -> String {
         ("MOTION_BLUR_SAMPLES", motion.samples),
         ("GBUFFER_CHANNEL", gbuffer_channel),
     ];
+    // The CPU twins' slack and clamps, in single precision: the same numbers on both sides.
     let f32s = [
+        ("BOUNDS_PADDING", twin::BOUNDS_PADDING as f32),
+        ("PLANE_SLACK", twin::PLANE_SLACK as f32),
+        ("CONE_COS_SLACK", twin::CONE_COS_SLACK as f32),
+        ("SPOT_SLACK", twin::SPOT_SLACK as f32),
+        ("MIN_DISTANCE_SQUARED", shading::MIN_DISTANCE_SQUARED as f32),
+        (
+            "MIN_PERCEPTUAL_ROUGHNESS",
+            shading::MIN_PERCEPTUAL_ROUGHNESS as f32,
+        ),
         ("SHININESS", shininess),
         ("SPECULAR", specular),
         ("AMBIENT", v.shading.ambient),

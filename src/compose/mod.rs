@@ -11,7 +11,10 @@ mod passes;
 mod resolver;
 
 pub use diagnostics::SourceLocation;
-pub use features::{constants_module, feature_flags, features_with};
+pub use features::{
+    CLUSTERS_PER_LANE, LIGHTS_PER_ROW, SCAN_BLOCK, SCAN_LANES, constants_module, feature_flags,
+    features_with, frame_features,
+};
 pub use passes::{
     ClusterPass, FramePlan, Pass, PassId, PassKind, PostPass, RasterPass, ScreenPass, passes, plan,
 };
@@ -142,18 +145,8 @@ impl Composer {
         self.compose_with(variant, pass, &[])
     }
 
-    /// The instrumented twin of a pass: feature `stats` on, so shading passes count their
-    /// light evaluations per pixel. Used for a frame's counters, never for its timings.
-    pub fn compose_instrumented(
-        &self,
-        variant: &Variant,
-        pass: &Pass,
-    ) -> Result<ComposedPass, ShaderError> {
-        self.compose_with(variant, pass, &[("stats", true)])
-    }
-
-    /// A pass of a variant with some of its feature flags set otherwise: `stats` for the
-    /// instrumented twin, or what a scene does not need (`spot_lights` off without spots).
+    /// A pass of a variant with some of its feature flags set otherwise: `stats` for an
+    /// instrumented frame (its counters, never its timings), or what a scene does not need (`spot_lights` off without spots).
     pub fn compose_with(
         &self,
         variant: &Variant,

@@ -100,7 +100,7 @@ impl PassId {
         }
     }
 
-    /// Shading passes: they loop over lights, and have an instrumented twin that counts the
+    /// Shading passes: they loop over lights, and have an instrumented version that counts the
     /// light evaluations.
     pub fn is_shading(self) -> bool {
         matches!(
@@ -187,16 +187,22 @@ pub fn passes(v: &Variant) -> Vec<Pass> {
         if clusters.active_clusters {
             out.push(clustering(ClusterPass::MarkActive, "passes::mark_active"));
         }
-        if clusters.culling == Culling::ZBinning {
-            // Bins and tile masks need no cluster boxes.
-            out.push(clustering(ClusterPass::LightAssign, "passes::zbin_assign"));
+        // Each method's own root; bins and tile masks need no cluster boxes.
+        let assign = match clusters.method() {
+            CullingMethod::OneLevel => "passes::assign_one_level",
+            CullingMethod::TwoLevel { .. } => "passes::assign_two_level",
+            CullingMethod::ZBinning => "passes::zbin_assign",
+            CullingMethod::Rasterised => "passes::assign_rasterised",
+        };
+        if !clusters.method().builds_lists() {
+            out.push(clustering(ClusterPass::LightAssign, assign));
         } else {
             out.push(clustering(
                 ClusterPass::ClusterBounds,
                 "passes::cluster_bounds",
             ));
             if clusters.assignment == Assignment::Gpu {
-                out.push(clustering(ClusterPass::LightAssign, "passes::light_assign"));
+                out.push(clustering(ClusterPass::LightAssign, assign));
             }
         }
     }

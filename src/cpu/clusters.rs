@@ -1,13 +1,17 @@
-//! Twin of `shaders/clustering/bounds.wesl` and `assign.wesl`: cluster boxes in view space
-//! and light lists, in f64, from the definitions in docs/ARCHITECTURE.md. Also the CPU light assignment
-//! of variants with `assignment: Cpu`.
+//! Twin of the cluster modules of `shaders/clustering/`: `bounds.wesl` (cluster boxes in view
+//! space), `assign.wesl` (the light tests and lists), `depth_mask.wesl`
+//! (2.5D masks), `two_level.wesl` (the coarse test and big tiles) and `raster_bin.wesl`
+//! (light proxies), in f64, from the definitions in docs/ARCHITECTURE.md. Also the CPU light
+//! assignment of variants with `assignment: Cpu`.
 
 use glam::{DMat4, DVec2, DVec3};
 
 use super::zslice::Slices;
 use crate::common::{Light, SpotTest, ZSlicing};
 
-/// Relative padding of every box (as in the shaders).
+/// Relative padding of every box: float rounding of a surface's position or slice can put it
+/// a hair outside its cluster's exact box, and a light it touches must still be listed (the
+/// shaders' `BOUNDS_PADDING`, generated from this).
 pub const BOUNDS_PADDING: f64 = 1e-4;
 
 /// A cluster grid over a camera.
@@ -129,7 +133,8 @@ pub fn sphere_touches_box(center: DVec3, radius: f64, b: &Aabb) -> bool {
     nearest.distance_squared(center) <= radius * radius
 }
 
-/// Relative widening of the radius in the plane tests (as in the shaders).
+/// Relative widening of the radius in the plane tests: rounding must never reject a light
+/// that touches (the shaders' `PLANE_SLACK`, generated from this).
 pub const PLANE_SLACK: f64 = 1e-4;
 
 /// The box test and the four side planes of tile (x, y)'s frustum piece: a light passes
@@ -269,7 +274,8 @@ pub fn binned(
 /// Widening of a spot's outer cone, in cosine, before it is tested (the shading compares
 /// an f32 cosine with rounding near 1e-7 against the cone's).
 pub const CONE_COS_SLACK: f64 = 1e-6;
-/// Relative widening of a spot's bounding sphere and of the cone test's distances.
+/// Relative widening of a spot's bounding sphere and of the cone test's distances (this and
+/// `CONE_COS_SLACK` generated into the shaders' constants).
 pub const SPOT_SLACK: f64 = 1e-5;
 
 /// A spot's cone in view space: apex, unit axis, range, and the cosine and sine of its outer
@@ -378,7 +384,8 @@ pub fn light_touches_cluster(
     }
 }
 
-/// Cells of a cluster's sample depth range in 2.5D culling (the bits of a u32).
+/// Cells of a cluster's sample depth range in 2.5D culling: the bits of a u32 (the shaders'
+/// `DEPTH_CELLS`, generated from this).
 pub const DEPTH_CELLS: u32 = 32;
 
 /// The cell of view depth `z` in range [z0, z1], clamped to the first and last cell.

@@ -5,7 +5,8 @@ use glam::DVec3;
 
 use crate::common::Light;
 
-/// Smallest squared distance of the inverse-square law (as in the shaders).
+/// Smallest squared distance of the inverse-square law: no division by zero where a light
+/// sits on a surface (the shaders' `MIN_DISTANCE_SQUARED`, generated from this).
 pub const MIN_DISTANCE_SQUARED: f64 = 1e-4;
 
 /// What shading needs from a variant.
@@ -89,7 +90,9 @@ pub fn spot_factor(light: &Light, l: DVec3) -> f64 {
     t * t * (3.0 - 2.0 * t)
 }
 
-/// Smallest perceptual roughness GGX shades with (as in the shaders).
+/// Smallest perceptual roughness GGX shades with: below it the lobe is narrower than f32
+/// can resolve, and Filament clamps likewise (the shaders' `MIN_PERCEPTUAL_ROUGHNESS`,
+/// generated from this).
 pub const MIN_PERCEPTUAL_ROUGHNESS: f64 = 0.045;
 
 /// GGX's alpha for a perceptual roughness: its square, after the clamp.

@@ -434,7 +434,7 @@ type Identity = (&'static str, fn(&CellRecord) -> Cell);
 
 const IDENTITY: &[Identity] = &[
     ("id", |c| Cell::Text(c.spec.id.clone())),
-    ("study", |c| Cell::Text(c.spec.study.clone())),
+    ("group", |c| Cell::Text(c.spec.group.clone())),
     ("variant", |c| Cell::Text(c.spec.variant.clone())),
     ("scene", |c| Cell::Text(c.spec.scene.clone())),
     ("width", |c| c.spec.params.width.into()),

@@ -1,4 +1,4 @@
-//! Which cells a matrix runs: studies (variants x scenes x sweeps), the naive baselines
+//! Which cells a matrix runs: groups (variants x scenes x sweeps), the naive baselines
 //! their speed-ups need, and a deterministic slice of them for `--shard`.
 
 use std::collections::BTreeMap;
@@ -117,7 +117,7 @@ pub fn parse_sweep(s: &str) -> Result<Sweep, String> {
     }
 }
 
-/// A variant as a study names it: loaded, or the reason it would not load.
+/// A variant as a group names it: loaded, or the reason it would not load.
 #[derive(Clone, Debug)]
 pub struct VariantEntry {
     pub name: String,
@@ -154,13 +154,42 @@ pub fn find_variants(args: &[String]) -> Result<Vec<VariantEntry>, String> {
 
 /// A set of cells: every variant on every scene at every combination of the sweeps.
 #[derive(Clone, Debug)]
-pub struct Study {
+pub struct Group {
     pub name: String,
     pub variants: Vec<VariantEntry>,
     pub scenes: Vec<String>,
     pub sweeps: Vec<Sweep>,
     /// Image size for every cell (default: each scene's).
     pub size: Option<(u32, u32)>,
+}
+
+/// The default matrix: every variant on every built-in scene, and a light-count sweep of
+/// naive forward, Forward+ and clustered deferred on the atrium.
+pub fn default_groups() -> Result<Vec<Group>, String> {
+    let scenes = crate::scene::SCENES
+        .iter()
+        .map(|s| s.name.to_string())
+        .collect();
+    Ok(vec![
+        Group {
+            name: "variants".into(),
+            variants: find_variants(&["variants".into()])?,
+            scenes,
+            sweeps: vec![],
+            size: None,
+        },
+        Group {
+            name: "lights".into(),
+            variants: find_variants(&[
+                "naive_forward".into(),
+                "forward_plus".into(),
+                "clustered_deferred_16x16x24".into(),
+            ])?,
+            scenes: vec!["atrium".into()],
+            sweeps: vec![Sweep::Lights(vec![64, 256, 1024, 5000, 16384])],
+            size: Some((256, 144)),
+        },
+    ])
 }
 
 /// Scene parameters as results record them.
@@ -210,8 +239,10 @@ impl From<ParamsRecord> for SceneParams {
 pub struct CellSpec {
     /// `variant@scene`, with the swept values in brackets: `forward_plus@atrium[lights=1024]`.
     pub id: String,
-    /// The study the cell belongs to ("variants", "lights", "baseline", ...).
-    pub study: String,
+    /// The group of the matrix the cell belongs to ("variants", "lights", "baseline", ...;
+    /// `study` in results written before the rename).
+    #[serde(alias = "study")]
+    pub group: String,
     pub variant: String,
     pub variant_path: PathBuf,
     pub scene: String,
@@ -271,22 +302,22 @@ pub struct PlannedCell {
     pub variant: Result<LoadedVariant, String>,
 }
 
-/// Expand studies into cells, in a fixed order; add a naive forward baseline for every
+/// Expand groups into cells, in a fixed order; add a naive forward baseline for every
 /// group of parameters that has none, from `baseline` (when there is no naive variant in
-/// the studies, the one in variants/ or the built-in default).
-pub fn expand(studies: &[Study]) -> Result<Vec<PlannedCell>, String> {
+/// the groups, the one in variants/ or the built-in default).
+pub fn expand(groups: &[Group]) -> Result<Vec<PlannedCell>, String> {
     let mut cells: Vec<PlannedCell> = Vec::new();
-    for study in studies {
-        check_distinct_names(&study.variants)?;
-        for scene in &study.scenes {
+    for group in groups {
+        check_distinct_names(&group.variants)?;
+        for scene in &group.scenes {
             let mut base = crate::scene::defaults(scene).map_err(|e| e.to_string())?;
             let file = crate::scene::file_of(scene).map_err(|e| e.to_string())?;
-            if let Some((w, h)) = study.size {
+            if let Some((w, h)) = group.size {
                 (base.width, base.height) = (w, h);
             }
-            for entry in &study.variants {
-                for point in sweep_points(&study.sweeps) {
-                    let mut cell = make_cell(&study.name, entry, scene, base, &point);
+            for entry in &group.variants {
+                for point in sweep_points(&group.sweeps) {
+                    let mut cell = make_cell(&group.name, entry, scene, base, &point);
                     cell.spec.scene_sha256 = file.as_ref().map(|f| f.sha256.clone());
                     if !cells.iter().any(|c| c.spec.id == cell.spec.id) {
                         cells.push(cell);
@@ -392,7 +423,7 @@ fn sweep_points(sweeps: &[Sweep]) -> Vec<Point> {
 }
 
 fn make_cell(
-    study: &str,
+    group: &str,
     entry: &VariantEntry,
     scene: &str,
     base: SceneParams,
@@ -452,7 +483,7 @@ fn make_cell(
     PlannedCell {
         spec: CellSpec {
             id,
-            study: study.to_string(),
+            group: group.to_string(),
             variant: entry.name.clone(),
             variant_path: entry.path.clone(),
             scene: scene.to_string(),
@@ -532,7 +563,7 @@ fn add_baselines(cells: &mut Vec<PlannedCell>) {
         cells.push(PlannedCell {
             spec: CellSpec {
                 id,
-                study: "baseline".into(),
+                group: "baseline".into(),
                 variant: name.clone(),
                 variant_path: path.clone(),
                 scene: spec.scene.clone(),
@@ -587,8 +618,8 @@ mod tests {
         VariantEntry::load(&PathBuf::from(format!("variants/{name}.ron")))
     }
 
-    fn study(variants: &[&str], sweeps: Vec<Sweep>) -> Study {
-        Study {
+    fn group(variants: &[&str], sweeps: Vec<Sweep>) -> Group {
+        Group {
             name: "test".into(),
             variants: variants.iter().map(|v| entry(v)).collect(),
             scenes: vec!["one_light".into()],
@@ -632,7 +663,7 @@ mod tests {
 
     #[test]
     fn cells_cover_the_sweeps_and_every_group_gets_a_naive_baseline() {
-        let s = study(
+        let s = group(
             &["forward_plus", "deferred_scissor"],
             vec![
                 Sweep::Lights(vec![4, 8]),
@@ -657,15 +688,15 @@ mod tests {
         );
         assert_eq!(cells[1].spec.grid, Some([4, 4, 4]));
         assert_eq!(cells[1].spec.params.lights, 4);
-        assert_eq!(cells[6].spec.study, "baseline");
+        assert_eq!(cells[6].spec.group, "baseline");
         assert!(cells[6].spec.is_naive_baseline());
     }
 
     #[test]
-    fn a_study_with_naive_forward_needs_no_extra_baseline_and_a_bad_scene_is_named() {
-        let cells = expand(&[study(&["naive_forward", "forward_plus"], vec![])]).unwrap();
+    fn a_group_with_naive_forward_needs_no_extra_baseline_and_a_bad_scene_is_named() {
+        let cells = expand(&[group(&["naive_forward", "forward_plus"], vec![])]).unwrap();
         assert_eq!(cells.len(), 2);
-        let mut s = study(&["forward_plus"], vec![]);
+        let mut s = group(&["forward_plus"], vec![]);
         s.scenes = vec!["moon".into()];
         let e = expand(&[s]).unwrap_err();
         assert!(
@@ -676,7 +707,7 @@ mod tests {
 
     #[test]
     fn shards_split_the_cells_without_overlap() {
-        let s = study(
+        let s = group(
             &[
                 "forward_plus",
                 "clustered_deferred_16x16x24",

@@ -4,10 +4,11 @@
 use bytemuck::{Pod, Zeroable};
 use wgpu::util::DeviceExt;
 
+use super::culling::Method;
 use crate::cpu::clusters::ClusterLists;
 use crate::cpu::zbin::ZBins;
 use crate::gpu::{Gpu, GpuError, read_buffer};
-use crate::variant::Culling;
+use crate::variant::{Clusters, Culling};
 
 /// Mirrors `ClusterRange` in `shaders/clustering/clusters.wesl`.
 #[repr(C)]
@@ -73,9 +74,6 @@ mod binding {
 /// Bytes of an indirect dispatch's arguments (x, y, z).
 pub const DISPATCH_ARGS_BYTES: u64 = 12;
 
-/// Clusters of one scan workgroup (`SCAN_BLOCK` in light_assign.wesl).
-pub const SCAN_BLOCK: u32 = 1024;
-
 /// Bytes of rasterised binning's `ProxyDraw` (build_bindings.wesl): the indirect draw, the
 /// pair count, then the scatter's indirect dispatch from this offset.
 const PROXY_DRAW_BYTES: u64 = 32;
@@ -133,12 +131,12 @@ pub struct ClusterBuffers {
     pub scatter_dispatch: wgpu::Buffer,
     /// Rasterised binning: the one-pixel-per-tile target the proxies are drawn into.
     pub bin_target: Option<wgpu::TextureView>,
-    /// Tiles per big tile side with two-level culling.
-    pub big_tiles: Option<u32>,
     /// The grid: tiles across, tiles down, slices (z-binning's bins).
     pub grid: (u32, u32, u32),
     pub lights: u32,
     pub culling: Culling,
+    /// How light assignment builds the lists.
+    pub method: Method,
 }
 
 /// A cluster's samples on the GPU: their depth range [z0, z1] (z1 = 0 where it holds none)
@@ -153,24 +151,6 @@ pub struct GpuDepthMask {
 /// rasteriser's loop budget up to here (`zbin_assign.wesl`).
 pub const ZBIN_MAX_LIGHTS: usize = 65536;
 
-/// Refuse a z-binning frame the sort or the tile masks cannot hold.
-pub fn check_zbinning(gpu: &Gpu, grid: (u32, u32, u32), lights: usize) -> Result<(), GpuError> {
-    if lights > ZBIN_MAX_LIGHTS {
-        return Err(GpuError::TooLarge(format!(
-            "z-binning sorts at most {ZBIN_MAX_LIGHTS} lights and the scene has {lights}; use fewer lights or another `clusters.culling`"
-        )));
-    }
-    let bytes = (grid.0 * grid.1) as u64 * (lights as u64).div_ceil(32) * 4;
-    let max = gpu.max_storage_bytes();
-    if bytes > max {
-        return Err(GpuError::TooLarge(format!(
-            "z-binning's tile masks for {}x{} tiles and {lights} lights take {bytes} bytes, more than the {max} bytes adapter `{}` allows in one buffer; use fewer tiles or lights",
-            grid.0, grid.1, gpu.adapter.name
-        )));
-    }
-    Ok(())
-}
-
 /// Format of rasterised binning's target (its colour is never read).
 pub const BIN_TARGET_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R8Unorm;
 
@@ -184,21 +164,8 @@ fn bin_target_size(grid: (u32, u32, u32)) -> (u32, u32) {
 
 /// Bytes of rasterised binning's proxies for `lights` lights on `grid`: at most one per
 /// light and slice, 16 bytes each.
-fn proxy_bytes(grid: (u32, u32, u32), lights: u32) -> u64 {
+pub fn proxy_bytes(grid: (u32, u32, u32), lights: u32) -> u64 {
     lights.max(1) as u64 * grid.2 as u64 * 16
-}
-
-/// Refuse a rasterised-binning frame whose proxies one buffer cannot hold.
-pub fn check_rasterised(gpu: &Gpu, grid: (u32, u32, u32), lights: usize) -> Result<(), GpuError> {
-    let bytes = proxy_bytes(grid, lights as u32);
-    let max = gpu.max_storage_bytes();
-    if bytes > max {
-        return Err(GpuError::TooLarge(format!(
-            "rasterised binning's proxies for {lights} lights over {} slices take {bytes} bytes, more than the {max} bytes adapter `{}` allows in one buffer; use fewer slices or lights",
-            grid.2, gpu.adapter.name
-        )));
-    }
-    Ok(())
 }
 
 /// Bytes of two-level culling's coarse masks: for each big tile of `big` tiles a side, a
@@ -209,8 +176,8 @@ fn coarse_bytes(grid: (u32, u32, u32), big: u32, words: u64) -> u64 {
 }
 
 /// The long lists' buffer (`SortJobs` in build_bindings.wesl), its dispatch header
-/// (x, y, z, jobs) made (0, 1, 1, 0): frames reset only x and jobs
-/// ([`ClusterBuffers::clear_long_lists`]).
+/// (x, y, z, jobs) made (0, 1, 1, 0): frames reset only x and jobs (light assignment's
+/// plan clears them, `culling/`).
 fn sort_jobs(gpu: &Gpu, size: u64) -> wgpu::Buffer {
     let buffer = storage(gpu, "long lists", size);
     gpu.queue
@@ -230,27 +197,29 @@ fn storage(gpu: &Gpu, label: &str, size: u64) -> wgpu::Buffer {
 }
 
 impl ClusterBuffers {
-    /// The buffers of `culling` on `grid` for `lights` lights (with two-level culling over
-    /// big tiles of `big_tiles` tiles a side); the buffers a method does not use are 16-byte
-    /// placeholders (every binding exists in every variant's layout).
+    /// The buffers of clusters `c` for `lights` lights; the buffers its method does not use
+    /// are 16-byte placeholders (every binding exists in every variant's layout).
     pub fn new(
         gpu: &Gpu,
-        grid: (u32, u32, u32),
+        c: &Clusters,
         lights: u32,
         index_capacity: u32,
         range: ClusterRange,
-        culling: Culling,
-        big_tiles: Option<u32>,
     ) -> Self {
+        let (grid, culling, method) = (c.grid, c.culling, c.method());
         let clusters = grid.0 * grid.1 * grid.2;
         let n = clusters as u64;
-        let lists = culling != Culling::ZBinning;
+        let lists = method.builds_lists();
         let zbin = !lists;
+        let (raster, big_tiles) = match method {
+            Method::Rasterised => (true, None),
+            Method::TwoLevel { big_tile } => (false, Some(big_tile)),
+            Method::OneLevel | Method::ZBinning => (false, None),
+        };
         // `bytes` where the method uses a buffer, a placeholder elsewhere.
         let sized = |used: bool, bytes: u64| if used { bytes } else { 16 };
         let index_capacity = if lists { index_capacity } else { 4 };
         let words = (lights as u64).div_ceil(32);
-        let raster = culling == Culling::Rasterised;
         let proxy_bytes = sized(raster, proxy_bytes(grid, lights));
         let copy_of = |label: &str, size: u64, usage: wgpu::BufferUsages| {
             gpu.device.create_buffer(&wgpu::BufferDescriptor {
@@ -278,7 +247,7 @@ impl ClusterBuffers {
             block_sums: storage(
                 gpu,
                 "block sums",
-                sized(lists, n.div_ceil(SCAN_BLOCK as u64) * 4),
+                sized(lists, n.div_ceil(crate::compose::SCAN_BLOCK as u64) * 4),
             ),
             indices: storage(gpu, "light indices", index_capacity as u64 * 4),
             stats: storage(
@@ -301,7 +270,7 @@ impl ClusterBuffers {
             depth_masks: storage(
                 gpu,
                 "depth masks",
-                sized(culling == Culling::DepthMask, n * 4),
+                sized(culling.marks_depth_cells(), n * 4),
             ),
             light_order: storage(gpu, "light order", sized(zbin, lights as u64 * 4)),
             bin_ranges: storage(gpu, "bin ranges", sized(zbin, grid.2 as u64 * 8)),
@@ -354,10 +323,10 @@ impl ClusterBuffers {
                     })
                     .create_view(&Default::default())
             }),
-            big_tiles,
             grid,
             lights,
             culling,
+            method,
         }
     }
 
@@ -397,16 +366,10 @@ impl ClusterBuffers {
         .sum()
     }
 
-    /// Clear the long lists' workgroup and job counts (the header's x and fourth word).
-    pub fn clear_long_lists(&self, encoder: &mut wgpu::CommandEncoder) {
-        encoder.clear_buffer(&self.sort_jobs, 0, Some(4));
-        encoder.clear_buffer(&self.sort_jobs, 12, Some(4));
-    }
-
     /// Replace the index buffer with one of `capacity` entries (bind groups must be remade).
     pub fn grow_indices(&mut self, gpu: &Gpu, capacity: u32) {
         self.indices = storage(gpu, "light indices", capacity as u64 * 4);
-        if self.culling == Culling::Rasterised {
+        if self.method == Method::Rasterised {
             self.bin_pairs = storage(gpu, "binned pairs", capacity as u64 * PAIR_BYTES);
         }
         self.index_capacity = capacity;
@@ -468,12 +431,12 @@ impl ClusterBuffers {
     /// Each cluster's samples as the GPU holds them (zero without sample bounds).
     pub fn read_depth_masks(&self, gpu: &Gpu) -> Result<Vec<GpuDepthMask>, GpuError> {
         let n = self.clusters as u64;
-        if self.culling == Culling::ZBinning {
+        if !self.method.builds_lists() {
             return Ok(vec![GpuDepthMask::default(); n as usize]);
         }
         let depths = read_buffer(gpu, &self.sample_depths, 0, n * 8)?;
         let depths: &[u32] = bytemuck::cast_slice(&depths);
-        let masks = if self.culling == Culling::DepthMask {
+        let masks = if self.culling.marks_depth_cells() {
             bytemuck::cast_slice(&read_buffer(gpu, &self.depth_masks, 0, n * 4)?).to_vec()
         } else {
             vec![0u32; n as usize]
@@ -512,7 +475,7 @@ impl ClusterBuffers {
 
     /// Lights in each cluster's list (z-binning: lights a pixel of each tile and bin walks).
     pub fn read_counts(&self, gpu: &Gpu) -> Result<Vec<u32>, GpuError> {
-        if self.culling == Culling::ZBinning {
+        if !self.method.builds_lists() {
             return Ok(self.read_zbins(gpu)?.counts());
         }
         let n = self.clusters as u64 * 4;
@@ -521,7 +484,7 @@ impl ClusterBuffers {
 
     /// The light lists as the GPU holds them (z-binning: each tile and bin's walk, sorted).
     pub fn read_lists(&self, gpu: &Gpu) -> Result<ClusterLists, GpuError> {
-        if self.culling == Culling::ZBinning {
+        if !self.method.builds_lists() {
             return Ok(self.read_zbins(gpu)?.lists());
         }
         let n = self.clusters as u64 * 4;

@@ -3,16 +3,22 @@
 //!
 //! The renderer keeps the resources and the frame loop. What each pass does (entry points,
 //! pipelines, attachments, dispatch) lives with its family: `raster`, `screen`,
-//! `clustering`, `post`. Bind group layouts come from each composed pass's naga module
-//! (`reflect`); which buffer or image fills a slot is `FrameResources::scene_binding`.
+//! `clustering` (light assignment one unit per method, `culling`), `post`. Bind group
+//! layouts come from each composed pass's naga module (`reflect`, `built`); which buffer or
+//! image fills a slot is `FrameResources::scene_binding`. What a frame must fit is
+//! `limits`, what it leaves to read back `readback`.
 
+mod built;
 mod clustering;
 mod clusters;
+mod culling;
 mod gbuffer;
+mod limits;
 mod lists;
 mod passes;
 mod post;
 mod raster;
+mod readback;
 mod reflect;
 mod resources;
 mod screen;
@@ -28,14 +34,12 @@ pub use truth::raster_truth;
 use std::time::Instant;
 
 use crate::compose::{self, ComposedPass, Composer, FramePlan, Pass, PassId, ShaderError};
-use crate::cpu::clusters::ClusterLists;
 use crate::gpu::{Gpu, GpuError, TimestampSlot, Timings, read_texture};
 use crate::scene::Scene;
-use crate::variant::{Assignment, DepthRangeSource, Pipeline, Variant, ZSlicing};
+use crate::variant::{Assignment, DepthRangeSource, Variant, ZSlicing};
+use built::{BuiltPass, Pipelines};
 use lists::CpuAssignment;
-use passes::ComputePipelines;
 use post::PostChain;
-use reflect::PassLayout;
 use resources::FrameResources;
 
 /// Why a frame could not be rendered.
@@ -73,23 +77,6 @@ pub struct FrameOutput {
     pub skipped: Vec<String>,
 }
 
-/// The pipelines of a built pass.
-enum Pipelines {
-    /// Render pipelines, drawn in order.
-    Render(Vec<wgpu::RenderPipeline>),
-    Compute(ComputePipelines),
-    /// Light assignment by rasterised binning: compute passes and the two draws.
-    Binning(ComputePipelines, clustering::BinningPipelines),
-}
-
-/// A pass ready to encode: its layout (read off its module), pipelines and bind groups.
-struct BuiltPass {
-    pass: Pass,
-    layout: PassLayout,
-    pipelines: Pipelines,
-    groups: Vec<Option<wgpu::BindGroup>>,
-}
-
 /// A variant ready to render a scene: composed passes, pipelines and resources.
 pub struct Renderer<'g> {
     gpu: &'g Gpu,
@@ -122,8 +109,8 @@ pub struct Renderer<'g> {
     fresh_pipelines: u32,
     /// Features set by the scene rather than the variant (spots, textures).
     frame_features: Vec<(&'static str, bool)>,
-    /// The clustered twin naive forward counts on, once made (see `prepare_counting`).
-    naive_twin: Option<Box<Renderer<'g>>>,
+    /// The clustered stand-in naive forward counts on, once made (see `prepare_counting`).
+    naive_stand_in: Option<Box<Renderer<'g>>>,
 }
 
 /// What this renderer's frames may leave out (all false when the variant skips nothing).
@@ -141,27 +128,6 @@ struct Skips {
     on: bool,
 }
 
-/// Variant values whose valid range depends on the scene's camera.
-fn check_for_scene(variant: &Variant, scene: &Scene) -> Result<(), RenderError> {
-    if variant.pipeline.is_clustered()
-        && let crate::common::ZSlicing::NearSliceThenExponential { near_slice_end } =
-            variant.clusters().slicing
-    {
-        let (near, far) = (scene.camera.near, scene.camera.far);
-        let end = near_slice_end as f64;
-        if !(end > near && end < far) {
-            return Err(RenderError::VariantForScene {
-                field: "clusters.slicing.near_slice_end".into(),
-                message: format!(
-                    "is {near_slice_end}; on scene `{}` it must lie between the camera's near and far planes, {} < value < {}",
-                    scene.name, near as f32, far as f32
-                ),
-            });
-        }
-    }
-    Ok(())
-}
-
 /// How a frame reports the spot cone it left out of its light loops.
 pub const SPOT_CONE: &str = "spot_cone";
 
@@ -173,7 +139,7 @@ struct FrameRun {
 }
 
 /// The composed passes of a plan: each timed pass once (depth_range may run twice; one
-/// pipeline serves both), with its instrumented twin when it shades.
+/// pipeline serves both), with its instrumented version when it shades.
 type Composed = Vec<(Pass, ComposedPass, Option<ComposedPass>)>;
 
 impl<'g> Renderer<'g> {
@@ -188,7 +154,7 @@ impl<'g> Renderer<'g> {
     }
 
     /// `count_every_light`: the instrumented passes count every light per fragment (the
-    /// counting twin of naive forward, see `prepare_counting`).
+    /// clustered stand-in of naive forward, see `prepare_counting`).
     fn build_renderer(
         gpu: &'g Gpu,
         composer: &Composer,
@@ -197,52 +163,7 @@ impl<'g> Renderer<'g> {
         count_every_light: bool,
     ) -> Result<Self, RenderError> {
         let (width, height) = (scene.params.width, scene.params.height);
-        gpu.check_size(width, height)?;
-        gpu.check_scene(scene)?;
-        if variant.pipeline.is_clustered() {
-            gpu.check_grid(variant.clusters().grid)?;
-            match variant.clusters().culling {
-                crate::variant::Culling::ZBinning => {
-                    clusters::check_zbinning(gpu, variant.clusters().grid, scene.lights.len())?
-                }
-                crate::variant::Culling::Rasterised => {
-                    clusters::check_rasterised(gpu, variant.clusters().grid, scene.lights.len())?
-                }
-                _ => {}
-            }
-        }
-        check_for_scene(variant, scene)?;
-        // Every pipeline but scissor deferred loops over up to all the lights per pixel; a
-        // walk through light bitmasks (z-binning's light loop, two-level culling's clusters)
-        // also loops once per 32-bit word of them, and two-level culling once per word of
-        // their summary.
-        let c = variant.clusters();
-        let mask_words = |n: usize| match variant.pipeline.is_clustered() {
-            true if c.big_tiles.is_some() => n.div_ceil(32) + n.div_ceil(1024) + 2,
-            true if c.culling == crate::variant::Culling::ZBinning => n.div_ceil(32) + 1,
-            _ => 0,
-        };
-        if let Some(limit) = crate::gpu::expect::max_lights_per_pixel(gpu)
-            && variant.pipeline != Pipeline::DeferredScissor
-            && scene.lights.len() + mask_words(scene.lights.len()) > limit as usize
-        {
-            let limit = limit as usize;
-            let most = (0..=limit)
-                .rev()
-                .find(|&n| n + mask_words(n) <= limit)
-                .unwrap_or(0);
-            return Err(RenderError::Gpu(GpuError::TooLarge(format!(
-                "{} lights: adapter `{}` ends a shader's loops after {} iterations in all, so a light loop over more than {most} lights{} would leave lights out without a word; use at most {most} lights on this adapter, or scissor deferred",
-                scene.lights.len(),
-                gpu.adapter.name,
-                crate::gpu::expect::LLVMPIPE_LOOP_ITERATIONS,
-                if mask_words(1) > 0 {
-                    " and their bitmask words"
-                } else {
-                    ""
-                }
-            ))));
-        }
+        limits::check_frame(gpu, variant, scene)?;
         let still_camera = scene.camera == scene.prev_camera;
         let plan = compose::plan(variant, still_camera);
         let skips = Skips {
@@ -251,19 +172,12 @@ impl<'g> Renderer<'g> {
             no_spots: variant.skip_unneeded && !scene.lights.iter().any(|l| l.is_spot()),
             on: variant.skip_unneeded,
         };
-        // A scene without spots needs no cone in its light loops: on a software rasteriser,
-        // which runs both sides of a branch, the cone costs point lights about half again.
-        let frame = [
-            ("spot_lights", !skips.no_spots),
-            ("base_color_texture", scene.textures.is_some()),
-        ];
-        let frame_features = frame.to_vec();
-        let instrumented_frame = [
-            frame[0],
-            frame[1],
-            ("stats", true),
-            ("count_every_light", count_every_light),
-        ];
+        let frame = compose::frame_features(!skips.no_spots, scene.textures.is_some(), None);
+        let instrumented_frame = compose::frame_features(
+            !skips.no_spots,
+            scene.textures.is_some(),
+            Some(count_every_light),
+        );
         let mut composed: Composed = Vec::new();
         for p in &plan.passes {
             if composed.iter().any(|(q, _, _)| q.id == p.id) {
@@ -314,8 +228,8 @@ impl<'g> Renderer<'g> {
             drew_without_lights: false,
             last_frame_countable: false,
             fresh_pipelines: 0,
-            frame_features,
-            naive_twin: None,
+            frame_features: frame.clone(),
+            naive_stand_in: None,
         };
         gpu.scoped("creating pipelines", || -> Result<(), RenderError> {
             for (pass, timed, _) in &composed {
@@ -343,91 +257,6 @@ impl<'g> Renderer<'g> {
             renderer.cpu_assignment = Some(CpuAssignment::new(variant, scene));
         }
         Ok(renderer)
-    }
-
-    /// Pipelines and bind groups of one pass (None for post passes: the chain has them).
-    fn build(
-        &self,
-        pass: Pass,
-        composed: &ComposedPass,
-        instrumented: bool,
-    ) -> Result<Option<BuiltPass>, RenderError> {
-        let gpu = self.gpu;
-        let layout = PassLayout::of(gpu, composed)?;
-        let l = &layout.pipeline;
-        let pipelines = match pass.id {
-            PassId::Raster(p) => Pipelines::Render(raster::pipelines(
-                gpu,
-                p,
-                composed,
-                l,
-                &self.variant,
-                instrumented,
-            )?),
-            PassId::Screen(p) => Pipelines::Render(screen::pipelines(gpu, p, composed, l)?),
-            PassId::Clustering(p) => {
-                let culling = self.variant.clusters().culling;
-                let compute = ComputePipelines::new(
-                    gpu,
-                    composed,
-                    l,
-                    clustering::entries(p, culling, self.variant.clusters().big_tiles.is_some()),
-                )?;
-                if p == compose::ClusterPass::LightAssign
-                    && culling == crate::variant::Culling::Rasterised
-                {
-                    Pipelines::Binning(
-                        compute,
-                        clustering::BinningPipelines::new(gpu, composed, l)?,
-                    )
-                } else {
-                    Pipelines::Compute(compute)
-                }
-            }
-            PassId::Post(_) => return Ok(None),
-        };
-        let groups = self.bind(pass.id, &layout)?;
-        Ok(Some(BuiltPass {
-            pass,
-            layout,
-            pipelines,
-            groups,
-        }))
-    }
-
-    /// The bind groups of pass `id` with `layout`, filled from the frame's resources.
-    fn bind(
-        &self,
-        id: PassId,
-        layout: &PassLayout,
-    ) -> Result<Vec<Option<wgpu::BindGroup>>, RenderError> {
-        let shaded = &self.post.output(&self.res.targets.hdr).view;
-        layout.bind_groups(self.gpu, id.name(), |group, binding| match id {
-            PassId::Screen(p) => screen::binding(p, group, binding, &self.res, shaded),
-            _ => self.res.scene_binding(group, binding),
-        })
-    }
-
-    /// Make every pass's bind groups again (after a buffer they bind was replaced).
-    fn remake_groups(&mut self) -> Result<(), RenderError> {
-        let mut all = Vec::new();
-        for b in self
-            .timed
-            .iter()
-            .chain(&self.instrumented)
-            .chain(&self.support)
-        {
-            all.push(self.bind(b.pass.id, &b.layout)?);
-        }
-        let built = self
-            .timed
-            .iter_mut()
-            .chain(&mut self.instrumented)
-            .chain(&mut self.support);
-        for (b, groups) in built.zip(all) {
-            b.groups = groups;
-        }
-        Ok(())
     }
 
     /// What the clustering passes dispatch over.
@@ -494,7 +323,7 @@ impl<'g> Renderer<'g> {
             skipped.push(PassId::Post(compose::PostPass::BloomBlur).name().into());
         }
         let wall_ms = start.elapsed().as_secs_f64() * 1e3;
-        let hdr = read_hdr(self.gpu, &self.post.output(&self.res.targets.hdr).texture)?;
+        let hdr = readback::read_hdr(self.gpu, &self.post.output(&self.res.targets.hdr).texture)?;
         let ldr = read_texture(self.gpu, &self.res.targets.ldr.texture, 4)?;
         Ok(FrameOutput {
             width: self.width,
@@ -643,116 +472,4 @@ impl<'g> Renderer<'g> {
             _ => {}
         }
     }
-
-    /// Debug view `view` of the last frame, drawn from its depth and light lists by the
-    /// debug pass alone (the same image a whole frame of the variant with that view shows;
-    /// post effects, which a debug view leaves out, change neither). 8-bit RGBA, row-major.
-    pub fn debug_image(
-        &self,
-        composer: &Composer,
-        view: crate::variant::DebugView,
-    ) -> Result<Vec<[u8; 4]>, RenderError> {
-        let gpu = self.gpu;
-        let mut v = self.variant.clone();
-        v.debug_view = view;
-        v.post = Default::default();
-        let id = PassId::Screen(compose::ScreenPass::DebugView);
-        let Some(pass) = compose::passes(&v).into_iter().find(|p| p.id == id) else {
-            return Err(RenderError::Reflection(format!(
-                "variant has no debug pass for view {view:?}"
-            )));
-        };
-        let composed = composer.compose_with(&v, &pass, &self.frame_features)?;
-        gpu.scoped("drawing a debug view", || -> Result<(), RenderError> {
-            let layout = PassLayout::of(gpu, &composed)?;
-            let pipelines = screen::pipelines(
-                gpu,
-                compose::ScreenPass::DebugView,
-                &composed,
-                &layout.pipeline,
-            )?;
-            let groups = layout.bind_groups(gpu, id.name(), |g, b| self.res.scene_binding(g, b))?;
-            let mut e = gpu.device.create_command_encoder(&Default::default());
-            screen::encode(
-                compose::ScreenPass::DebugView,
-                &pipelines,
-                &groups,
-                &mut e,
-                None,
-                &self.res,
-            );
-            gpu.queue.submit([e.finish()]);
-            Ok(())
-        })??;
-        let ldr = read_texture(gpu, &self.res.targets.ldr.texture, 4)?;
-        Ok(bytemuck::cast_slice(&ldr).to_vec())
-    }
-
-    /// The shading pass's HDR image of the last frame, before post-processing.
-    pub fn read_shaded(&self) -> Result<Vec<[f32; 4]>, RenderError> {
-        Ok(read_hdr(self.gpu, &self.res.targets.hdr.texture)?)
-    }
-
-    /// The light lists as the GPU holds them after the last frame (clustered variants).
-    pub fn cluster_lists(&self) -> Result<Option<ClusterLists>, RenderError> {
-        match &self.res.clusters {
-            Some(c) => Ok(Some(c.read_lists(self.gpu)?)),
-            None => Ok(None),
-        }
-    }
-
-    /// The cluster boxes after the last frame (clustered variants): [min, max] per cluster.
-    pub fn cluster_bounds(&self) -> Result<Option<Vec<[[f32; 4]; 2]>>, RenderError> {
-        match &self.res.clusters {
-            Some(c) => Ok(Some(c.read_bounds(self.gpu)?)),
-            None => Ok(None),
-        }
-    }
-
-    /// Each cluster's sample depth range and 2.5D mask after the last frame (clustered
-    /// variants; see `ClusterBuffers::read_depth_masks`).
-    pub fn depth_masks(&self) -> Result<Option<Vec<GpuDepthMask>>, RenderError> {
-        match &self.res.clusters {
-            Some(c) => Ok(Some(c.read_depth_masks(self.gpu)?)),
-            None => Ok(None),
-        }
-    }
-
-    /// Z-binning's sorted lights, bins and tile masks after the last frame (None for other
-    /// pipelines and culling methods).
-    pub fn zbins(&self) -> Result<Option<crate::cpu::zbin::ZBins>, RenderError> {
-        match &self.res.clusters {
-            Some(c) if c.culling == crate::variant::Culling::ZBinning => {
-                Ok(Some(c.read_zbins(self.gpu)?))
-            }
-            _ => Ok(None),
-        }
-    }
-
-    /// The depth buffer of the last frame (read it with `twins::gpu_depth_samples`).
-    pub fn depth_texture(&self) -> &wgpu::Texture {
-        &self.res.targets.depth.texture
-    }
-
-    /// The clustered depth range after the last frame (clustered variants).
-    pub fn cluster_range(&self) -> Result<Option<ClusterRange>, RenderError> {
-        match &self.res.clusters {
-            Some(c) => Ok(Some(c.read_range(self.gpu)?)),
-            None => Ok(None),
-        }
-    }
-}
-
-/// Read an HDR target (rgba32float or rgba16float) as f32.
-fn read_hdr(gpu: &Gpu, texture: &wgpu::Texture) -> Result<Vec<[f32; 4]>, GpuError> {
-    Ok(match texture.format() {
-        wgpu::TextureFormat::Rgba16Float => {
-            let bytes = read_texture(gpu, texture, 8)?;
-            bytemuck::cast_slice::<u8, [u16; 4]>(&bytes)
-                .iter()
-                .map(|p| p.map(|h| half::f16::from_bits(h).to_f32()))
-                .collect()
-        }
-        _ => bytemuck::cast_slice(&read_texture(gpu, texture, 16)?).to_vec(),
-    })
 }

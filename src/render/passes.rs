@@ -107,20 +107,23 @@ pub fn render_pipeline(
     })
 }
 
-/// The compute pipelines of a pass, one per entry point, sharing its layout.
-pub struct ComputePipelines(Vec<(&'static str, wgpu::ComputePipeline)>);
+/// The compute pipelines of a pass, one per entry point, sharing its layout, each with its
+/// workgroup size as the pass's naga module states it.
+pub struct ComputePipelines(Vec<(String, [u32; 3], wgpu::ComputePipeline)>);
 
 impl ComputePipelines {
+    /// Pipelines of the named compute entry points of `pass`.
     pub fn new(
         gpu: &Gpu,
         pass: &ComposedPass,
         layout: &wgpu::PipelineLayout,
-        entries: &[&'static str],
+        entries: &[&str],
     ) -> Result<Self, GpuError> {
         let module = shader_module(gpu, pass)?;
         let pipelines = entries
             .iter()
             .map(|&entry| {
+                let size = workgroup_size(pass, entry);
                 let key = format!("{}\0{entry}", pass.wgsl);
                 let pipeline = gpu.compute_pipeline(&pass.name, key, || {
                     gpu.device
@@ -133,20 +136,55 @@ impl ComputePipelines {
                             cache: None,
                         })
                 })?;
-                Ok((entry, pipeline))
+                Ok((entry.to_string(), size, pipeline))
             })
             .collect::<Result<_, GpuError>>()?;
         Ok(Self(pipelines))
     }
 
+    /// Pipelines of every compute entry point the composed pass holds (its features leave
+    /// only those its variant runs).
+    pub fn all(
+        gpu: &Gpu,
+        pass: &ComposedPass,
+        layout: &wgpu::PipelineLayout,
+    ) -> Result<Self, GpuError> {
+        let entries: Vec<&str> = pass
+            .module
+            .entry_points
+            .iter()
+            .filter(|e| e.stage == naga::ShaderStage::Compute)
+            .map(|e| e.name.as_str())
+            .collect();
+        Self::new(gpu, pass, layout, &entries)
+    }
+
     /// The pipeline of `entry`, one of those it was made with.
     pub fn get(&self, entry: &str) -> &wgpu::ComputePipeline {
+        &self.find(entry).2
+    }
+
+    /// The workgroups that cover `threads` invocations of `entry` (at least one a side).
+    pub fn groups_for(&self, entry: &str, threads: [u32; 3]) -> [u32; 3] {
+        let size = self.find(entry).1;
+        [0, 1, 2].map(|i| threads[i].div_ceil(size[i]).max(1))
+    }
+
+    fn find(&self, entry: &str) -> &(String, [u32; 3], wgpu::ComputePipeline) {
         self.0
             .iter()
-            .find(|(e, _)| *e == entry)
-            .map(|(_, p)| p)
+            .find(|(e, _, _)| e == entry)
             .unwrap_or_else(|| panic!("no compute pipeline for entry point `{entry}`"))
     }
+}
+
+/// The workgroup size of compute entry point `entry` of `pass`, from its naga module.
+fn workgroup_size(pass: &ComposedPass, entry: &str) -> [u32; 3] {
+    pass.module
+        .entry_points
+        .iter()
+        .find(|e| e.name == entry && e.stage == naga::ShaderStage::Compute)
+        .map_or([1, 1, 1], |e| e.workgroup_size)
 }
 
 /// A colour target without blending.

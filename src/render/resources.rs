@@ -372,7 +372,7 @@ impl FrameResources {
                 .max(1024)
                 .min(bindable) as u32;
             let range = super::ClusterRange::new(scene.camera.near as f32, scene.camera.far as f32);
-            super::ClusterBuffers::new(gpu, c.grid, lights, capacity, range, c.culling, c.big_tiles)
+            super::ClusterBuffers::new(gpu, &c, lights, capacity, range)
         });
         Self {
             scene: SceneBuffers::upload(gpu, scene, depth.mapping),

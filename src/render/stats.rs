@@ -77,26 +77,26 @@ struct ShadingCounts {
 }
 
 impl<'g> Renderer<'g> {
-    /// Make naive forward's counting twin, so that `stats` counts on it: a clustered
+    /// Make naive forward's clustered stand-in, so that `stats` counts on it: a clustered
     /// renderer with the same rasterisation (pre-pass or not, depth format and test, vertex
     /// shader), exact light lists, and shading that counts every light as evaluated per
     /// fragment and tests only the lights of its list for range. Exact lists hold every
     /// light in range of a fragment, so the useful count is naive forward's own, at a small
     /// part of the cost of looping over every light (`tests/measure.rs` holds them equal).
-    /// Nothing to do for other pipelines; a twin that cannot be made (its cluster buffers
+    /// Nothing to do for other pipelines; a stand-in that cannot be made (its cluster buffers
     /// over a limit) leaves naive forward counting on its own frame: slower, as exact.
     pub fn prepare_counting(&mut self, composer: &Composer, scene: &Scene) {
-        if self.variant.pipeline != Pipeline::NaiveForward || self.naive_twin.is_some() {
+        if self.variant.pipeline != Pipeline::NaiveForward || self.naive_stand_in.is_some() {
             return;
         }
-        let twin = Variant {
+        let stand_in = Variant {
             pipeline: Pipeline::ClusteredForward,
             clusters: Some(Clusters::default()),
             post: Default::default(),
             debug_view: DebugView::Off,
             ..self.variant.clone()
         };
-        self.naive_twin = Renderer::build_renderer(self.gpu, composer, &twin, scene, true)
+        self.naive_stand_in = Renderer::build_renderer(self.gpu, composer, &stand_in, scene, true)
             .ok()
             .map(Box::new);
     }
@@ -121,11 +121,11 @@ impl<'g> Renderer<'g> {
     }
 
     /// Render the frame again with instrumented shading and return its exact counters
-    /// (naive forward's shading counters on its twin, once `prepare_counting` made it).
+    /// (naive forward's shading counters on its stand-in, once `prepare_counting` made it).
     pub fn stats(&mut self) -> Result<FrameStats, RenderError> {
         let gpu = self.gpu;
-        let counts = match &mut self.naive_twin {
-            Some(twin) => twin.count_shading()?,
+        let counts = match &mut self.naive_stand_in {
+            Some(stand_in) => stand_in.count_shading()?,
             None => self.count_shading()?,
         };
         let mut stats = FrameStats {
@@ -175,7 +175,7 @@ impl<'g> Renderer<'g> {
             visible.sort_unstable();
             visible.dedup();
             let counts = c.read_counts(gpu)?;
-            if c.culling == crate::variant::Culling::ZBinning {
+            if !c.method.builds_lists() {
                 // No lists on the GPU: each tile and bin's walk stands for one.
                 stats.light_list_entries = counts.iter().map(|&n| n as u64).sum();
                 stats.max_lights_per_cluster = counts.iter().copied().max().unwrap_or(0);

@@ -265,7 +265,7 @@ fn run_set(
         for total in NORMAL_BITS {
             let codec = kind.with_bits(total);
             let (gpu_codes, gpu_decoded) =
-                crate::twins::gpu_codec_round_trip(gpu, composer, codec, &gpu_in)?;
+                crate::kernels::gpu_codec_round_trip(gpu, composer, codec, &gpu_in)?;
             let (cpu_codes, cpu_decoded) = cpu_round_trip(codec, &cpu_in);
             let differing = gpu_codes
                 .iter()

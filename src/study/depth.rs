@@ -243,7 +243,7 @@ pub fn run(
         let variant = setup.variant();
         let mut renderer = Renderer::new(gpu, composer, &variant, &scene)?;
         renderer.render()?;
-        let samples = crate::twins::gpu_depth_samples(
+        let samples = crate::kernels::gpu_depth_samples(
             gpu,
             composer,
             &variant,

@@ -189,6 +189,61 @@ pub enum Culling {
     Rasterised,
 }
 
+/// How light assignment on the GPU reaches the clusters: the method a variant's `culling`
+/// and `big_tiles` choose (`Clusters::method`). Each has its shader root
+/// (`compose::passes`) and its unit in `render/culling/`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum CullingMethod {
+    /// A workgroup per light counts the clusters it touches, a prefix sum, a second walk
+    /// fills the lists, each list sorted (`Boxes` or `DepthMask` without big tiles).
+    OneLevel,
+    /// Big tiles of `big_tile` x `big_tile` tiles: a coarse pass per light, then each
+    /// cluster walks its big tile's survivors (`big_tiles`).
+    TwoLevel { big_tile: u32 },
+    /// Lights sorted by depth into bins, a bitmask per tile; no lists.
+    ZBinning,
+    /// Light proxies drawn into a one-pixel-per-tile target.
+    Rasterised,
+}
+
+impl Culling {
+    /// Whether marking also records each cluster's depth cells (2.5D culling's masks).
+    pub fn marks_depth_cells(self) -> bool {
+        match self {
+            Culling::DepthMask => true,
+            Culling::Boxes | Culling::ZBinning | Culling::Rasterised => false,
+        }
+    }
+}
+
+impl CullingMethod {
+    /// Whether it builds per-cluster lists (and boxes to test them on); z-binning walks bins
+    /// and tile masks instead.
+    pub fn builds_lists(self) -> bool {
+        match self {
+            CullingMethod::OneLevel
+            | CullingMethod::TwoLevel { .. }
+            | CullingMethod::Rasterised => true,
+            CullingMethod::ZBinning => false,
+        }
+    }
+}
+
+impl Clusters {
+    /// The method these clusters' lights are assigned by. Every `Culling` has its arm: a
+    /// new one does not compile until it says which method builds its lists.
+    pub fn method(&self) -> CullingMethod {
+        match self.culling {
+            Culling::Boxes | Culling::DepthMask => match self.big_tiles {
+                Some(big_tile) => CullingMethod::TwoLevel { big_tile },
+                None => CullingMethod::OneLevel,
+            },
+            Culling::ZBinning => CullingMethod::ZBinning,
+            Culling::Rasterised => CullingMethod::Rasterised,
+        }
+    }
+}
+
 /// Where light lists are built.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
 pub enum Assignment {
@@ -438,7 +493,10 @@ impl Default for MotionBlur {
 }
 
 /// Diagnostic views that replace the shaded image.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
+#[derive(
+    Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, JsonSchema, strum::IntoStaticStr,
+)]
+#[strum(serialize_all = "kebab-case")]
 pub enum DebugView {
     /// The shaded image.
     Off,
@@ -449,6 +507,7 @@ pub enum DebugView {
     /// Each z-slice in its own colour (clustered pipelines).
     ZSlice,
     /// One G-buffer channel (deferred pipelines).
+    #[strum(serialize = "gbuffer")]
     GBuffer {
         /// Which channel.
         channel: GBufferChannel,
@@ -456,7 +515,19 @@ pub enum DebugView {
 }
 
 /// G-buffer channels a debug view can show.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
+#[derive(
+    Clone,
+    Copy,
+    Debug,
+    PartialEq,
+    Eq,
+    Serialize,
+    Deserialize,
+    JsonSchema,
+    strum::IntoStaticStr,
+    strum::EnumIter,
+)]
+#[strum(serialize_all = "kebab-case")]
 pub enum GBufferChannel {
     /// World position (fractional part of each coordinate).
     Position,
@@ -466,4 +537,41 @@ pub enum GBufferChannel {
     Albedo,
     /// Linear view depth.
     Depth,
+}
+
+impl DebugView {
+    /// Every view, `Off` first, each G-buffer channel its own.
+    pub fn every() -> Vec<DebugView> {
+        use strum::IntoEnumIterator;
+        // A new view joins the list: without its arm here this does not compile.
+        let _every_arm = |v: DebugView| match v {
+            DebugView::Off
+            | DebugView::ClusterIndex
+            | DebugView::LightsPerCluster
+            | DebugView::ZSlice
+            | DebugView::GBuffer { .. } => (),
+        };
+        let plain = [
+            DebugView::Off,
+            DebugView::ClusterIndex,
+            DebugView::LightsPerCluster,
+            DebugView::ZSlice,
+        ];
+        let channels = GBufferChannel::iter().map(|channel| DebugView::GBuffer { channel });
+        plain.into_iter().chain(channels).collect()
+    }
+
+    /// The command-line name: `lights-per-cluster`, `gbuffer-normal`.
+    pub fn name(self) -> String {
+        let view: &str = self.into();
+        match self {
+            DebugView::GBuffer { channel } => format!("{view}-{}", <&str>::from(channel)),
+            _ => view.to_string(),
+        }
+    }
+
+    /// The view of a command-line name.
+    pub fn named(name: &str) -> Option<DebugView> {
+        DebugView::every().into_iter().find(|v| v.name() == name)
+    }
 }

@@ -1,7 +1,11 @@
-//! Helpers shared by the GPU tests.
-#![allow(dead_code)]
+//! Helpers every test module shares: the GPU, variants and small scenes, one cell, a
+//! scratch folder, and the command-line runner.
 
-use std::path::Path;
+use std::ffi::OsStr;
+use std::io::Read;
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::time::{Duration, Instant};
 
 use clusterlab::compose::Composer;
 use clusterlab::gpu::Gpu;
@@ -62,6 +66,158 @@ pub fn copy_tree(from: &Path, to: &Path) {
             copy_tree(&entry.path(), &target);
         } else {
             std::fs::copy(entry.path(), target).unwrap();
+        }
+    }
+}
+
+/// A fresh, empty folder under the temporary folder for the calling test file's `name`
+/// (the file's name and this process's id keep test files and concurrent runs apart).
+#[track_caller]
+pub fn scratch(name: &str) -> PathBuf {
+    let file = Path::new(std::panic::Location::caller().file());
+    // A module's `mod.rs` goes by its folder's name.
+    let named = if file.file_stem() == Some(OsStr::new("mod")) {
+        file.parent().and_then(Path::file_name)
+    } else {
+        file.file_stem()
+    };
+    let group = named.and_then(OsStr::to_str).unwrap_or("test");
+    let dir =
+        std::env::temp_dir().join(format!("clusterlab-{group}-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("scratch folder");
+    dir
+}
+
+/// The binary the command-line tests run: the one cargo built with them, or the one
+/// `CLUSTERLAB_UNDER_TEST` names (to show which checks an older build fails).
+pub fn binary() -> PathBuf {
+    std::env::var_os("CLUSTERLAB_UNDER_TEST")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| PathBuf::from(env!("CARGO_BIN_EXE_clusterlab")))
+}
+
+/// Longest a run may take before it counts as a hang (a pipe read, a device read whole).
+pub const HANG: Duration = Duration::from_secs(180);
+
+/// A command line of the binary under test.
+pub struct Cli(Command);
+
+/// What a run printed and how it ended.
+pub struct Ran {
+    /// The exit code; `None` when a signal ended it.
+    pub code: Option<i32>,
+    pub stdout: String,
+    pub stderr: String,
+}
+
+impl Ran {
+    /// Everything it printed: standard output, then standard error.
+    pub fn printed(&self) -> String {
+        format!("{}{}", self.stdout, self.stderr)
+    }
+
+    /// Whether it exited with 0, and everything printed.
+    pub fn succeeded(self) -> (bool, String) {
+        let printed = self.printed();
+        (self.code == Some(0), printed)
+    }
+
+    /// The exit code and everything printed.
+    pub fn outcome(self) -> (Option<i32>, String) {
+        let printed = self.printed();
+        (self.code, printed)
+    }
+}
+
+/// `clusterlab ARGS`, in the current folder, standard input closed.
+pub fn cli<S: AsRef<OsStr>>(args: impl IntoIterator<Item = S>) -> Cli {
+    let mut command = Command::new(binary());
+    command.args(args).stdin(Stdio::null());
+    Cli(command)
+}
+
+impl Cli {
+    pub fn arg(mut self, arg: impl AsRef<OsStr>) -> Cli {
+        self.0.arg(arg);
+        self
+    }
+
+    /// Set `key` to `value`; an empty value removes it.
+    pub fn env(mut self, key: &str, value: impl AsRef<OsStr>) -> Cli {
+        if value.as_ref().is_empty() {
+            self.0.env_remove(key);
+        } else {
+            self.0.env(key, value);
+        }
+        self
+    }
+
+    pub fn envs<'a>(self, env: impl IntoIterator<Item = &'a (&'a str, &'a str)>) -> Cli {
+        env.into_iter().fold(self, |cli, (k, v)| cli.env(k, v))
+    }
+
+    pub fn dir(mut self, dir: impl AsRef<Path>) -> Cli {
+        self.0.current_dir(dir);
+        self
+    }
+
+    /// Started, not waited for (a run a test interrupts), its standard output dropped and
+    /// its standard error piped for the test. SIGINT stops it whatever the test inherited:
+    /// a shell starts a background job with SIGINT ignored, and its children would ignore
+    /// it too.
+    pub fn spawn(mut self) -> Child {
+        use std::os::unix::process::CommandExt;
+        // SAFETY: signal() is async-signal-safe, as pre_exec requires.
+        unsafe {
+            self.0.pre_exec(|| {
+                libc::signal(libc::SIGINT, libc::SIG_DFL);
+                Ok(())
+            });
+        }
+        self.0
+            .stdout(Stdio::null())
+            .stderr(Stdio::piped())
+            .spawn()
+            .expect("start clusterlab")
+    }
+
+    /// Run it to the end; still running after `HANG` fails the test. Its output is read
+    /// while it runs, so a long report never blocks it on a full pipe.
+    pub fn run(mut self) -> Ran {
+        let shown = format!("{:?}", self.0);
+        let mut child = self
+            .0
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .expect("start clusterlab");
+        let drain = |pipe: Option<Box<dyn Read + Send>>| {
+            std::thread::spawn(move || {
+                let mut bytes = Vec::new();
+                if let Some(mut pipe) = pipe {
+                    let _ = pipe.read_to_end(&mut bytes);
+                }
+                String::from_utf8_lossy(&bytes).into_owned()
+            })
+        };
+        let stdout = drain(child.stdout.take().map(|p| Box::new(p) as _));
+        let stderr = drain(child.stderr.take().map(|p| Box::new(p) as _));
+        let start = Instant::now();
+        let status = loop {
+            if let Some(status) = child.try_wait().expect("wait for clusterlab") {
+                break status;
+            }
+            if start.elapsed() > HANG {
+                let _ = child.kill();
+                panic!("{shown} hung: still running after {HANG:?}");
+            }
+            std::thread::sleep(Duration::from_millis(20));
+        };
+        Ran {
+            code: status.code(),
+            stdout: stdout.join().expect("stdout"),
+            stderr: stderr.join().expect("stderr"),
         }
     }
 }

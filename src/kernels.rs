@@ -1,5 +1,5 @@
-//! Running the WGSL twins of CPU functions on the GPU over many inputs (test kernels under
-//! `shaders/passes/twin_*.wesl`), so tests can compare both sides.
+//! Test kernels: the shaders' own WGSL functions run on the GPU over many inputs (roots
+//! `shaders/passes/kernel_*.wesl`), so tests can compare them with their CPU twins.
 
 use bytemuck::{Pod, Zeroable};
 use wgpu::util::DeviceExt;
@@ -9,33 +9,6 @@ use crate::cpu::zslice::Slices;
 use crate::gpu::{Gpu, read_buffer};
 use crate::render::RenderError;
 use crate::variant::{Clusters, NormalCodec, Pipeline, Variant};
-
-/// Run entry point `entry` of test kernel `root` once per input (64 a workgroup). Group 0
-/// binds `inputs` (read-only storage) at 0.., then read-write outputs of the given byte
-/// sizes; returns the outputs' bytes.
-pub fn run_kernel(
-    gpu: &Gpu,
-    composer: &Composer,
-    root: &str,
-    entry: &str,
-    invocations: u32,
-    inputs: &[&[u8]],
-    output_sizes: &[u64],
-) -> Result<Vec<Vec<u8>>, RenderError> {
-    // Kernels call functions directly, but every module's flags and constants must still be
-    // defined: take those of the default variant.
-    let inputs: Vec<KernelInput> = inputs.iter().map(|b| KernelInput::Bytes(b)).collect();
-    run_kernel_for(
-        gpu,
-        composer,
-        &Variant::default(),
-        root,
-        entry,
-        invocations,
-        &inputs,
-        output_sizes,
-    )
-}
 
 /// What a kernel reads: a read-only storage buffer, or a depth texture.
 pub enum KernelInput<'a> {
@@ -180,7 +153,7 @@ enum InputResource {
     Texture(wgpu::TextureView),
 }
 
-/// Parameters of the z-slicing kernel. Mirrors `SliceParams` in twin_zslice.wesl.
+/// Parameters of the z-slicing kernel. Mirrors `SliceParams` in kernel_zslice.wesl.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
 struct SliceParams {
@@ -233,7 +206,7 @@ pub fn gpu_zslices(
         gpu,
         composer,
         &variant,
-        "twin_zslice",
+        "kernel_zslice",
         "zslice_main",
         n,
         &[
@@ -311,9 +284,9 @@ fn codec_kernel(
         composer,
         (
             &with_codec(codec),
-            &[("twin_old_acos_polar", old_acos_polar)],
+            &[("kernel_old_acos_polar", old_acos_polar)],
         ),
-        "twin_codecs",
+        "kernel_codecs",
         "codec_main",
         n as u32,
         &[
@@ -353,7 +326,7 @@ pub fn gpu_codec_round_trip(
             gpu,
             composer,
             &variant,
-            "twin_codec_round_trip",
+            "kernel_codec_round_trip",
             "round_trip_main",
             n as u32,
             &[
@@ -392,7 +365,7 @@ pub fn gpu_depth_samples(
         gpu,
         composer,
         variant,
-        "twin_depth",
+        "kernel_depth",
         "depth_main",
         n,
         &[

@@ -4,7 +4,7 @@ use clusterlab::compose::Composer;
 use clusterlab::cpu::normals as cpu;
 use clusterlab::cpu::zslice::Slices;
 use clusterlab::gpu::Gpu;
-use clusterlab::twins::{gpu_codecs, gpu_zslices};
+use clusterlab::kernels::{gpu_codecs, gpu_zslices};
 use clusterlab::variant::{NormalCodec, ZSlicing};
 use glam::DVec3;
 use rand::{Rng, SeedableRng};
@@ -232,7 +232,7 @@ fn the_codec_check_rejects_the_old_acos_polar_encoder() {
     let (as_f32, inputs) = codec_inputs();
     let zeros = vec![[0u32; 2]; inputs.len()];
     let polar = NormalCodec::Polar { bits: 32 };
-    let old = clusterlab::twins::gpu_codecs_old_acos_polar(&gpu, &composer, 16, &as_f32, &zeros)
+    let old = clusterlab::kernels::gpu_codecs_old_acos_polar(&gpu, &composer, 16, &as_f32, &zeros)
         .expect("kernel runs");
     let verdict = check_codes(polar, 16, &inputs, &old.codes);
     eprintln!("old acos encoder: {verdict:?}");

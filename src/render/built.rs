@@ -1,0 +1,102 @@
+//! Passes made ready to encode: each composed pass's layout (read off its naga module), its
+//! pipelines by family, and its bind groups filled from the frame's resources.
+
+use super::culling::{BinningPipelines, Method};
+use super::passes::ComputePipelines;
+use super::reflect::PassLayout;
+use super::{RenderError, Renderer, raster, screen};
+use crate::compose::{self, ComposedPass, Pass, PassId};
+
+/// The pipelines of a built pass.
+pub(super) enum Pipelines {
+    /// Render pipelines, drawn in order.
+    Render(Vec<wgpu::RenderPipeline>),
+    Compute(ComputePipelines),
+    /// Light assignment by rasterised binning: compute passes and the two draws.
+    Binning(ComputePipelines, BinningPipelines),
+}
+
+/// A pass ready to encode: its layout (read off its module), pipelines and bind groups.
+pub(super) struct BuiltPass {
+    pub pass: Pass,
+    pub layout: PassLayout,
+    pub pipelines: Pipelines,
+    pub groups: Vec<Option<wgpu::BindGroup>>,
+}
+
+impl Renderer<'_> {
+    /// Pipelines and bind groups of one pass (None for post passes: the chain has them).
+    pub(super) fn build(
+        &self,
+        pass: Pass,
+        composed: &ComposedPass,
+        instrumented: bool,
+    ) -> Result<Option<BuiltPass>, RenderError> {
+        let gpu = self.gpu;
+        let layout = PassLayout::of(gpu, composed)?;
+        let l = &layout.pipeline;
+        let pipelines = match pass.id {
+            PassId::Raster(p) => Pipelines::Render(raster::pipelines(
+                gpu,
+                p,
+                composed,
+                l,
+                &self.variant,
+                instrumented,
+            )?),
+            PassId::Screen(p) => Pipelines::Render(screen::pipelines(gpu, p, composed, l)?),
+            PassId::Clustering(p) => {
+                let compute = ComputePipelines::all(gpu, composed, l)?;
+                let method = self.variant.clusters().method();
+                if p == compose::ClusterPass::LightAssign && method == Method::Rasterised {
+                    Pipelines::Binning(compute, BinningPipelines::new(gpu, composed, l)?)
+                } else {
+                    Pipelines::Compute(compute)
+                }
+            }
+            PassId::Post(_) => return Ok(None),
+        };
+        let groups = self.bind(pass.id, &layout)?;
+        Ok(Some(BuiltPass {
+            pass,
+            layout,
+            pipelines,
+            groups,
+        }))
+    }
+
+    /// The bind groups of pass `id` with `layout`, filled from the frame's resources.
+    fn bind(
+        &self,
+        id: PassId,
+        layout: &PassLayout,
+    ) -> Result<Vec<Option<wgpu::BindGroup>>, RenderError> {
+        let shaded = &self.post.output(&self.res.targets.hdr).view;
+        layout.bind_groups(self.gpu, id.name(), |group, binding| match id {
+            PassId::Screen(p) => screen::binding(p, group, binding, &self.res, shaded),
+            _ => self.res.scene_binding(group, binding),
+        })
+    }
+
+    /// Make every pass's bind groups again (after a buffer they bind was replaced).
+    pub(super) fn remake_groups(&mut self) -> Result<(), RenderError> {
+        let mut all = Vec::new();
+        for b in self
+            .timed
+            .iter()
+            .chain(&self.instrumented)
+            .chain(&self.support)
+        {
+            all.push(self.bind(b.pass.id, &b.layout)?);
+        }
+        let built = self
+            .timed
+            .iter_mut()
+            .chain(&mut self.instrumented)
+            .chain(&mut self.support);
+        for (b, groups) in built.zip(all) {
+            b.groups = groups;
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,186 @@
+//! How light assignment builds a frame's light lists: one module per method, each a plan of
+//! its clears and steps (entry points, what they dispatch over, copies, a draw), chosen by
+//! one exhaustive match on the variant's method (`Clusters::method`). The steps run in order
+//! ([`encode`]); workgroup counts come from each entry point's workgroup size in the pass's
+//! naga module.
+
+mod one_level;
+mod rasterised;
+mod two_level;
+mod zbinning;
+
+pub use rasterised::BinningPipelines;
+
+use super::clusters::{ClusterBuffers, DISPATCH_ARGS_BYTES};
+use super::passes::{ComputePipelines, set_compute_groups};
+use crate::compose::LIGHTS_PER_ROW;
+use crate::gpu::{Gpu, GpuError, TimestampSlot};
+
+pub use crate::variant::CullingMethod as Method;
+
+impl Method {
+    /// Refuse a frame of `lights` lights the method's buffers cannot hold.
+    pub fn check(self, gpu: &Gpu, grid: (u32, u32, u32), lights: usize) -> Result<(), GpuError> {
+        match self {
+            Method::OneLevel | Method::TwoLevel { .. } => Ok(()),
+            Method::ZBinning => zbinning::check(gpu, grid, lights),
+            Method::Rasterised => rasterised::check(gpu, grid, lights),
+        }
+    }
+
+    /// Iterations a pixel's light loop adds, beyond one per light, for a walk through
+    /// bitmasks of `lights` lights (one per 32-bit word, and per word of their summary).
+    pub fn mask_words(self, lights: usize) -> usize {
+        match self {
+            Method::TwoLevel { .. } => lights.div_ceil(32) + lights.div_ceil(1024) + 2,
+            Method::ZBinning => lights.div_ceil(32) + 1,
+            Method::OneLevel | Method::Rasterised => 0,
+        }
+    }
+
+    /// The clears and steps of light assignment for `lights` lights.
+    fn plan(self, c: &ClusterBuffers, lights: u32) -> Plan<'_> {
+        match self {
+            Method::OneLevel => one_level::plan(c, lights),
+            Method::TwoLevel { big_tile } => two_level::plan(c, lights, big_tile),
+            Method::ZBinning => zbinning::plan(c, lights),
+            Method::Rasterised => rasterised::plan(c, lights),
+        }
+    }
+}
+
+/// What light assignment runs: buffers (or parts of them) cleared first, then its steps.
+struct Plan<'a> {
+    clears: Vec<Clear<'a>>,
+    steps: Vec<Step<'a>>,
+}
+
+/// A buffer cleared from byte `at`, `bytes` of it or to its end.
+struct Clear<'a>(&'a wgpu::Buffer, u64, Option<u64>);
+
+impl<'a> Clear<'a> {
+    fn whole(buffer: &'a wgpu::Buffer) -> Self {
+        Clear(buffer, 0, None)
+    }
+
+    /// The long lists' workgroup and job counts (the header's x and fourth word).
+    fn long_lists(c: &'a ClusterBuffers) -> [Self; 2] {
+        [
+            Clear(&c.sort_jobs, 0, Some(4)),
+            Clear(&c.sort_jobs, 12, Some(4)),
+        ]
+    }
+}
+
+/// One step of light assignment. Dispatches run in a compute pass; a copy or the draw ends
+/// it, and the next dispatch begins another.
+enum Step<'a> {
+    /// Entry point `entry` over `Over`.
+    Dispatch(&'static str, Over),
+    /// Entry point `entry`, its workgroup count read from a buffer.
+    Indirect(&'static str, &'a wgpu::Buffer),
+    /// `bytes` (or all) of a buffer from byte `at`, to the start of another.
+    Copy(&'a wgpu::Buffer, u64, &'a wgpu::Buffer, Option<u64>),
+    /// Rasterised binning's draw of the light proxies.
+    DrawProxies,
+}
+
+/// What a dispatch covers.
+enum Over {
+    /// One invocation per item (x, y), in workgroups of the entry's own size.
+    Threads(u32, u32),
+    /// Exactly this many workgroups.
+    Groups(u32, u32, u32),
+}
+
+/// One workgroup per light, in rows of LIGHTS_PER_ROW.
+fn per_light(lights: u32) -> Over {
+    Over::Groups(
+        lights.clamp(1, LIGHTS_PER_ROW),
+        lights.div_ceil(LIGHTS_PER_ROW).max(1),
+        1,
+    )
+}
+
+/// The long lists at the end of one-level and rasterised assignment (sorted) and two-level
+/// (written): as many workgroups as the passes before queued, in a compute pass of their own.
+fn long_lists<'a>(c: &'a ClusterBuffers, entry: &'static str) -> [Step<'a>; 2] {
+    [
+        Step::Copy(&c.sort_jobs, 0, &c.sort_dispatch, Some(DISPATCH_ARGS_BYTES)),
+        Step::Indirect(entry, &c.sort_dispatch),
+    ]
+}
+
+/// Encode light assignment by `method`: its clears, then its steps. The first compute pass
+/// writes the beginning timestamp and the last the end (one pass writes both).
+#[allow(clippy::too_many_arguments)]
+pub fn encode(
+    method: Method,
+    p: &ComputePipelines,
+    binning: Option<&BinningPipelines>,
+    groups: &[Option<wgpu::BindGroup>],
+    encoder: &mut wgpu::CommandEncoder,
+    slot: Option<TimestampSlot<'_>>,
+    c: &ClusterBuffers,
+    lights: u32,
+) {
+    let plan = method.plan(c, lights);
+    for Clear(buffer, at, bytes) in &plan.clears {
+        encoder.clear_buffer(buffer, *at, *bytes);
+    }
+    // Compute passes: a run of dispatches between copies and draws.
+    let mut passes = 0;
+    let mut in_pass = false;
+    for step in &plan.steps {
+        let dispatch = matches!(step, Step::Dispatch(..) | Step::Indirect(..));
+        passes += usize::from(dispatch && !in_pass);
+        in_pass = dispatch;
+    }
+    let mut steps = plan.steps.iter().peekable();
+    let mut pass = 0;
+    while let Some(step) = steps.next() {
+        match step {
+            Step::Copy(from, at, to, bytes) => {
+                encoder.copy_buffer_to_buffer(from, *at, to, 0, *bytes)
+            }
+            Step::DrawProxies => {
+                // Made with the pass whenever its variant culls by rasterised binning.
+                let binning = binning.expect("rasterised binning without its draw");
+                rasterised::draw(binning, groups, encoder, c);
+            }
+            Step::Dispatch(..) | Step::Indirect(..) => {
+                pass += 1;
+                let timestamps = match (pass == 1, pass == passes) {
+                    (true, true) => TimestampSlot::compute(slot),
+                    (true, false) => TimestampSlot::compute_part(slot, false),
+                    (false, true) => TimestampSlot::compute_part(slot, true),
+                    (false, false) => None,
+                };
+                let mut cp = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                    label: Some("light assignment"),
+                    timestamp_writes: timestamps,
+                });
+                set_compute_groups(&mut cp, groups);
+                let mut next = Some(step);
+                while let Some(step) = next {
+                    match step {
+                        Step::Dispatch(entry, over) => {
+                            let [x, y, z] = match *over {
+                                Over::Threads(x, y) => p.groups_for(entry, [x, y, 1]),
+                                Over::Groups(x, y, z) => [x, y, z],
+                            };
+                            cp.set_pipeline(p.get(entry));
+                            cp.dispatch_workgroups(x, y, z);
+                        }
+                        Step::Indirect(entry, args) => {
+                            cp.set_pipeline(p.get(entry));
+                            cp.dispatch_workgroups_indirect(args, 0);
+                        }
+                        Step::Copy(..) | Step::DrawProxies => unreachable!("not a dispatch"),
+                    }
+                    next = steps.next_if(|s| matches!(s, Step::Dispatch(..) | Step::Indirect(..)));
+                }
+            }
+        }
+    }
+}

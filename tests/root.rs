@@ -1,0 +1,30 @@
+//! clusterlab's integration tests, one binary (as wgpu and naga do): each file below is a
+//! module, `common` holds what they share.
+
+mod common;
+
+mod cli;
+mod clustered;
+mod completeness;
+mod compose;
+mod constants;
+mod debug_views;
+mod device;
+mod folders;
+mod fuzz;
+mod ggx;
+mod gltf;
+mod hostile;
+mod images;
+mod inputs;
+mod kernels;
+mod matrix;
+mod measure;
+mod naive;
+mod post;
+mod properties;
+mod readme;
+mod shards;
+mod skipping;
+mod stress;
+mod study;
