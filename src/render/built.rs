@@ -1,11 +1,12 @@
 //! Passes made ready to encode: each composed pass's layout (read off its naga module), its
 //! pipelines by family, and its bind groups filled from the frame's resources.
 
-use super::culling::{BinningPipelines, Method};
+use super::culling::BinningPipelines;
 use super::passes::ComputePipelines;
 use super::reflect::PassLayout;
 use super::{RenderError, Renderer, raster, screen};
 use crate::compose::{self, ComposedPass, Pass, PassId};
+use crate::variant::CullingMethod;
 
 /// The pipelines of a built pass.
 pub(super) enum Pipelines {
@@ -48,7 +49,7 @@ impl Renderer<'_> {
             PassId::Clustering(p) => {
                 let compute = ComputePipelines::all(gpu, composed, l)?;
                 let method = self.variant.clusters().method();
-                if p == compose::ClusterPass::LightAssign && method == Method::Rasterised {
+                if p == compose::ClusterPass::LightAssign && method == CullingMethod::Rasterised {
                     Pipelines::Binning(compute, BinningPipelines::new(gpu, composed, l)?)
                 } else {
                     Pipelines::Compute(compute)

@@ -4,10 +4,10 @@
 use bytemuck::{Pod, Zeroable};
 use wgpu::util::DeviceExt;
 
-use super::culling::Method;
 use crate::cpu::clusters::ClusterLists;
 use crate::cpu::zbin::ZBins;
 use crate::gpu::{Gpu, GpuError, read_buffer};
+use crate::variant::CullingMethod;
 use crate::variant::{Clusters, Culling};
 
 /// Mirrors `ClusterRange` in `shaders/clustering/clusters.wesl`.
@@ -136,7 +136,7 @@ pub struct ClusterBuffers {
     pub lights: u32,
     pub culling: Culling,
     /// How light assignment builds the lists.
-    pub method: Method,
+    pub method: CullingMethod,
 }
 
 /// A cluster's samples on the GPU: their depth range [z0, z1] (z1 = 0 where it holds none)
@@ -212,9 +212,9 @@ impl ClusterBuffers {
         let lists = method.builds_lists();
         let zbin = !lists;
         let (raster, big_tiles) = match method {
-            Method::Rasterised => (true, None),
-            Method::TwoLevel { big_tile } => (false, Some(big_tile)),
-            Method::OneLevel | Method::ZBinning => (false, None),
+            CullingMethod::Rasterised => (true, None),
+            CullingMethod::TwoLevel { big_tile } => (false, Some(big_tile)),
+            CullingMethod::OneLevel | CullingMethod::ZBinning => (false, None),
         };
         // `bytes` where the method uses a buffer, a placeholder elsewhere.
         let sized = |used: bool, bytes: u64| if used { bytes } else { 16 };
@@ -369,7 +369,7 @@ impl ClusterBuffers {
     /// Replace the index buffer with one of `capacity` entries (bind groups must be remade).
     pub fn grow_indices(&mut self, gpu: &Gpu, capacity: u32) {
         self.indices = storage(gpu, "light indices", capacity as u64 * 4);
-        if self.method == Method::Rasterised {
+        if self.method == CullingMethod::Rasterised {
             self.bin_pairs = storage(gpu, "binned pairs", capacity as u64 * PAIR_BYTES);
         }
         self.index_capacity = capacity;

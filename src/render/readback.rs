@@ -2,12 +2,12 @@
 //! views: the shaded image, the light lists, boxes, masks and bins, the depth range, and a
 //! debug view drawn from the frame's own depth and lists.
 
-use super::culling::Method;
 use super::reflect::PassLayout;
 use super::{ClusterRange, GpuDepthMask, RenderError, Renderer, screen};
 use crate::compose::{self, Composer, PassId};
 use crate::cpu::clusters::ClusterLists;
 use crate::gpu::{Gpu, GpuError, read_texture};
+use crate::variant::CullingMethod;
 
 impl Renderer<'_> {
     /// Debug view `view` of the last frame, drawn from its depth and light lists by the
@@ -88,7 +88,7 @@ impl Renderer<'_> {
     /// pipelines and culling methods).
     pub fn zbins(&self) -> Result<Option<crate::cpu::zbin::ZBins>, RenderError> {
         match &self.res.clusters {
-            Some(c) if c.method == Method::ZBinning => Ok(Some(c.read_zbins(self.gpu)?)),
+            Some(c) if c.method == CullingMethod::ZBinning => Ok(Some(c.read_zbins(self.gpu)?)),
             _ => Ok(None),
         }
     }

@@ -16,15 +16,15 @@ use super::passes::{ComputePipelines, set_compute_groups};
 use crate::compose::LIGHTS_PER_ROW;
 use crate::gpu::{Gpu, GpuError, TimestampSlot};
 
-pub use crate::variant::CullingMethod as Method;
+use crate::variant::CullingMethod;
 
-impl Method {
+impl CullingMethod {
     /// Refuse a frame of `lights` lights the method's buffers cannot hold.
     pub fn check(self, gpu: &Gpu, grid: (u32, u32, u32), lights: usize) -> Result<(), GpuError> {
         match self {
-            Method::OneLevel | Method::TwoLevel { .. } => Ok(()),
-            Method::ZBinning => zbinning::check(gpu, grid, lights),
-            Method::Rasterised => rasterised::check(gpu, grid, lights),
+            CullingMethod::OneLevel | CullingMethod::TwoLevel { .. } => Ok(()),
+            CullingMethod::ZBinning => zbinning::check(gpu, grid, lights),
+            CullingMethod::Rasterised => rasterised::check(gpu, grid, lights),
         }
     }
 
@@ -32,19 +32,19 @@ impl Method {
     /// bitmasks of `lights` lights (one per 32-bit word, and per word of their summary).
     pub fn mask_words(self, lights: usize) -> usize {
         match self {
-            Method::TwoLevel { .. } => lights.div_ceil(32) + lights.div_ceil(1024) + 2,
-            Method::ZBinning => lights.div_ceil(32) + 1,
-            Method::OneLevel | Method::Rasterised => 0,
+            CullingMethod::TwoLevel { .. } => lights.div_ceil(32) + lights.div_ceil(1024) + 2,
+            CullingMethod::ZBinning => lights.div_ceil(32) + 1,
+            CullingMethod::OneLevel | CullingMethod::Rasterised => 0,
         }
     }
 
     /// The clears and steps of light assignment for `lights` lights.
     fn plan(self, c: &ClusterBuffers, lights: u32) -> Plan<'_> {
         match self {
-            Method::OneLevel => one_level::plan(c, lights),
-            Method::TwoLevel { big_tile } => two_level::plan(c, lights, big_tile),
-            Method::ZBinning => zbinning::plan(c, lights),
-            Method::Rasterised => rasterised::plan(c, lights),
+            CullingMethod::OneLevel => one_level::plan(c, lights),
+            CullingMethod::TwoLevel { big_tile } => two_level::plan(c, lights, big_tile),
+            CullingMethod::ZBinning => zbinning::plan(c, lights),
+            CullingMethod::Rasterised => rasterised::plan(c, lights),
         }
     }
 }
@@ -115,7 +115,7 @@ fn long_lists<'a>(c: &'a ClusterBuffers, entry: &'static str) -> [Step<'a>; 2] {
 /// writes the beginning timestamp and the last the end (one pass writes both).
 #[allow(clippy::too_many_arguments)]
 pub fn encode(
-    method: Method,
+    method: CullingMethod,
     p: &ComputePipelines,
     binning: Option<&BinningPipelines>,
     groups: &[Option<wgpu::BindGroup>],
