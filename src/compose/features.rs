@@ -18,6 +18,9 @@ pub const SCAN_LANES: u32 = 256;
 pub const CLUSTERS_PER_LANE: u32 = 4;
 /// Clusters of one prefix-sum block: a workgroup of the first level each.
 pub const SCAN_BLOCK: u32 = SCAN_LANES * CLUSTERS_PER_LANE;
+/// What a walk through light bitmasks reports as its length (`ClusterStats::longest_walk`)
+/// when a software GPU's loop budget cut it short (`passes/assign_two_level.wesl`).
+pub const WALK_CUT_SHORT: u32 = u32::MAX;
 
 /// The flags a frame sets over its variant's: `spot_lights` (a scene without spots needs no
 /// cone in its light loops: on a software rasteriser, which runs both sides of a branch, the
@@ -190,6 +193,7 @@ pub fn constants_module(v: &Variant) -> String {
         ("DEPTH_CELLS", twin::DEPTH_CELLS),
         ("SCAN_LANES", SCAN_LANES),
         ("CLUSTERS_PER_LANE", CLUSTERS_PER_LANE),
+        ("WALK_CUT_SHORT", WALK_CUT_SHORT),
         ("GRID_X", clusters.grid.0),
         ("GRID_Y", clusters.grid.1),
         ("GRID_Z", clusters.grid.2),

@@ -12,8 +12,8 @@ mod resolver;
 
 pub use diagnostics::SourceLocation;
 pub use features::{
-    CLUSTERS_PER_LANE, LIGHTS_PER_ROW, SCAN_BLOCK, SCAN_LANES, constants_module, feature_flags,
-    features_with, frame_features,
+    CLUSTERS_PER_LANE, LIGHTS_PER_ROW, SCAN_BLOCK, SCAN_LANES, WALK_CUT_SHORT, constants_module,
+    feature_flags, features_with, frame_features,
 };
 pub use passes::{
     ClusterPass, FramePlan, Pass, PassId, PassKind, PostPass, RasterPass, ScreenPass, passes, plan,
@@ -36,6 +36,9 @@ pub struct ComposedPass {
     pub wgsl: String,
     pub module: naga::Module,
     pub info: naga::valid::ModuleInfo,
+    /// Each resource binding's name as its module declares it (unmangled), by (group,
+    /// binding): what the renderer binds a slot by.
+    pub slot_names: std::collections::BTreeMap<(u32, u32), String>,
 }
 
 /// Why a pass did not compose.
@@ -254,11 +257,13 @@ impl Composer {
             let span = e.spans().last().and_then(|(s, _)| s.to_range());
             naga_error(unmangle_names(&error_chain(e.as_inner()), &sourcemap), span)
         })?;
+        let slot_names = declared_slot_names(&module, &sourcemap);
         Ok(ComposedPass {
             name: name.to_string(),
             wgsl,
             module,
             info,
+            slot_names,
         })
     }
 }
@@ -278,6 +283,26 @@ fn deterministic_order(
             .map_or((0, String::new()), |module| (1, module))
     });
     unit
+}
+
+/// The declared name of every resource binding of `module`, by (group, binding).
+fn declared_slot_names(
+    module: &naga::Module,
+    sourcemap: &wesl::BasicSourceMap,
+) -> std::collections::BTreeMap<(u32, u32), String> {
+    use wesl::SourceMap;
+    module
+        .global_variables
+        .iter()
+        .filter_map(|(_, var)| {
+            let slot = var.binding.as_ref()?;
+            let name = var.name.as_deref()?;
+            let declared = sourcemap
+                .get_decl(name)
+                .map_or_else(|| name.to_string(), |(_, n)| n.to_string());
+            Some(((slot.group, slot.binding), declared))
+        })
+        .collect()
 }
 
 /// `text` with every mangled declaration name replaced by `module::name`.

@@ -73,9 +73,9 @@ impl Renderer<'_> {
         layout: &PassLayout,
     ) -> Result<Vec<Option<wgpu::BindGroup>>, RenderError> {
         let shaded = &self.post.output(&self.res.targets.hdr).view;
-        layout.bind_groups(self.gpu, id.name(), |group, binding| match id {
-            PassId::Screen(p) => screen::binding(p, group, binding, &self.res, shaded),
-            _ => self.res.scene_binding(group, binding),
+        layout.bind_groups(self.gpu, id.name(), |slot| match id {
+            PassId::Screen(p) => screen::binding(p, slot, &self.res, shaded),
+            _ => self.res.scene_binding(slot),
         })
     }
 

@@ -41,34 +41,8 @@ pub struct ClusterStats {
     pub active_clusters: u32,
     pub max_per_cluster: u32,
     pub overflow: u32,
-    pub _pad: [u32; 3],
-}
-
-/// Bindings of group 1 (see `build_bindings.wesl`).
-mod binding {
-    pub const RANGE: u32 = 0;
-    pub const BOUNDS: u32 = 1;
-    pub const ACTIVE: u32 = 2;
-    pub const COUNTS: u32 = 3;
-    pub const OFFSETS: u32 = 4;
-    pub const BLOCK_SUMS: u32 = 5;
-    pub const INDICES: u32 = 6;
-    pub const STATS: u32 = 7;
-    pub const LIGHT_VIEW: u32 = 8;
-    pub const LIGHT_RANGES: u32 = 9;
-    pub const FILL_CURSORS: u32 = 10;
-    pub const SAMPLE_DEPTHS: u32 = 11;
-    pub const SORT_JOBS: u32 = 12;
-    pub const DEPTH_MASKS: u32 = 13;
-    pub const LIGHT_ORDER: u32 = 14;
-    pub const BIN_RANGES: u32 = 15;
-    pub const TILE_MASKS: u32 = 16;
-    pub const COARSE_MASKS: u32 = 17;
-    pub const BIG_TILE_DEPTHS: u32 = 18;
-    pub const LIGHT_PROXIES: u32 = 19;
-    pub const PROXY_DRAW: u32 = 20;
-    pub const BIN_PAIRS: u32 = 21;
-    pub const PROXY_PLACES: u32 = 22;
+    pub longest_walk: u32,
+    pub _pad: [u32; 2],
 }
 
 /// Bytes of an indirect dispatch's arguments (x, y, z).
@@ -375,33 +349,33 @@ impl ClusterBuffers {
         self.index_capacity = capacity;
     }
 
-    /// The buffer at `@group(1) @binding(b)` (build_bindings.wesl; lookup.wesl binds a
-    /// few of the same read-only).
-    pub fn buffer(&self, b: u32) -> Option<&wgpu::Buffer> {
-        Some(match b {
-            binding::RANGE => &self.range,
-            binding::BOUNDS => &self.bounds,
-            binding::ACTIVE => &self.active,
-            binding::COUNTS => &self.counts,
-            binding::OFFSETS => &self.offsets,
-            binding::BLOCK_SUMS => &self.block_sums,
-            binding::INDICES => &self.indices,
-            binding::STATS => &self.stats,
-            binding::LIGHT_VIEW => &self.light_view,
-            binding::LIGHT_RANGES => &self.light_ranges,
-            binding::FILL_CURSORS => &self.fill_cursors,
-            binding::SAMPLE_DEPTHS => &self.sample_depths,
-            binding::SORT_JOBS => &self.sort_jobs,
-            binding::DEPTH_MASKS => &self.depth_masks,
-            binding::LIGHT_ORDER => &self.light_order,
-            binding::BIN_RANGES => &self.bin_ranges,
-            binding::TILE_MASKS => &self.tile_masks,
-            binding::COARSE_MASKS => &self.coarse_masks,
-            binding::BIG_TILE_DEPTHS => &self.big_tile_depths,
-            binding::LIGHT_PROXIES => &self.light_proxies,
-            binding::PROXY_DRAW => &self.proxy_draw,
-            binding::BIN_PAIRS => &self.bin_pairs,
-            binding::PROXY_PLACES => &self.proxy_places,
+    /// The buffer a cluster pass binds by `name`, the name `build_bindings.wesl` (and,
+    /// read-only, `lookup.wesl`) declares it by: the slot numbers are written only there.
+    pub fn buffer(&self, name: &str) -> Option<&wgpu::Buffer> {
+        Some(match name {
+            "cluster_range" => &self.range,
+            "cluster_bounds" => &self.bounds,
+            "cluster_active" => &self.active,
+            "light_counts" => &self.counts,
+            "light_offsets" => &self.offsets,
+            "block_sums" => &self.block_sums,
+            "light_indices" => &self.indices,
+            "cluster_stats" => &self.stats,
+            "light_view" => &self.light_view,
+            "light_ranges" => &self.light_ranges,
+            "fill_cursors" => &self.fill_cursors,
+            "sample_depths" => &self.sample_depths,
+            "sort_jobs" => &self.sort_jobs,
+            "depth_masks" => &self.depth_masks,
+            "light_order" => &self.light_order,
+            "bin_ranges" => &self.bin_ranges,
+            "tile_masks" => &self.tile_masks,
+            "coarse_masks" => &self.coarse_masks,
+            "big_tile_depths" => &self.big_tile_depths,
+            "light_proxies" => &self.light_proxies,
+            "proxy_draw" => &self.proxy_draw,
+            "bin_pairs" => &self.bin_pairs,
+            "proxy_places" => &self.proxy_places,
             _ => return None,
         })
     }

@@ -1,6 +1,7 @@
 //! What a frame of a variant and scene must fit before anything is made for it: the
 //! adapter's sizes, the method's buffers, the scene-dependent variant values, and Mesa's
-//! loop budget.
+//! loop budget for the pipelines that loop over every light (a clustered frame's is checked
+//! on the lists it builds, after it: `Renderer::check_walks`).
 
 use super::RenderError;
 use crate::gpu::{Gpu, GpuError};
@@ -17,34 +18,23 @@ pub fn check_frame(gpu: &Gpu, variant: &Variant, scene: &Scene) -> Result<(), Re
         c.method().check(gpu, c.grid, scene.lights.len())?;
     }
     check_for_scene(variant, scene)?;
-    // Every pipeline but scissor deferred loops over up to all the lights per pixel; a
-    // walk through light bitmasks (z-binning's light loop, two-level culling's clusters)
-    // also loops once per 32-bit word of them, and two-level culling once per word of
-    // their summary.
-    let method = variant.clusters().method();
-    let mask_words = |n: usize| match variant.pipeline.is_clustered() {
-        true => method.mask_words(n),
-        false => 0,
+    // Naive forward loops over every light per pixel; scissor deferred draws them instead,
+    // and a clustered frame's loops are checked on the lengths it builds (`check_walks`).
+    let loops_over_every_light = match variant.pipeline {
+        Pipeline::NaiveForward => true,
+        Pipeline::ClusteredForward | Pipeline::ClusteredDeferred | Pipeline::DeferredScissor => {
+            false
+        }
     };
     if let Some(limit) = crate::gpu::expect::max_lights_per_pixel(gpu)
-        && variant.pipeline != Pipeline::DeferredScissor
-        && scene.lights.len() + mask_words(scene.lights.len()) > limit as usize
+        && loops_over_every_light
+        && scene.lights.len() > limit as usize
     {
-        let limit = limit as usize;
-        let most = (0..=limit)
-            .rev()
-            .find(|&n| n + mask_words(n) <= limit)
-            .unwrap_or(0);
         return Err(RenderError::Gpu(GpuError::TooLarge(format!(
-            "{} lights: adapter `{}` ends a shader's loops after {} iterations in all, so a light loop over more than {most} lights{} would leave lights out without a word; use at most {most} lights on this adapter, or scissor deferred",
+            "{} lights: adapter `{}` ends a shader's loops after {} iterations in all, so a light loop over more than {limit} lights would leave lights out without a word; use at most {limit} lights on this adapter, a clustered pipeline or scissor deferred",
             scene.lights.len(),
             gpu.adapter.name,
             crate::gpu::expect::LLVMPIPE_LOOP_ITERATIONS,
-            if mask_words(1) > 0 {
-                " and their bitmask words"
-            } else {
-                ""
-            }
         ))));
     }
     Ok(())

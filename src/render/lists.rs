@@ -3,9 +3,10 @@
 
 use std::time::Instant;
 
-use super::{FrameRun, RenderError, Renderer};
+use super::{ClusterBuffers, ClusterStats, FrameRun, RenderError, Renderer};
+use crate::compose::WALK_CUT_SHORT;
 use crate::cpu::clusters::{self as cpu_clusters, Grid};
-use crate::gpu::GpuError;
+use crate::gpu::{Gpu, GpuError};
 use crate::scene::Scene;
 use crate::variant::{LightLists, Variant};
 
@@ -36,7 +37,8 @@ impl CpuAssignment {
 
 impl Renderer<'_> {
     /// After a frame: if the light lists overflowed the index buffer, grow it to fit and
-    /// say so (the caller runs the frame again).
+    /// say so (the caller runs the frame again); else check its walks against the loop
+    /// budget.
     fn grow_lists_if_needed(&mut self) -> Result<bool, RenderError> {
         let gpu = self.gpu;
         let Some(c) = &mut self.res.clusters else {
@@ -44,6 +46,7 @@ impl Renderer<'_> {
         };
         let s = c.read_stats(gpu)?;
         if s.overflow == 0 {
+            check_walks(gpu, c, &s)?;
             return Ok(false);
         }
         let needed = s.total as u64 + s.total as u64 / 4 + 1024;
@@ -104,4 +107,46 @@ impl Renderer<'_> {
         }
         Ok(Some(ms))
     }
+}
+
+/// Refuse a frame that looped past the adapter's loop budget (llvmpipe ends an invocation's
+/// loops after a fixed count in all, without a word): its longest light list, which a
+/// pixel's light loop walks, or its longest walk through light bitmasks. Budgeting what the
+/// frame built, not a list of every light, lets a clustered frame hold any number of lights
+/// whose lists fit. The longest list is named, from the read-back counts.
+fn check_walks(gpu: &Gpu, c: &ClusterBuffers, s: &ClusterStats) -> Result<(), RenderError> {
+    let Some(budget) = crate::gpu::expect::max_lights_per_pixel(gpu) else {
+        return Ok(());
+    };
+    if s.max_per_cluster.max(s.longest_walk) <= budget {
+        return Ok(());
+    }
+    let counts = c.read_counts(gpu)?;
+    let (cluster, lights) = counts
+        .iter()
+        .enumerate()
+        .max_by_key(|&(i, n)| (*n, std::cmp::Reverse(i)))
+        .map_or((0, 0), |(i, n)| (i as u32, *n));
+    let (x, y) = (c.grid.0, c.grid.1);
+    // A walk cut short counted only the lights it reached.
+    let cut = s.longest_walk == WALK_CUT_SHORT;
+    let longest = format!(
+        "cluster {cluster} (tile {}, {}, slice {}) holds {}{lights} lights",
+        cluster % x,
+        cluster / x % y,
+        cluster / (x * y),
+        if cut { "at least " } else { "" }
+    );
+    let what = match s.longest_walk {
+        _ if cut => format!("a walk through light bitmasks was cut short ({longest})"),
+        w if w > budget => {
+            format!("a walk through light bitmasks takes {w} iterations ({longest})")
+        }
+        _ => longest,
+    };
+    Err(RenderError::Gpu(GpuError::TooLarge(format!(
+        "{what}: adapter `{}` ends a shader's loops after {} iterations in all, so this frame would leave lights out without a word (at most {budget} a loop here); use smaller lights, a finer grid or scissor deferred",
+        gpu.adapter.name,
+        crate::gpu::expect::LLVMPIPE_LOOP_ITERATIONS,
+    ))))
 }

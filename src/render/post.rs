@@ -197,9 +197,9 @@ impl PostChain {
                 .map(target)
                 .collect();
             let groups =
-                layout.bind_groups(gpu, composed.name.as_str(), |group, binding| match group {
-                    0 => frame.scene_binding(group, binding),
-                    1 => match images.get(binding as usize) {
+                layout.bind_groups(gpu, composed.name.as_str(), |slot| match slot.group {
+                    0 => frame.scene_binding(slot),
+                    1 => match images.get(slot.binding as usize) {
                         Some(t) => Some(wgpu::BindingResource::TextureView(&t.view)),
                         None => blur_dispatch.as_ref().map(|b| b.as_entire_binding()),
                     },

@@ -37,7 +37,7 @@ impl Renderer<'_> {
                 &composed,
                 &layout.pipeline,
             )?;
-            let groups = layout.bind_groups(gpu, id.name(), |g, b| self.res.scene_binding(g, b))?;
+            let groups = layout.bind_groups(gpu, id.name(), |slot| self.res.scene_binding(slot))?;
             let mut e = gpu.device.create_command_encoder(&Default::default());
             screen::encode(
                 compose::ScreenPass::DebugView,

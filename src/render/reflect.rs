@@ -139,10 +139,19 @@ fn storage_format(f: naga::StorageFormat) -> Option<wgpu::TextureFormat> {
     })
 }
 
+/// One binding of a pass: where it sits, and the name its module declares it by.
+pub struct Slot<'a> {
+    pub group: u32,
+    pub binding: u32,
+    pub name: &'a str,
+}
+
 /// The bind group layouts of a pass and the pipeline layout made of them; a group the pass
 /// does not use is a gap. Made once per device for each distinct WGSL.
 pub struct PassLayout {
     entries: GroupEntries,
+    /// Each binding's declared name (`ComposedPass::slot_names`).
+    names: BTreeMap<(u32, u32), String>,
     groups: Vec<Option<wgpu::BindGroupLayout>>,
     pub pipeline: wgpu::PipelineLayout,
 }
@@ -177,18 +186,19 @@ impl PassLayout {
         })?;
         Ok(Self {
             entries,
+            names: pass.slot_names.clone(),
             groups: objects.groups,
             pipeline: objects.pipeline,
         })
     }
 
-    /// The bind groups of this layout, each binding filled by `resource(group, binding)`.
-    /// A slot `resource` has nothing for is an error naming it.
+    /// The bind groups of this layout, each binding filled by `resource(slot)`. A slot
+    /// `resource` has nothing for is an error naming it.
     pub fn bind_groups<'r>(
         &self,
         gpu: &Gpu,
         pass: &str,
-        resource: impl Fn(u32, u32) -> Option<wgpu::BindingResource<'r>>,
+        resource: impl Fn(&Slot) -> Option<wgpu::BindingResource<'r>>,
     ) -> Result<Vec<Option<wgpu::BindGroup>>, RenderError> {
         let entries = &self.entries;
         self.groups
@@ -201,9 +211,18 @@ impl PassLayout {
                 let bound = slots
                     .iter()
                     .map(|slot| {
-                        let resource = resource(g as u32, slot.binding).ok_or_else(|| {
+                        let name = self
+                            .names
+                            .get(&(g as u32, slot.binding))
+                            .map_or("", String::as_str);
+                        let at = Slot {
+                            group: g as u32,
+                            binding: slot.binding,
+                            name,
+                        };
+                        let resource = resource(&at).ok_or_else(|| {
                             RenderError::Reflection(format!(
-                                "pass `{pass}` binds @group({g}) @binding({}), which no resource fills",
+                                "pass `{pass}` binds @group({g}) @binding({}) `{name}`, which no resource fills",
                                 slot.binding
                             ))
                         })?;

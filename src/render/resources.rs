@@ -5,6 +5,7 @@ use bytemuck::{Pod, Zeroable};
 use glam::DMat4;
 use wgpu::util::DeviceExt;
 
+use super::reflect::Slot;
 use crate::cpu::depth::DepthMapping;
 use crate::gpu::Gpu;
 use crate::scene::{Light, Scene, Vertex};
@@ -382,20 +383,20 @@ impl FrameResources {
         }
     }
 
-    /// What sits at `@group(group) @binding(binding)` of a scene pass. The groups are the
-    /// same in every scene pass: 0 the frame (`view`, `lights`), 1 the clusters (the
-    /// binding numbers of `build_bindings.wesl`, read-only in `lookup.wesl`), 2 the surface
-    /// (depth, then the G-buffer targets; `packing/gbuffer.wesl`), 3 the counters.
-    pub fn scene_binding(&self, group: u32, binding: u32) -> Option<wgpu::BindingResource<'_>> {
+    /// What fills `slot` of a scene pass. The groups are the same in every scene pass: 0
+    /// the frame (`view`, `lights`), 1 the clusters (by the names `build_bindings.wesl`
+    /// declares, and `lookup.wesl` read-only), 2 the surface (depth, then the G-buffer
+    /// targets; `packing/gbuffer.wesl`), 3 the counters.
+    pub fn scene_binding(&self, slot: &Slot) -> Option<wgpu::BindingResource<'_>> {
         fn texture(t: &Target) -> wgpu::BindingResource<'_> {
             wgpu::BindingResource::TextureView(&t.view)
         }
-        match (group, binding) {
+        match (slot.group, slot.binding) {
             (0, b) => self.scene.frame_binding(b),
-            (1, b) => self
+            (1, _) => self
                 .clusters
                 .as_ref()?
-                .buffer(b)
+                .buffer(slot.name)
                 .map(|b| b.as_entire_binding()),
             (2, 0) => Some(texture(&self.targets.depth)),
             (2, b) => self.targets.gbuffer.get(b as usize - 1).map(texture),

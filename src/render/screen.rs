@@ -3,6 +3,7 @@
 //! pipelines, bindings, attachments and draws.
 
 use super::passes::{begin_render, clear_attachment, color_target, render_pipeline};
+use super::reflect::Slot;
 use super::resources::{FrameResources, LDR_FORMAT};
 use crate::compose::{ComposedPass, ScreenPass};
 use crate::gpu::{Gpu, GpuError, TimestampSlot};
@@ -44,20 +45,18 @@ pub fn pipelines(
     })
 }
 
-/// What sits at `@group(group) @binding(binding)` of a screen pass: the scene passes'
-/// groups, but for tonemapping, which reads the final colour (`shaded`, after any post
-/// effect) at group 0.
+/// What fills `slot` of a screen pass: the scene passes' groups, but for tonemapping, which
+/// reads the final colour (`shaded`, after any post effect) at group 0.
 pub fn binding<'a>(
     pass: ScreenPass,
-    group: u32,
-    binding: u32,
+    slot: &Slot,
     resources: &'a FrameResources,
     shaded: &'a wgpu::TextureView,
 ) -> Option<wgpu::BindingResource<'a>> {
-    match (pass, group, binding) {
+    match (pass, slot.group, slot.binding) {
         (ScreenPass::Tonemap, 0, 0) => Some(wgpu::BindingResource::TextureView(shaded)),
         (ScreenPass::Tonemap, _, _) => None,
-        _ => resources.scene_binding(group, binding),
+        _ => resources.scene_binding(slot),
     }
 }
 

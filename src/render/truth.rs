@@ -8,7 +8,7 @@
 
 use super::RenderError;
 use super::passes::{clear_attachment, color_target, render_pipeline};
-use super::reflect::PassLayout;
+use super::reflect::{PassLayout, Slot};
 use super::resources::{DepthSetup, SceneBuffers, target};
 use crate::compose::Composer;
 use crate::cpu::truth::RasterTruth;
@@ -49,8 +49,8 @@ pub fn raster_truth(
     let depth = DepthSetup::of(variant);
     let textures = gpu.scoped("raster truth", || -> Result<_, RenderError> {
         let buffers = SceneBuffers::upload(gpu, scene, depth.mapping);
-        let frame = |group: u32, binding: u32| match group {
-            0 => buffers.frame_binding(binding),
+        let frame = |slot: &Slot| match slot.group {
+            0 => buffers.frame_binding(slot.binding),
             _ => None,
         };
         let layout = PassLayout::of(gpu, &pass)?;

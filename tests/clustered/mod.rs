@@ -4,6 +4,7 @@
 //! Each culling method's own checks are in its module.
 
 mod depth_mask;
+mod loop_budget;
 mod one_level;
 mod rasterised;
 mod two_level;

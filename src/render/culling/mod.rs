@@ -28,16 +28,6 @@ impl CullingMethod {
         }
     }
 
-    /// Iterations a pixel's light loop adds, beyond one per light, for a walk through
-    /// bitmasks of `lights` lights (one per 32-bit word, and per word of their summary).
-    pub fn mask_words(self, lights: usize) -> usize {
-        match self {
-            CullingMethod::TwoLevel { .. } => lights.div_ceil(32) + lights.div_ceil(1024) + 2,
-            CullingMethod::ZBinning => lights.div_ceil(32) + 1,
-            CullingMethod::OneLevel | CullingMethod::Rasterised => 0,
-        }
-    }
-
     /// The clears and steps of light assignment for `lights` lights.
     fn plan(self, c: &ClusterBuffers, lights: u32) -> Plan<'_> {
         match self {

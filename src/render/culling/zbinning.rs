@@ -13,6 +13,7 @@ pub(super) fn plan(c: &ClusterBuffers, lights: u32) -> Plan<'_> {
             Step::Dispatch("transform_lights", Over::Threads(lights, 1)),
             Step::Dispatch("sort_lights", Over::Groups(1, 1, 1)),
             Step::Dispatch("bin_lights", Over::Threads(lights, 1)),
+            Step::Dispatch("measure_bins", Over::Threads(c.grid.2, 1)),
             Step::Dispatch("mask_tiles", per_light(lights)),
         ],
     }
