@@ -11,7 +11,9 @@ use clusterlab::cpu::zslice::Slices;
 use clusterlab::kernels::{gpu_codecs, gpu_zslices};
 use clusterlab::stress;
 use clusterlab::study::{codecs, slicing};
-use clusterlab::variant::{self, NormalCodec, Pipeline, PostEffect, ZSlicing};
+use clusterlab::variant::{
+    self, Culling, METHOD_FLAGS, NormalCodec, Pipeline, PostEffect, ZSlicing,
+};
 use strum::IntoEnumIterator;
 
 const NEAR: f64 = 0.1;
@@ -220,5 +222,47 @@ fn every_spot_test_has_stress_runs_a_shipped_variant_and_a_study() {
         }
     }
     // `study cones` iterates SpotTest::iter() itself.
+    assert!(missing.is_empty(), "{}", missing.join("\n"));
+}
+
+/// Every culling choice has a shipped variant, a row in `study culling` and a stress run;
+/// every method a shipped variant uses names a flag the features set.
+#[test]
+fn every_culling_has_a_shipped_variant_a_study_row_and_a_stress_run() {
+    let shipped = shipped();
+    let culling_of = |v: &variant::Variant| v.pipeline.is_clustered().then(|| v.clusters().culling);
+    let study = clusterlab::study::culling::methods();
+    let cases = stress::cases();
+    let mut missing = Vec::new();
+    for culling in Culling::iter() {
+        if !shipped
+            .iter()
+            .any(|v| culling_of(&v.variant) == Some(culling))
+        {
+            missing.push(format!("{culling:?}: no shipped variant"));
+        }
+        if !study
+            .iter()
+            .any(|m| culling_of(&m.variant((640, 360))) == Some(culling))
+        {
+            missing.push(format!("{culling:?}: no row in `study culling`"));
+        }
+        if !stress::NOT_STRESSED.contains(&culling)
+            && !cases.iter().any(|c| {
+                c.variants
+                    .iter()
+                    .any(|(_, v)| culling_of(v) == Some(culling))
+            })
+        {
+            missing.push(format!("{culling:?}: no stress run"));
+        }
+    }
+    for v in shipped.iter().filter(|v| v.variant.pipeline.is_clustered()) {
+        if let Some(flag) = v.variant.clusters().method().flag()
+            && !METHOD_FLAGS.contains(&flag)
+        {
+            missing.push(format!("{}: flag `{flag}` is not in METHOD_FLAGS", v.name));
+        }
+    }
     assert!(missing.is_empty(), "{}", missing.join("\n"));
 }

@@ -57,13 +57,6 @@ pub fn features_with(v: &Variant, overrides: &[(&str, bool)]) -> Vec<(&'static s
 pub fn feature_flags(v: &Variant) -> Vec<(&'static str, bool)> {
     let p = v.pipeline;
     let clusters = v.clusters();
-    // Each light-assignment method's flag, from the one method the variant's fields choose.
-    let (zbinning, two_level, raster_binning) = match clusters.method() {
-        CullingMethod::OneLevel => (false, false, false),
-        CullingMethod::TwoLevel { .. } => (false, true, false),
-        CullingMethod::ZBinning => (true, false, false),
-        CullingMethod::Rasterised => (false, false, true),
-    };
     let codec = v.normal_codec();
     let layout = v.gbuffer().layout;
     let deferred = p.is_deferred();
@@ -97,9 +90,6 @@ pub fn feature_flags(v: &Variant) -> Vec<(&'static str, bool)> {
         ("active_clusters", clusters.active_clusters),
         ("sample_bounds", clusters.sample_bounds),
         ("depth_mask", clusters.culling.marks_depth_cells()),
-        ("zbinning", p.is_clustered() && zbinning),
-        ("two_level", p.is_clustered() && two_level),
-        ("raster_binning", p.is_clustered() && raster_binning),
         ("gbuffer_wide", deferred && layout == GBufferLayout::Wide),
         (
             "gbuffer_packed",
@@ -156,6 +146,9 @@ pub fn feature_flags(v: &Variant) -> Vec<(&'static str, bool)> {
     ];
     // One flag per z-slicing scheme, from the scheme list itself.
     flags.extend(ZSlicing::iter().map(|s| (s.feature(), s.same_scheme(slicing))));
+    // Each light-assignment method's flag, from the one method the variant's fields choose.
+    let method = p.is_clustered().then(|| clusters.method().flag()).flatten();
+    flags.extend(METHOD_FLAGS.map(|f| (f, method == Some(f))));
     flags
 }
 
@@ -188,9 +181,10 @@ pub fn constants_module(v: &Variant) -> String {
     };
 
     use crate::cpu::{clusters as twin, shading};
-    let u32s = [
-        ("LIGHTS_PER_ROW", LIGHTS_PER_ROW),
-        ("DEPTH_CELLS", twin::DEPTH_CELLS),
+    // The twins' numbers after the row width, where they have always been.
+    let mut u32s = vec![("LIGHTS_PER_ROW", LIGHTS_PER_ROW)];
+    u32s.extend_from_slice(crate::cpu::SHARED_U32S);
+    u32s.extend([
         ("SCAN_LANES", SCAN_LANES),
         ("CLUSTERS_PER_LANE", CLUSTERS_PER_LANE),
         ("WALK_CUT_SHORT", WALK_CUT_SHORT),
@@ -204,7 +198,7 @@ pub fn constants_module(v: &Variant) -> String {
         ("BLOOM_RADIUS", bloom.radius),
         ("MOTION_BLUR_SAMPLES", motion.samples),
         ("GBUFFER_CHANNEL", gbuffer_channel),
-    ];
+    ]);
     // The CPU twins' slack and clamps, in single precision: the same numbers on both sides.
     let f32s = [
         ("BOUNDS_PADDING", twin::BOUNDS_PADDING as f32),

@@ -188,12 +188,7 @@ pub fn passes(v: &Variant) -> Vec<Pass> {
             out.push(clustering(ClusterPass::MarkActive, "passes::mark_active"));
         }
         // Each method's own root; bins and tile masks need no cluster boxes.
-        let assign = match clusters.method() {
-            CullingMethod::OneLevel => "passes::assign_one_level",
-            CullingMethod::TwoLevel { .. } => "passes::assign_two_level",
-            CullingMethod::ZBinning => "passes::zbin_assign",
-            CullingMethod::Rasterised => "passes::assign_rasterised",
-        };
+        let assign = clusters.method().shader_root();
         if !clusters.method().builds_lists() {
             out.push(clustering(ClusterPass::LightAssign, assign));
         } else {

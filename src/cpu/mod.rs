@@ -13,3 +13,7 @@ pub mod shading;
 pub mod truth;
 pub mod zbin;
 pub mod zslice;
+
+/// The whole numbers the twins share with the shaders, generated into the `constants`
+/// module (`compose::constants_module`): each written once, here.
+pub const SHARED_U32S: &[(&str, u32)] = &[("DEPTH_CELLS", clusters::DEPTH_CELLS)];

@@ -105,6 +105,9 @@ pub struct ClusterBuffers {
     pub scatter_dispatch: wgpu::Buffer,
     /// Rasterised binning: the one-pixel-per-tile target the proxies are drawn into.
     pub bin_target: Option<wgpu::TextureView>,
+    /// The buffers only the method's own shader root declares, by that name
+    /// (`CullingMethod::own_buffers`).
+    pub own: Vec<(&'static str, wgpu::Buffer)>,
     /// The grid: tiles across, tiles down, slices (z-binning's bins).
     pub grid: (u32, u32, u32),
     pub lights: u32,
@@ -185,10 +188,10 @@ impl ClusterBuffers {
         let n = clusters as u64;
         let lists = method.builds_lists();
         let zbin = !lists;
-        let (raster, big_tiles) = match method {
-            CullingMethod::Rasterised => (true, None),
-            CullingMethod::TwoLevel { big_tile } => (false, Some(big_tile)),
-            CullingMethod::OneLevel | CullingMethod::ZBinning => (false, None),
+        let raster = method == CullingMethod::Rasterised;
+        let big_tiles = match method {
+            CullingMethod::TwoLevel { big_tile } => Some(big_tile),
+            _ => None,
         };
         // `bytes` where the method uses a buffer, a placeholder elsewhere.
         let sized = |used: bool, bytes: u64| if used { bytes } else { 16 };
@@ -297,6 +300,11 @@ impl ClusterBuffers {
                     })
                     .create_view(&Default::default())
             }),
+            own: method
+                .own_buffers(grid, lights)
+                .into_iter()
+                .map(|(name, bytes)| (name, storage(gpu, name, bytes)))
+                .collect(),
             grid,
             lights,
             culling,
@@ -335,7 +343,8 @@ impl ClusterBuffers {
             &self.proxy_draw_args,
             &self.scatter_dispatch,
         ]
-        .iter()
+        .into_iter()
+        .chain(self.own.iter().map(|(_, b)| b))
         .map(|b| b.size())
         .sum()
     }
@@ -376,8 +385,16 @@ impl ClusterBuffers {
             "proxy_draw" => &self.proxy_draw,
             "bin_pairs" => &self.bin_pairs,
             "proxy_places" => &self.proxy_places,
-            _ => return None,
+            _ => return self.own.iter().find(|(n, _)| *n == name).map(|(_, b)| b),
         })
+    }
+
+    /// The buffer bound as `name`, as 32-bit words.
+    pub fn read_words(&self, gpu: &Gpu, name: &str) -> Result<Vec<u32>, GpuError> {
+        let buffer = self
+            .buffer(name)
+            .ok_or_else(|| GpuError::Captured(format!("no cluster buffer is named `{name}`")))?;
+        Ok(bytemuck::cast_slice(&read_buffer(gpu, buffer, 0, buffer.size())?).to_vec())
     }
 
     pub fn read_stats(&self, gpu: &Gpu) -> Result<ClusterStats, GpuError> {

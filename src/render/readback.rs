@@ -93,6 +93,15 @@ impl Renderer<'_> {
         }
     }
 
+    /// A cluster buffer after the last frame, by the name its WGSL binds it as, in 32-bit
+    /// words (None for pipelines without clusters).
+    pub fn cluster_buffer(&self, name: &str) -> Result<Option<Vec<u32>>, RenderError> {
+        match &self.res.clusters {
+            Some(c) => Ok(Some(c.read_words(self.gpu, name)?)),
+            None => Ok(None),
+        }
+    }
+
     /// The depth buffer of the last frame (read it with `kernels::gpu_depth_samples`).
     pub fn depth_texture(&self) -> &wgpu::Texture {
         &self.res.targets.depth.texture

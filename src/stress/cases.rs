@@ -38,22 +38,29 @@ fn variant(description: &str, pipeline: Pipeline) -> Variant {
     }
 }
 
+/// Cullings the stress suite cannot judge yet: 2.5D lists hold only the lights that reach
+/// a visible sample, and the missing-light check asks for every light that clearly touches
+/// a cluster, sample or not.
+pub const NOT_STRESSED: [Culling; 1] = [Culling::DepthMask];
+
 /// Every pipeline, exact (full-precision G-buffer, exact lists), and Forward+ with each
-/// culling method that builds lists otherwise: z-binning, two-level culling and rasterised
-/// binning.
+/// other culling (but `NOT_STRESSED`) and with two-level culling.
 pub fn pipelines() -> Vec<(String, Variant)> {
     let mut out: Vec<(String, Variant)> = Pipeline::iter()
         .map(|p| (p.short_name().to_string(), variant(p.short_name(), p)))
         .collect();
-    let mut zbin = variant("forward_plus_zbinning", Pipeline::ClusteredForward);
-    zbin.clusters.as_mut().expect("clustered").culling = Culling::ZBinning;
-    out.push(("forward_plus_zbinning".into(), zbin));
+    for culling in Culling::iter() {
+        if culling == Culling::Boxes || NOT_STRESSED.contains(&culling) {
+            continue;
+        }
+        let name = format!("forward_plus_{}", format!("{culling:?}").to_lowercase());
+        let mut v = variant(&name, Pipeline::ClusteredForward);
+        v.clusters.as_mut().expect("clustered").culling = culling;
+        out.push((name, v));
+    }
     let mut two_level = variant("forward_plus_two_level", Pipeline::ClusteredForward);
     two_level.clusters.as_mut().expect("clustered").big_tiles = Some(2);
     out.push(("forward_plus_two_level".into(), two_level));
-    let mut raster = variant("forward_plus_rasterised", Pipeline::ClusteredForward);
-    raster.clusters.as_mut().expect("clustered").culling = Culling::Rasterised;
-    out.push(("forward_plus_rasterised".into(), raster));
     out
 }
 

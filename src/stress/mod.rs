@@ -4,7 +4,7 @@
 
 mod cases;
 
-pub use cases::{Case, SIZE, all as cases, codec_case_name, slicing_case_name};
+pub use cases::{Case, NOT_STRESSED, SIZE, all as cases, codec_case_name, slicing_case_name};
 
 use std::collections::HashMap;
 

@@ -189,7 +189,7 @@ fn check_clusters(c: &Clusters, v: &Variant, out: &mut Vec<Problem>) {
                 format!("is {n}; it must be in 1..={MAX_BIG_TILES} (tiles per big tile side)"),
             ));
         }
-        if matches!(c.culling, Culling::ZBinning | Culling::Rasterised)
+        if !matches!(c.culling, Culling::Boxes | Culling::DepthMask)
             || c.assignment == Assignment::Cpu
         {
             out.push(problem(
@@ -198,10 +198,20 @@ fn check_clusters(c: &Clusters, v: &Variant, out: &mut Vec<Problem>) {
             ));
         }
     }
-    if c.culling == Culling::Rasterised && c.assignment != Assignment::Gpu {
+    // The CPU builds lists by the box test (with or without depth masks) alone; z-binning
+    // says why itself, above.
+    if c.assignment != Assignment::Gpu
+        && !matches!(
+            c.culling,
+            Culling::Boxes | Culling::DepthMask | Culling::ZBinning
+        )
+    {
         out.push(problem(
             "clusters.assignment",
-            "Rasterised draws each light's proxies on the GPU: use `assignment: Gpu`",
+            format!(
+                "{:?} builds its lists on the GPU: use `assignment: Gpu`",
+                c.culling
+            ),
         ));
     }
     if c.culling == Culling::DepthMask && !c.sample_bounds {

@@ -159,7 +159,9 @@ impl Default for Clusters {
 }
 
 /// The test that decides whether a light goes into a cluster's list.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
+#[derive(
+    Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, JsonSchema, strum::EnumIter,
+)]
 pub enum Culling {
     /// The light's sphere against the cluster's box, tightened by its tile's four side
     /// planes (and a spot's cone against the box's bounding sphere).
@@ -216,7 +218,31 @@ impl Culling {
     }
 }
 
+/// The WESL flags of the methods that have one (shared modules test them); each is set
+/// where `CullingMethod::flag` names it.
+pub const METHOD_FLAGS: [&str; 3] = ["zbinning", "two_level", "raster_binning"];
+
 impl CullingMethod {
+    /// Its light-assignment pass's shader root.
+    pub fn shader_root(self) -> &'static str {
+        match self {
+            CullingMethod::OneLevel => "passes::assign_one_level",
+            CullingMethod::TwoLevel { .. } => "passes::assign_two_level",
+            CullingMethod::ZBinning => "passes::zbin_assign",
+            CullingMethod::Rasterised => "passes::assign_rasterised",
+        }
+    }
+
+    /// Its WESL flag (one of `METHOD_FLAGS`), where shared modules treat it apart.
+    pub fn flag(self) -> Option<&'static str> {
+        match self {
+            CullingMethod::OneLevel => None,
+            CullingMethod::TwoLevel { .. } => Some("two_level"),
+            CullingMethod::ZBinning => Some("zbinning"),
+            CullingMethod::Rasterised => Some("raster_binning"),
+        }
+    }
+
     /// Whether it builds per-cluster lists (and boxes to test them on); z-binning walks bins
     /// and tile masks instead.
     pub fn builds_lists(self) -> bool {

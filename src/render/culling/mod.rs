@@ -28,6 +28,18 @@ impl CullingMethod {
         }
     }
 
+    /// The buffers only this method's shader root declares (bound by those names), with
+    /// their sizes in bytes, for `lights` lights on `grid`.
+    pub fn own_buffers(self, grid: (u32, u32, u32), lights: u32) -> Vec<(&'static str, u64)> {
+        let _ = (grid, lights);
+        match self {
+            CullingMethod::OneLevel
+            | CullingMethod::TwoLevel { .. }
+            | CullingMethod::ZBinning
+            | CullingMethod::Rasterised => Vec::new(),
+        }
+    }
+
     /// The clears and steps of light assignment for `lights` lights.
     fn plan(self, c: &ClusterBuffers, lights: u32) -> Plan<'_> {
         match self {
