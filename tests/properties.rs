@@ -558,7 +558,7 @@ fn gpu_light_assignment_keeps_every_touching_light() {
         1u32..=32,
         1u32..=48,
         any::<proptest::sample::Index>(),
-        (0u32..4, 1u32..=6),
+        (0u32..5, 1u32..=6),
     );
     let mut runner = TestRunner::new(Config::with_cases(16));
     runner
@@ -587,6 +587,7 @@ fn gpu_light_assignment_keeps_every_touching_light() {
                         0 => {}
                         1 => c.culling = Culling::ZBinning,
                         2 => c.culling = Culling::Rasterised,
+                        3 => c.culling = Culling::Bvh,
                         _ => c.big_tiles = Some(big),
                     }
                     let problems = clusterlab::variant::check(&v);

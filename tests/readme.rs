@@ -31,6 +31,7 @@ fn culling(v: &Variant) -> String {
         (Assignment::Cpu, ..) => "CPU".to_string(),
         (_, Culling::ZBinning, _) => "z-binning".into(),
         (_, Culling::Rasterised, _) => "rasterised".into(),
+        (_, Culling::Bvh, _) => "BVH".into(),
         (_, Culling::Boxes | Culling::DepthMask, Some(_)) => "two-level".into(),
         (_, Culling::Boxes | Culling::DepthMask, None) => "one-level".into(),
     };

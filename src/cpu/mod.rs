@@ -2,6 +2,7 @@
 //! They are the oracles that the WGSL is tested against, and `frame` shades whole frames
 //! with them. They import only `common`: never the variant schema or the scenes.
 
+pub mod bvh;
 pub mod clusters;
 pub mod color;
 pub mod depth;
@@ -16,4 +17,8 @@ pub mod zslice;
 
 /// The whole numbers the twins share with the shaders, generated into the `constants`
 /// module (`compose::constants_module`): each written once, here.
-pub const SHARED_U32S: &[(&str, u32)] = &[("DEPTH_CELLS", clusters::DEPTH_CELLS)];
+pub const SHARED_U32S: &[(&str, u32)] = &[
+    ("DEPTH_CELLS", clusters::DEPTH_CELLS),
+    ("BVH_WIDTH", bvh::BVH_WIDTH),
+    ("SORT_BLOCK", bvh::SORT_BLOCK),
+];

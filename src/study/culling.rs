@@ -120,6 +120,16 @@ pub fn methods() -> Vec<Method> {
             ..base
         },
         Method {
+            name: "Olsson light BVH",
+            source: "Olsson 2012: the same clusters, each walking a light BVH built every frame",
+            grid: |(x, y)| (x, y, 256),
+            slicing: ZSlicing::OlssonCubic,
+            sample_bounds: true,
+            culling: Culling::Bvh,
+            tile_pixels: Some(OLSSON_TILE),
+            ..base
+        },
+        Method {
             name: "z-binning",
             source: "Drobot 2017: 16-pixel tiles of light bitmasks, 128 exponential depth bins",
             grid: |(x, y)| (x, y, 128),

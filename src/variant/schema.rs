@@ -189,6 +189,14 @@ pub enum Culling {
     /// boundaries, so a tile is drawn exactly when the rectangle holds it (no conservative
     /// rasterisation needed). Works with active clusters and sample bounds; GPU assignment.
     Rasterised,
+    /// Olsson, Billeter and Assarsson 2012's light BVH, built on the GPU every frame: lights
+    /// sorted by the Morton code of the centre of their range of clusters, a tree of 32
+    /// children a node over that order (each node the union of its children's ranges, as
+    /// boxes of clusters), then each cluster walks the tree to the lights whose range holds
+    /// it and tests each as `Boxes` does. Lists equal `Boxes` lists; a cluster's work grows
+    /// with the lights near it, not with all of them. Works with active clusters and sample
+    /// bounds; GPU assignment.
+    Bvh,
 }
 
 /// How light assignment on the GPU reaches the clusters: the method a variant's `culling`
@@ -206,6 +214,8 @@ pub enum CullingMethod {
     ZBinning,
     /// Light proxies drawn into a one-pixel-per-tile target.
     Rasterised,
+    /// A light BVH built each frame, walked by each cluster.
+    Bvh,
 }
 
 impl Culling {
@@ -213,7 +223,7 @@ impl Culling {
     pub fn marks_depth_cells(self) -> bool {
         match self {
             Culling::DepthMask => true,
-            Culling::Boxes | Culling::ZBinning | Culling::Rasterised => false,
+            Culling::Boxes | Culling::ZBinning | Culling::Rasterised | Culling::Bvh => false,
         }
     }
 }
@@ -230,13 +240,14 @@ impl CullingMethod {
             CullingMethod::TwoLevel { .. } => "passes::assign_two_level",
             CullingMethod::ZBinning => "passes::zbin_assign",
             CullingMethod::Rasterised => "passes::assign_rasterised",
+            CullingMethod::Bvh => "passes::assign_bvh",
         }
     }
 
     /// Its WESL flag (one of `METHOD_FLAGS`), where shared modules treat it apart.
     pub fn flag(self) -> Option<&'static str> {
         match self {
-            CullingMethod::OneLevel => None,
+            CullingMethod::OneLevel | CullingMethod::Bvh => None,
             CullingMethod::TwoLevel { .. } => Some("two_level"),
             CullingMethod::ZBinning => Some("zbinning"),
             CullingMethod::Rasterised => Some("raster_binning"),
@@ -249,7 +260,8 @@ impl CullingMethod {
         match self {
             CullingMethod::OneLevel
             | CullingMethod::TwoLevel { .. }
-            | CullingMethod::Rasterised => true,
+            | CullingMethod::Rasterised
+            | CullingMethod::Bvh => true,
             CullingMethod::ZBinning => false,
         }
     }
@@ -266,6 +278,7 @@ impl Clusters {
             },
             Culling::ZBinning => CullingMethod::ZBinning,
             Culling::Rasterised => CullingMethod::Rasterised,
+            Culling::Bvh => CullingMethod::Bvh,
         }
     }
 }

@@ -3,6 +3,7 @@
 //! the CPU twin's, caps count every dropped light, and lossy layouts report their error.
 //! Each culling method's own checks are in its module.
 
+mod bvh;
 mod depth_mask;
 mod loop_budget;
 mod one_level;
@@ -114,6 +115,14 @@ fn exact_variants() -> Vec<LoadedVariant> {
                 raster_variant(pipeline, (16, 9, 24), active),
             ));
         }
+        out.push(loaded(
+            &format!("{pipeline:?} BVH"),
+            bvh_variant(
+                pipeline,
+                (16, 9, 24),
+                pipeline == Pipeline::ClusteredForward,
+            ),
+        ));
     }
     let mut cpu = clustered(Pipeline::ClusteredForward, ZSlicing::Exponential);
     cpu.clusters.as_mut().unwrap().assignment = Assignment::Cpu;
@@ -157,6 +166,13 @@ fn raster_variant(pipeline: Pipeline, grid: (u32, u32, u32), active: bool) -> Va
     c.active_clusters = active;
     c.sample_bounds = active;
     c.culling = Culling::Rasterised;
+    v
+}
+
+/// Olsson's light BVH on `grid`, with active clusters and sample bounds or without.
+fn bvh_variant(pipeline: Pipeline, grid: (u32, u32, u32), active: bool) -> Variant {
+    let mut v = raster_variant(pipeline, grid, active);
+    v.clusters.as_mut().unwrap().culling = Culling::Bvh;
     v
 }
 

@@ -4,6 +4,7 @@
 //! ([`encode`]); workgroup counts come from each entry point's workgroup size in the pass's
 //! naga module.
 
+mod bvh;
 mod one_level;
 mod rasterised;
 mod two_level;
@@ -23,6 +24,7 @@ impl CullingMethod {
     pub fn check(self, gpu: &Gpu, grid: (u32, u32, u32), lights: usize) -> Result<(), GpuError> {
         match self {
             CullingMethod::OneLevel | CullingMethod::TwoLevel { .. } => Ok(()),
+            CullingMethod::Bvh => bvh::check(gpu, lights),
             CullingMethod::ZBinning => zbinning::check(gpu, grid, lights),
             CullingMethod::Rasterised => rasterised::check(gpu, grid, lights),
         }
@@ -31,12 +33,13 @@ impl CullingMethod {
     /// The buffers only this method's shader root declares (bound by those names), with
     /// their sizes in bytes, for `lights` lights on `grid`.
     pub fn own_buffers(self, grid: (u32, u32, u32), lights: u32) -> Vec<(&'static str, u64)> {
-        let _ = (grid, lights);
+        let _ = grid;
         match self {
             CullingMethod::OneLevel
             | CullingMethod::TwoLevel { .. }
             | CullingMethod::ZBinning
             | CullingMethod::Rasterised => Vec::new(),
+            CullingMethod::Bvh => bvh::own_buffers(lights),
         }
     }
 
@@ -47,6 +50,7 @@ impl CullingMethod {
             CullingMethod::TwoLevel { big_tile } => two_level::plan(c, lights, big_tile),
             CullingMethod::ZBinning => zbinning::plan(c, lights),
             CullingMethod::Rasterised => rasterised::plan(c, lights),
+            CullingMethod::Bvh => bvh::plan(c, lights),
         }
     }
 }

@@ -1,0 +1,68 @@
+//! Olsson 2012's light BVH (`passes/assign_bvh.wesl`, twin `cpu::bvh`): each block of the
+//! lights' Morton order sorted in a workgroup's memory, then the bitonic merges, the tree
+//! built level by level, and each cluster's walk counted, summed into offsets, walked again
+//! to write its list, and the lists sorted. A merge step and a level are told apart by
+//! their dispatch's workgroup count: a merge carries its place in the schedule as
+//! workgroups beyond the blocks (which return at once), a level is its nodes.
+
+use super::one_level::scan_blocks;
+use super::{Clear, Over, Plan, Step, long_lists};
+use crate::cpu::bvh::{SORT_BLOCK, level_sizes, merge_schedule, sorted_size};
+use crate::gpu::{Gpu, GpuError};
+use crate::render::clusters::ClusterBuffers;
+
+/// Most lights: the lowest level's dispatch has a workgroup per node, at most 65535.
+const MAX_LIGHTS: u32 = 1 << 21;
+
+pub(super) fn plan(c: &ClusterBuffers, lights: u32) -> Plan<'_> {
+    let n = sorted_size(lights);
+    let blocks = n / SORT_BLOCK;
+    let mut clears = vec![Clear::whole(&c.counts)];
+    clears.extend(Clear::long_lists(c));
+    let mut steps = vec![
+        Step::Dispatch("transform_lights", Over::Threads(lights, 1)),
+        Step::Dispatch("sort_blocks", Over::Groups(blocks, 1, 1)),
+    ];
+    for (s, (_, j)) in merge_schedule(n).into_iter().enumerate() {
+        let entry = if j == 0 { "merge_blocks" } else { "merge_step" };
+        steps.push(Step::Dispatch(entry, Over::Groups(blocks + s as u32, 1, 1)));
+    }
+    for nodes in level_sizes(n) {
+        steps.push(Step::Dispatch("build_nodes", Over::Groups(nodes, 1, 1)));
+    }
+    steps.extend([
+        Step::Dispatch("count_clusters", Over::Threads(c.clusters, 1)),
+        Step::Dispatch("scan_local", scan_blocks(c)),
+        Step::Dispatch("scan_blocks", Over::Groups(1, 1, 1)),
+        Step::Dispatch("fill_clusters", Over::Threads(c.clusters, 1)),
+        Step::Dispatch("finish_lists", Over::Threads(c.clusters, 1)),
+    ]);
+    steps.extend(long_lists(c, "sort_long_lists"));
+    Plan { clears, steps }
+}
+
+/// The sorted order (a key and a light each) and every level's nodes (a range each).
+pub(super) fn own_buffers(lights: u32) -> Vec<(&'static str, u64)> {
+    let n = sorted_size(lights);
+    let nodes: u64 = level_sizes(n).iter().map(|&s| s as u64).sum();
+    vec![("bvh_order", n as u64 * 8), ("bvh_nodes", nodes * 16)]
+}
+
+/// Refuse a frame of more lights than the tree's lowest level can be built for, or whose
+/// order does not fit one buffer.
+pub(super) fn check(gpu: &Gpu, lights: usize) -> Result<(), GpuError> {
+    if lights > MAX_LIGHTS as usize {
+        return Err(GpuError::TooLarge(format!(
+            "the light BVH is built for at most {MAX_LIGHTS} lights and the scene has {lights}; use fewer lights or another `clusters.culling`"
+        )));
+    }
+    let bytes = sorted_size(lights as u32) as u64 * 8;
+    let max = gpu.max_storage_bytes();
+    if bytes > max {
+        return Err(GpuError::TooLarge(format!(
+            "the light BVH's order of {lights} lights takes {bytes} bytes, more than the {max} bytes adapter `{}` allows in one buffer; use fewer lights",
+            gpu.adapter.name
+        )));
+    }
+    Ok(())
+}
