@@ -18,8 +18,9 @@ pub const SCAN_LANES: u32 = 256;
 pub const CLUSTERS_PER_LANE: u32 = 4;
 /// Clusters of one prefix-sum block: a workgroup of the first level each.
 pub const SCAN_BLOCK: u32 = SCAN_LANES * CLUSTERS_PER_LANE;
-/// What a walk through light bitmasks reports as its length (`ClusterStats::longest_walk`)
-/// when a software GPU's loop budget cut it short (`passes/assign_two_level.wesl`).
+/// What a walk of light assignment reports as its length (`ClusterStats::longest_walk`) when
+/// a software GPU's loop budget cut it short (`passes/assign_two_level.wesl`,
+/// `assign_bvh.wesl`).
 pub const WALK_CUT_SHORT: u32 = u32::MAX;
 
 /// The flags a frame sets over its variant's: `spot_lights` (a scene without spots needs no

@@ -42,7 +42,8 @@ pub struct ClusterStats {
     pub max_per_cluster: u32,
     pub overflow: u32,
     pub longest_walk: u32,
-    pub _pad: [u32; 2],
+    pub proxies_unheld: u32,
+    pub _pad: u32,
 }
 
 /// Bytes of an indirect dispatch's arguments (x, y, z).
@@ -139,10 +140,13 @@ fn bin_target_size(grid: (u32, u32, u32)) -> (u32, u32) {
     (grid.0 * columns, grid.1 * grid.2.div_ceil(columns))
 }
 
+/// Bytes of one rasterised binning proxy (`light_proxies`: a vec4<u32>).
+pub const PROXY_BYTES: u64 = 16;
+
 /// Bytes of rasterised binning's proxies for `lights` lights on `grid`: at most one per
-/// light and slice, 16 bytes each.
-pub fn proxy_bytes(grid: (u32, u32, u32), lights: u32) -> u64 {
-    lights.max(1) as u64 * grid.2 as u64 * 16
+/// light and slice.
+fn proxy_bytes(grid: (u32, u32, u32), lights: u32) -> u64 {
+    lights.max(1) as u64 * grid.2 as u64 * PROXY_BYTES
 }
 
 /// Bytes of two-level culling's coarse masks: for each big tile of `big` tiles a side, a
@@ -197,7 +201,10 @@ impl ClusterBuffers {
         let sized = |used: bool, bytes: u64| if used { bytes } else { 16 };
         let index_capacity = if lists { index_capacity } else { 4 };
         let words = (lights as u64).div_ceil(32);
-        let proxy_bytes = sized(raster, proxy_bytes(grid, lights));
+        // A proxy per light and slice at most, in the largest buffer the adapter binds: a
+        // frame with more is refused after it runs (`ClusterStats::proxies_unheld`).
+        let largest = gpu.max_storage_bytes() / PROXY_BYTES * PROXY_BYTES;
+        let proxy_bytes = sized(raster, proxy_bytes(grid, lights).min(largest));
         let copy_of = |label: &str, size: u64, usage: wgpu::BufferUsages| {
             gpu.device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some(label),

@@ -47,6 +47,7 @@ impl Renderer<'_> {
         let s = c.read_stats(gpu)?;
         if s.overflow == 0 {
             check_walks(gpu, c, &s)?;
+            check_proxies(gpu, &s)?;
             return Ok(false);
         }
         let needed = s.total as u64 + s.total as u64 / 4 + 1024;
@@ -111,7 +112,8 @@ impl Renderer<'_> {
 
 /// Refuse a frame that looped past the adapter's loop budget (llvmpipe ends an invocation's
 /// loops after a fixed count in all, without a word): its longest light list, which a
-/// pixel's light loop walks, or its longest walk through light bitmasks. Budgeting what the
+/// pixel's light loop walks, or its longest walk of light assignment (through light bitmasks
+/// or the light BVH; `ClusterStats::longest_walk`). Budgeting what the
 /// frame built, not a list of every light, lets a clustered frame hold any number of lights
 /// whose lists fit. The longest list is named, from the read-back counts.
 fn check_walks(gpu: &Gpu, c: &ClusterBuffers, s: &ClusterStats) -> Result<(), RenderError> {
@@ -137,16 +139,33 @@ fn check_walks(gpu: &Gpu, c: &ClusterBuffers, s: &ClusterStats) -> Result<(), Re
         cluster / (x * y),
         if cut { "at least " } else { "" }
     );
-    let what = match s.longest_walk {
-        _ if cut => format!("a walk through light bitmasks was cut short ({longest})"),
-        w if w > budget => {
-            format!("a walk through light bitmasks takes {w} iterations ({longest})")
-        }
-        _ => longest,
+    let what = if cut {
+        format!("a light-assignment walk was cut short ({longest})")
+    } else if s.longest_walk > budget {
+        let w = s.longest_walk;
+        format!("a light-assignment walk takes {w} iterations ({longest})")
+    } else {
+        longest
     };
     Err(RenderError::Gpu(GpuError::TooLarge(format!(
         "{what}: adapter `{}` ends a shader's loops after {} iterations in all, so this frame would leave lights out without a word (at most {budget} a loop here); use smaller lights, a finer grid or scissor deferred",
         gpu.adapter.name,
         crate::gpu::expect::LLVMPIPE_LOOP_ITERATIONS,
+    ))))
+}
+
+/// Refuse a frame of more rasterised-binning proxies than the largest buffer the adapter
+/// binds holds (the buffer is sized for a proxy per light and slice, up to that size; most
+/// lights span a few slices, so most frames past that worst case still fit).
+fn check_proxies(gpu: &Gpu, s: &ClusterStats) -> Result<(), RenderError> {
+    if s.proxies_unheld == 0 {
+        return Ok(());
+    }
+    let bytes = s.proxies_unheld as u64 * super::clusters::PROXY_BYTES;
+    Err(RenderError::Gpu(GpuError::TooLarge(format!(
+        "rasterised binning's {} light proxies this frame take {bytes} bytes, more than the {} bytes adapter `{}` allows in one buffer; use fewer slices or lights",
+        s.proxies_unheld,
+        gpu.max_storage_bytes(),
+        gpu.adapter.name
     ))))
 }

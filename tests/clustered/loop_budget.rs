@@ -8,7 +8,7 @@
 use super::*;
 
 /// One variant per way lists are built or walked: one level, two levels, z-binning's bins,
-/// rasterised proxies, the CPU.
+/// rasterised proxies, the light BVH, the CPU.
 fn every_walk() -> Vec<(&'static str, Variant)> {
     let one_level = clustered(Pipeline::ClusteredForward, ZSlicing::Exponential);
     let mut two_level = one_level.clone();
@@ -24,6 +24,7 @@ fn every_walk() -> Vec<(&'static str, Variant)> {
             "rasterised",
             raster_variant(Pipeline::ClusteredForward, grid, false),
         ),
+        ("BVH", bvh_variant(Pipeline::ClusteredForward, grid, false)),
         ("CPU assignment", on_cpu),
     ]
 }
@@ -87,9 +88,9 @@ fn a_list_past_the_loop_budget_is_refused_naming_its_cluster() {
             (Some(_), Err(e)) => {
                 let message = e.to_string();
                 // A list's length is exact where it is counted; a walk through bitmasks
-                // (two-level, z-binning) is named as such.
+                // or the tree (two-level, z-binning, BVH) is named as such.
                 let named = message.contains(&format!("holds {n} lights"))
-                    || message.contains("a walk through light bitmasks");
+                    || message.contains("a light-assignment walk");
                 assert!(
                     named && message.contains("ends a shader's loops"),
                     "{name}: {message}"

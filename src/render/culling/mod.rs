@@ -23,10 +23,11 @@ impl CullingMethod {
     /// Refuse a frame of `lights` lights the method's buffers cannot hold.
     pub fn check(self, gpu: &Gpu, grid: (u32, u32, u32), lights: usize) -> Result<(), GpuError> {
         match self {
-            CullingMethod::OneLevel | CullingMethod::TwoLevel { .. } => Ok(()),
+            CullingMethod::OneLevel
+            | CullingMethod::TwoLevel { .. }
+            | CullingMethod::Rasterised => Ok(()),
             CullingMethod::Bvh => bvh::check(gpu, lights),
             CullingMethod::ZBinning => zbinning::check(gpu, grid, lights),
-            CullingMethod::Rasterised => rasterised::check(gpu, grid, lights),
         }
     }
 

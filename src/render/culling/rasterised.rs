@@ -9,7 +9,7 @@ use super::{Clear, Over, Plan, Step, long_lists};
 use crate::compose::ComposedPass;
 use crate::gpu::{Gpu, GpuError};
 use crate::render::clusters::{
-    BIN_TARGET_FORMAT, ClusterBuffers, DISPATCH_ARGS_BYTES, SCATTER_DISPATCH_AT, proxy_bytes,
+    BIN_TARGET_FORMAT, ClusterBuffers, DISPATCH_ARGS_BYTES, SCATTER_DISPATCH_AT,
 };
 use crate::render::passes::{begin_render, color_target, render_pipeline};
 
@@ -113,17 +113,4 @@ pub(super) fn draw(
     rp.set_pipeline(&binning.draw);
     rp.set_vertex_buffer(0, c.proxy_instances.slice(..));
     rp.draw_indirect(&c.proxy_draw_args, 0);
-}
-
-/// Refuse a frame whose proxies one buffer cannot hold.
-pub(super) fn check(gpu: &Gpu, grid: (u32, u32, u32), lights: usize) -> Result<(), GpuError> {
-    let bytes = proxy_bytes(grid, lights as u32);
-    let max = gpu.max_storage_bytes();
-    if bytes > max {
-        return Err(GpuError::TooLarge(format!(
-            "rasterised binning's proxies for {lights} lights over {} slices take {bytes} bytes, more than the {max} bytes adapter `{}` allows in one buffer; use fewer slices or lights",
-            grid.2, gpu.adapter.name
-        )));
-    }
-    Ok(())
 }
