@@ -357,6 +357,15 @@ impl ClusterBuffers {
     }
 
     /// Replace the index buffer with one of `capacity` entries (bind groups must be remade).
+    /// Bytes each list entry takes in the largest buffer sized by the entries: an index,
+    /// or with rasterised binning the pair the draw recorded.
+    pub fn bytes_per_entry(&self) -> u64 {
+        match self.method {
+            CullingMethod::Rasterised => PAIR_BYTES,
+            _ => 4,
+        }
+    }
+
     pub fn grow_indices(&mut self, gpu: &Gpu, capacity: u32) {
         self.indices = storage(gpu, "light indices", capacity as u64 * 4);
         if self.method == CullingMethod::Rasterised {

@@ -50,14 +50,18 @@ impl Renderer<'_> {
             check_proxies(gpu, &s)?;
             return Ok(false);
         }
-        let needed = s.total as u64 + s.total as u64 / 4 + 1024;
-        let limit = gpu.limits.max_storage_buffer_binding_size / 4;
-        if needed > limit {
+        // Every buffer sized by the entries must bind: the indices, and rasterised binning's
+        // pairs (12 bytes an entry).
+        let limit = gpu.limits.max_storage_buffer_binding_size / c.bytes_per_entry();
+        if s.total as u64 > limit {
             return Err(RenderError::Gpu(GpuError::TooLarge(format!(
-                "the light lists need {} entries, more than adapter `{}` can bind ({limit}); use fewer lights, a coarser grid or a per-cluster cap",
-                s.total, gpu.adapter.name
+                "the light lists need {} entries, more than adapter `{}` can bind ({limit} of {} bytes); use fewer lights, a coarser grid or a per-cluster cap",
+                s.total,
+                gpu.adapter.name,
+                c.bytes_per_entry()
             ))));
         }
+        let needed = (s.total as u64 + s.total as u64 / 4 + 1024).min(limit);
         c.grow_indices(gpu, needed as u32);
         self.reallocations += 1;
         self.remake_groups()?;
