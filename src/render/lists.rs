@@ -55,7 +55,7 @@ impl Renderer<'_> {
         let limit = gpu.limits.max_storage_buffer_binding_size / c.bytes_per_entry();
         if s.total as u64 > limit {
             return Err(RenderError::Gpu(GpuError::TooLarge(format!(
-                "the light lists need {} entries, more than adapter `{}` can bind ({limit} of {} bytes); use fewer lights, a coarser grid or a per-cluster cap",
+                "the light lists need {} entries, more than adapter `{}` can bind ({limit} entries of {} bytes); use fewer lights, a coarser grid or a per-cluster cap",
                 s.total,
                 gpu.adapter.name,
                 c.bytes_per_entry()
