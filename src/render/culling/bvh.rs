@@ -11,8 +11,9 @@ use crate::cpu::bvh::{SORT_BLOCK, level_sizes, merge_schedule, sorted_size};
 use crate::gpu::{Gpu, GpuError};
 use crate::render::clusters::ClusterBuffers;
 
-/// Most lights: the lowest level's dispatch has a workgroup per node, at most 65535.
-const MAX_LIGHTS: u32 = 1 << 21;
+/// Most lights: the lowest level's dispatch has a workgroup per node of 32 sorted entries,
+/// at most 65535, and the sorted order is a power of two: 2^20 entries make 32768 nodes.
+const MAX_LIGHTS: u32 = 1 << 20;
 
 pub(super) fn plan(c: &ClusterBuffers, lights: u32) -> Plan<'_> {
     let n = sorted_size(lights);
