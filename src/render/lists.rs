@@ -45,9 +45,10 @@ impl Renderer<'_> {
             return Ok(false);
         };
         let s = c.read_stats(gpu)?;
+        // Proxies left out leave lists short too: that is the frame's first problem.
+        check_proxies(gpu, &s)?;
         if s.overflow == 0 {
             check_walks(gpu, c, &s)?;
-            check_proxies(gpu, &s)?;
             return Ok(false);
         }
         // Every buffer sized by the entries must bind: the indices, and rasterised binning's
