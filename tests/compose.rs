@@ -14,10 +14,11 @@ fn snapshot_settings(folder: &str) -> insta::Settings {
 }
 
 /// One snapshot per distinct composed shader: every pass of every variant in variants/ is
-/// composed, equal WGSL is one snapshot named after its pass and the first variant (by name)
-/// that composes it, and its header lists every variant that shares it. A change to one
-/// module is then one diff per distinct shader it reaches, and a new variant file gets its
-/// snapshots (or joins existing ones) with no code change.
+/// composed, and equal WGSL is one snapshot, named after its pass and a hash of its text
+/// (`shader_name`), whose header lists every variant that shares it. A new variant file then
+/// joins existing snapshots or adds its own with no code change, and renames none; a change
+/// to a module shows as each shader it reaches, under its new name, with the old ones
+/// listed here to delete.
 #[test]
 fn composed_wgsl_of_every_distinct_pass() {
     let composer = Composer::default();
@@ -38,10 +39,10 @@ fn composed_wgsl_of_every_distinct_pass() {
             }
         }
     }
-    let mut names = Vec::new();
+    let mut names: Vec<String> = Vec::new();
     let mut stale_headers = Vec::new();
     for ((pass, wgsl), users) in &shaders {
-        let name = format!("{pass}@{}", users[0]);
+        let name = shader_name(pass, wgsl);
         let mut settings = snapshot_settings("wgsl");
         settings.set_description(format!(
             "pass `{pass}` as {} variant(s) compose it: {}",
@@ -69,7 +70,12 @@ fn composed_wgsl_of_every_distinct_pass() {
         if listed != users.iter().map(String::as_str).collect::<Vec<_>>() {
             stale_headers.push(file);
         }
-        names.push(format!("{name}.snap"));
+        let file_name = format!("{name}.snap");
+        assert!(
+            !names.contains(&file_name),
+            "two shaders of pass `{pass}` hash alike: lengthen `shader_name`'s hash"
+        );
+        names.push(file_name);
     }
     assert!(
         stale_headers.is_empty(),
@@ -86,6 +92,18 @@ fn composed_wgsl_of_every_distinct_pass() {
         stale.is_empty(),
         "snapshots of no composed shader (delete them): {stale:?}"
     );
+}
+
+/// A shader's snapshot name: its pass and the first 32 bits of the FNV-1a hash of its text
+/// (line ends made `\n`, so a checkout's line ends do not rename it).
+fn shader_name(pass: &str, wgsl: &str) -> String {
+    let hash = wgsl
+        .replace("\r\n", "\n")
+        .bytes()
+        .fold(0xcbf2_9ce4_8422_2325_u64, |h, b| {
+            (h ^ b as u64).wrapping_mul(0x0100_0000_01b3)
+        });
+    format!("{pass}@{:08x}", hash >> 32)
 }
 
 #[test]

@@ -5,41 +5,13 @@
 //! are integer boxes of clusters (tiles across, down, slices), so a walk finds exactly the
 //! lights one-level assignment walks for that cluster, with no slack to derive.
 
+use super::sort::{NO_KEY, sorted_size};
+
 /// Children of a node.
 pub const BVH_WIDTH: u32 = 32;
-/// Entries one workgroup sorts in its own memory (two per invocation).
-pub const SORT_BLOCK: u32 = 512;
-
 /// A light's range of clusters as the GPU packs it (`light_range::cluster_span`):
 /// x0 | x1 << 16, y0 | y1 << 16, k0 | k1 << 16, and 1 when the range is not empty.
 pub type Range = [u32; 4];
-
-/// The key of a light left out of every cluster, and of padding: after every other.
-pub const NO_KEY: u32 = u32::MAX;
-
-/// Entries of the sorted order: the light count rounded up to a power of two, at least a
-/// sort block.
-pub fn sorted_size(lights: u32) -> u32 {
-    lights.next_power_of_two().max(SORT_BLOCK)
-}
-
-/// The bitonic merges after each block is sorted, in order: `(k, j)` a compare-and-swap
-/// step over all entries at distance j within runs of k, or `(k, 0)` the steps of distance
-/// below a block, done within each block.
-pub fn merge_schedule(n: u32) -> Vec<(u32, u32)> {
-    let mut steps = Vec::new();
-    let mut k = 2 * SORT_BLOCK;
-    while k <= n {
-        let mut j = k / 2;
-        while j >= SORT_BLOCK {
-            steps.push((k, j));
-            j /= 2;
-        }
-        steps.push((k, 0));
-        k *= 2;
-    }
-    steps
-}
 
 /// Nodes of each level above the lights, from the lowest (one per `BVH_WIDTH` sorted
 /// lights) to the root (one node).
@@ -247,15 +219,9 @@ mod tests {
         assert_eq!(morton_key([0; 4], grid), NO_KEY);
     }
 
-    /// The merges double k from two blocks to n, each with its steps from k/2 down to a
-    /// block, then the step within blocks.
+    /// One node per BVH_WIDTH entries a level, up to the root.
     #[test]
-    fn the_merge_schedule_covers_every_bitonic_step_above_a_block() {
-        assert!(merge_schedule(SORT_BLOCK).is_empty());
-        assert_eq!(
-            merge_schedule(4 * SORT_BLOCK),
-            vec![(1024, 512), (1024, 0), (2048, 1024), (2048, 512), (2048, 0)]
-        );
+    fn levels_shrink_by_the_width_to_one_root() {
         assert_eq!(level_sizes(512), vec![16, 1]);
         assert_eq!(level_sizes(1 << 18), vec![8192, 256, 8, 1]);
     }

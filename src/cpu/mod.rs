@@ -11,6 +11,7 @@ pub mod light_grid;
 pub mod normals;
 pub mod post;
 pub mod shading;
+pub mod sort;
 pub mod truth;
 pub mod zbin;
 pub mod zslice;
@@ -20,5 +21,5 @@ pub mod zslice;
 pub const SHARED_U32S: &[(&str, u32)] = &[
     ("DEPTH_CELLS", clusters::DEPTH_CELLS),
     ("BVH_WIDTH", bvh::BVH_WIDTH),
-    ("SORT_BLOCK", bvh::SORT_BLOCK),
+    ("SORT_BLOCK", sort::SORT_BLOCK),
 ];

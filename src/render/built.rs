@@ -49,8 +49,10 @@ impl Renderer<'_> {
             PassId::Clustering(p) => {
                 let compute = ComputePipelines::all(gpu, composed, l)?;
                 let method = self.variant.clusters().method();
+                let proxies = self.res.clusters.as_ref().and_then(|c| c.proxy_layout);
                 if p == compose::ClusterPass::LightAssign && method == CullingMethod::Rasterised {
-                    Pipelines::Binning(compute, BinningPipelines::new(gpu, composed, l)?)
+                    let proxies = proxies.ok_or_else(|| no_proxy_layout(composed))?;
+                    Pipelines::Binning(compute, BinningPipelines::new(gpu, composed, l, proxies)?)
                 } else {
                     Pipelines::Compute(compute)
                 }
@@ -100,4 +102,12 @@ impl Renderer<'_> {
         }
         Ok(())
     }
+}
+
+/// Rasterised binning's root without the proxy buffers its draw and copies need.
+pub(super) fn no_proxy_layout(pass: &ComposedPass) -> RenderError {
+    RenderError::Reflection(format!(
+        "pass `{}`: rasterised binning's root must declare `light_proxies` and `proxy_draw` (a `ProxyDraw` with `scatter_x`)",
+        pass.name
+    ))
 }

@@ -7,6 +7,7 @@ use wgpu::util::DeviceExt;
 use crate::cpu::clusters::ClusterLists;
 use crate::cpu::zbin::ZBins;
 use crate::gpu::{Gpu, GpuError, read_buffer};
+use crate::render::culling::ProxyLayout;
 use crate::variant::CullingMethod;
 use crate::variant::{Clusters, Culling};
 
@@ -49,14 +50,6 @@ pub struct ClusterStats {
 /// Bytes of an indirect dispatch's arguments (x, y, z).
 pub const DISPATCH_ARGS_BYTES: u64 = 12;
 
-/// Bytes of rasterised binning's `ProxyDraw` (build_bindings.wesl): the indirect draw, the
-/// pair count, then the scatter's indirect dispatch from this offset.
-const PROXY_DRAW_BYTES: u64 = 32;
-pub const SCATTER_DISPATCH_AT: u64 = 20;
-
-/// Bytes of one of rasterised binning's recorded pairs: cluster, light, place in the list.
-const PAIR_BYTES: u64 = 12;
-
 pub struct ClusterBuffers {
     pub clusters: u32,
     pub range: wgpu::Buffer,
@@ -89,13 +82,11 @@ pub struct ClusterBuffers {
     pub coarse_masks: wgpu::Buffer,
     /// Two-level culling with active clusters: each big tile's sample depth range.
     pub big_tile_depths: wgpu::Buffer,
-    /// Rasterised binning: the lights' proxies in light order (`split_lights`), their
+    /// Rasterised binning: the lights' proxies in light order (`split_lights`), and their
     /// indirect draw with the pair count and the scatter's dispatch (`ProxyDraw` in
-    /// build_bindings.wesl), and the (cluster, light) pairs the draw records, as many as
-    /// the index buffer has entries.
+    /// build_bindings.wesl).
     pub light_proxies: wgpu::Buffer,
     pub proxy_draw: wgpu::Buffer,
-    pub bin_pairs: wgpu::Buffer,
     /// Rasterised binning: each light's proxy count, then its first proxy's place.
     pub proxy_places: wgpu::Buffer,
     /// Copies of those the draw reads as instances and indirect arguments, and of the
@@ -104,6 +95,8 @@ pub struct ClusterBuffers {
     pub proxy_instances: wgpu::Buffer,
     pub proxy_draw_args: wgpu::Buffer,
     pub scatter_dispatch: wgpu::Buffer,
+    /// Rasterised binning: its buffers' layouts as its root declares them.
+    pub proxy_layout: Option<ProxyLayout>,
     /// Rasterised binning: the one-pixel-per-tile target the proxies are drawn into.
     pub bin_target: Option<wgpu::TextureView>,
     /// The buffers only the method's own shader root declares, by that name
@@ -125,10 +118,6 @@ pub struct GpuDepthMask {
     pub mask: u32,
 }
 
-/// Most lights z-binning sorts: its one-workgroup bitonic sort stays within a software
-/// rasteriser's loop budget up to here (`zbin_assign.wesl`).
-pub const ZBIN_MAX_LIGHTS: usize = 65536;
-
 /// Format of rasterised binning's target (its colour is never read).
 pub const BIN_TARGET_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R8Unorm;
 
@@ -140,14 +129,6 @@ fn bin_target_size(grid: (u32, u32, u32)) -> (u32, u32) {
     (grid.0 * columns, grid.1 * grid.2.div_ceil(columns))
 }
 
-/// Bytes of one rasterised binning proxy (`light_proxies`: a vec4<u32>).
-pub const PROXY_BYTES: u64 = 16;
-
-/// Bytes of rasterised binning's proxies for `lights` lights on `grid`: at most one per
-/// light and slice.
-fn proxy_bytes(grid: (u32, u32, u32), lights: u32) -> u64 {
-    lights.max(1) as u64 * grid.2 as u64 * PROXY_BYTES
-}
 
 /// Bytes of two-level culling's coarse masks: for each big tile of `big` tiles a side, a
 /// mask of `words` words and its summary, then a mask for each slice (`two_level.wesl`).
@@ -166,6 +147,21 @@ fn sort_jobs(gpu: &Gpu, size: u64) -> wgpu::Buffer {
     buffer
 }
 
+/// The buffers only `method`'s shader root declares, by those names.
+fn own_buffers(
+    gpu: &Gpu,
+    method: CullingMethod,
+    grid: (u32, u32, u32),
+    lights: u32,
+    entries: u32,
+) -> Vec<(&'static str, wgpu::Buffer)> {
+    method
+        .own_buffers(grid, lights, entries)
+        .into_iter()
+        .map(|(name, bytes)| (name, storage(gpu, name, bytes)))
+        .collect()
+}
+
 fn storage(gpu: &Gpu, label: &str, size: u64) -> wgpu::Buffer {
     gpu.device.create_buffer(&wgpu::BufferDescriptor {
         label: Some(label),
@@ -178,14 +174,16 @@ fn storage(gpu: &Gpu, label: &str, size: u64) -> wgpu::Buffer {
 }
 
 impl ClusterBuffers {
-    /// The buffers of clusters `c` for `lights` lights; the buffers its method does not use
-    /// are 16-byte placeholders (every binding exists in every variant's layout).
+    /// The buffers of clusters `c` for `lights` lights (with rasterised binning, laid out
+    /// as `proxies`, its root's declarations); the buffers its method does not use are
+    /// 16-byte placeholders that no pass binds (layouts hold only what a pass declares).
     pub fn new(
         gpu: &Gpu,
         c: &Clusters,
         lights: u32,
         index_capacity: u32,
         range: ClusterRange,
+        proxies: Option<ProxyLayout>,
     ) -> Self {
         let (grid, culling, method) = (c.grid, c.culling, c.method());
         let clusters = grid.0 * grid.1 * grid.2;
@@ -203,8 +201,14 @@ impl ClusterBuffers {
         let words = (lights as u64).div_ceil(32);
         // A proxy per light and slice at most, in the largest buffer the adapter binds: a
         // frame with more is refused after it runs (`ClusterStats::proxies_unheld`).
-        let largest = gpu.max_storage_bytes() / PROXY_BYTES * PROXY_BYTES;
-        let proxy_bytes = sized(raster, proxy_bytes(grid, lights).min(largest));
+        let (proxy_bytes, draw_bytes) = match proxies.filter(|_| raster) {
+            Some(p) => {
+                let largest = gpu.max_storage_bytes() / p.proxy_bytes * p.proxy_bytes;
+                let worst = lights.max(1) as u64 * grid.2 as u64 * p.proxy_bytes;
+                (worst.min(largest), p.draw_bytes)
+            }
+            None => (16, 16),
+        };
         let copy_of = |label: &str, size: u64, usage: wgpu::BufferUsages| {
             gpu.device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some(label),
@@ -274,12 +278,7 @@ impl ClusterBuffers {
                 big_tiles.map_or(16, |b| (grid.0.div_ceil(b) * grid.1.div_ceil(b)) as u64 * 8),
             ),
             light_proxies: storage(gpu, "light proxies", proxy_bytes),
-            proxy_draw: storage(gpu, "proxy draw", sized(raster, PROXY_DRAW_BYTES)),
-            bin_pairs: storage(
-                gpu,
-                "binned pairs",
-                sized(raster, index_capacity as u64 * PAIR_BYTES),
-            ),
+            proxy_draw: storage(gpu, "proxy draw", draw_bytes),
             proxy_places: storage(gpu, "proxy places", sized(raster, lights as u64 * 4)),
             proxy_instances: copy_of("proxy instances", proxy_bytes, wgpu::BufferUsages::VERTEX),
             proxy_draw_args: copy_of("proxy draw arguments", 16, wgpu::BufferUsages::INDIRECT),
@@ -288,6 +287,7 @@ impl ClusterBuffers {
                 DISPATCH_ARGS_BYTES,
                 wgpu::BufferUsages::INDIRECT,
             ),
+            proxy_layout: proxies.filter(|_| raster),
             bin_target: raster.then(|| {
                 let atlas = bin_target_size(grid);
                 gpu.device
@@ -307,11 +307,7 @@ impl ClusterBuffers {
                     })
                     .create_view(&Default::default())
             }),
-            own: method
-                .own_buffers(grid, lights)
-                .into_iter()
-                .map(|(name, bytes)| (name, storage(gpu, name, bytes)))
-                .collect(),
+            own: own_buffers(gpu, method, grid, lights, index_capacity),
             grid,
             lights,
             culling,
@@ -344,7 +340,6 @@ impl ClusterBuffers {
             &self.big_tile_depths,
             &self.light_proxies,
             &self.proxy_draw,
-            &self.bin_pairs,
             &self.proxy_places,
             &self.proxy_instances,
             &self.proxy_draw_args,
@@ -356,21 +351,11 @@ impl ClusterBuffers {
         .sum()
     }
 
-    /// Replace the index buffer with one of `capacity` entries (bind groups must be remade).
-    /// Bytes each list entry takes in the largest buffer sized by the entries: an index,
-    /// or with rasterised binning the pair the draw recorded.
-    pub fn bytes_per_entry(&self) -> u64 {
-        match self.method {
-            CullingMethod::Rasterised => PAIR_BYTES,
-            _ => 4,
-        }
-    }
-
+    /// Replace the index buffer with one of `capacity` entries, and the method's own
+    /// buffers, which may be sized by the entries (bind groups must be remade).
     pub fn grow_indices(&mut self, gpu: &Gpu, capacity: u32) {
         self.indices = storage(gpu, "light indices", capacity as u64 * 4);
-        if self.method == CullingMethod::Rasterised {
-            self.bin_pairs = storage(gpu, "binned pairs", capacity as u64 * PAIR_BYTES);
-        }
+        self.own = own_buffers(gpu, self.method, self.grid, self.lights, capacity);
         self.index_capacity = capacity;
     }
 
@@ -399,7 +384,6 @@ impl ClusterBuffers {
             "big_tile_depths" => &self.big_tile_depths,
             "light_proxies" => &self.light_proxies,
             "proxy_draw" => &self.proxy_draw,
-            "bin_pairs" => &self.bin_pairs,
             "proxy_places" => &self.proxy_places,
             _ => return self.own.iter().find(|(n, _)| *n == name).map(|(_, b)| b),
         })

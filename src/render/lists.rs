@@ -1,11 +1,11 @@
-//! The light lists: grown to fit when a frame overflows them, and built on the CPU for
-//! variants with `assignment: Cpu`.
+//! The light lists: whether a frame's fit (or how far they must grow, or why they cannot),
+//! and built on the CPU for variants with `assignment: Cpu`.
 
 use std::time::Instant;
 
-use super::{ClusterBuffers, ClusterStats, FrameRun, RenderError, Renderer};
+use super::{ClusterBuffers, ClusterStats, RenderError};
 use crate::compose::WALK_CUT_SHORT;
-use crate::cpu::clusters::{self as cpu_clusters, Grid};
+use crate::cpu::clusters::{self as cpu_clusters, ClusterLists, Grid};
 use crate::gpu::{Gpu, GpuError};
 use crate::scene::Scene;
 use crate::variant::{LightLists, Variant};
@@ -35,84 +35,56 @@ impl CpuAssignment {
     }
 }
 
-impl Renderer<'_> {
-    /// After a frame: if the light lists overflowed the index buffer, grow it to fit and
-    /// say so (the caller runs the frame again); else check its walks against the loop
-    /// budget.
-    fn grow_lists_if_needed(&mut self) -> Result<bool, RenderError> {
-        let gpu = self.gpu;
-        let Some(c) = &mut self.res.clusters else {
-            return Ok(false);
-        };
-        let s = c.read_stats(gpu)?;
-        // Proxies left out leave lists short too: that is the frame's first problem.
-        check_proxies(gpu, &s)?;
-        if s.overflow == 0 {
-            check_walks(gpu, c, &s)?;
-            return Ok(false);
-        }
-        // Every buffer sized by the entries must bind: the indices, and rasterised binning's
-        // pairs (12 bytes an entry).
-        let limit = gpu.limits.max_storage_buffer_binding_size / c.bytes_per_entry();
-        if s.total as u64 > limit {
-            return Err(RenderError::Gpu(GpuError::TooLarge(format!(
-                "the light lists need {} entries, more than adapter `{}` can bind ({limit} entries of {} bytes); use fewer lights, a coarser grid or a per-cluster cap",
-                s.total,
-                gpu.adapter.name,
-                c.bytes_per_entry()
-            ))));
-        }
-        let needed = (s.total as u64 + s.total as u64 / 4 + 1024).min(limit);
-        c.grow_indices(gpu, needed as u32);
-        self.reallocations += 1;
-        self.remake_groups()?;
-        Ok(true)
-    }
-
-    /// Run the frame until its light lists fit: the index buffer grows to the exact total a
-    /// frame reports, so one re-run fits; lists that still do not fit are an error, never a
-    /// picture with lights missing.
-    pub(super) fn run_fitted(&mut self, instrumented: bool) -> Result<FrameRun, RenderError> {
-        let mut frame = self.run_frame(instrumented)?;
-        let mut runs = 1;
-        while self.grow_lists_if_needed()? {
-            if runs == 3 {
-                return Err(RenderError::Gpu(GpuError::Captured(
-                    "the light lists still overflowed their buffer after growing it twice".into(),
-                )));
-            }
-            frame = self.run_frame(instrumented)?;
-            runs += 1;
-        }
-        Ok(frame)
-    }
-
-    /// Build and upload the light lists on the CPU (variants with `assignment: Cpu`).
-    pub(super) fn assign_on_cpu(&mut self) -> Result<Option<f64>, RenderError> {
-        let Some(cpu) = &self.cpu_assignment else {
-            return Ok(None);
-        };
+impl CpuAssignment {
+    /// The light lists, built on the CPU, and the milliseconds it took.
+    pub fn assign(&self) -> (ClusterLists, f64) {
         let start = Instant::now();
         let lists = cpu_clusters::assign(
-            &cpu.grid,
-            &cpu.bounds,
-            &cpu.lights,
-            cpu.spot_test,
-            cpu.cap,
+            &self.grid,
+            &self.bounds,
+            &self.lights,
+            self.spot_test,
+            self.cap,
             None,
             None,
         );
-        let ms = start.elapsed().as_secs_f64() * 1e3;
-        let c = self.res.clusters.as_mut().expect("clustered");
-        if !c.upload_lists(self.gpu, &lists) {
-            c.grow_indices(self.gpu, lists.indices.len() as u32 + 1024);
-            self.reallocations += 1;
-            self.remake_groups()?;
-            let c = self.res.clusters.as_ref().expect("clustered");
-            c.upload_lists(self.gpu, &lists);
-        }
-        Ok(Some(ms))
+        (lists, start.elapsed().as_secs_f64() * 1e3)
     }
+}
+
+/// Whether a frame's light lists fit: they did, or the index buffer must grow to this many
+/// entries and the frame run again.
+pub enum Fit {
+    Fits,
+    GrowTo(u32),
+}
+
+/// After a frame: whether its lists fit the index buffer (from its counters), or how far
+/// the buffer must grow; an error where they cannot fit, or where the frame left proxies
+/// out or looped past the loop budget.
+pub fn fit(gpu: &Gpu, c: &ClusterBuffers) -> Result<Fit, RenderError> {
+    let s = c.read_stats(gpu)?;
+    // Proxies left out leave lists short too: that is the frame's first problem.
+    check_proxies(gpu, c, &s)?;
+    if s.overflow == 0 {
+        check_walks(gpu, c, &s)?;
+        return Ok(Fit::Fits);
+    }
+    Ok(Fit::GrowTo(capacity_for(gpu, s.total as u64)?))
+}
+
+/// The index buffer's entries for lists of `entries` entries, with room to spare: an error
+/// where they cannot bind. Every buffer sized by the entries must: the indices, and
+/// rasterised binning's pair arrays, a 32-bit word an entry each.
+pub fn capacity_for(gpu: &Gpu, entries: u64) -> Result<u32, RenderError> {
+    let limit = (gpu.limits.max_storage_buffer_binding_size / 4).min(u32::MAX as u64);
+    if entries > limit {
+        return Err(RenderError::Gpu(GpuError::TooLarge(format!(
+            "the light lists need {entries} entries, more than adapter `{}` can bind ({limit} entries of 4 bytes); use fewer lights, a coarser grid or a per-cluster cap",
+            gpu.adapter.name,
+        ))));
+    }
+    Ok((entries + entries / 4 + 1024).min(limit) as u32)
 }
 
 /// Refuse a frame that looped past the adapter's loop budget (llvmpipe ends an invocation's
@@ -162,11 +134,11 @@ fn check_walks(gpu: &Gpu, c: &ClusterBuffers, s: &ClusterStats) -> Result<(), Re
 /// Refuse a frame of more rasterised-binning proxies than the largest buffer the adapter
 /// binds holds (the buffer is sized for a proxy per light and slice, up to that size; most
 /// lights span a few slices, so most frames past that worst case still fit).
-fn check_proxies(gpu: &Gpu, s: &ClusterStats) -> Result<(), RenderError> {
-    if s.proxies_unheld == 0 {
+fn check_proxies(gpu: &Gpu, c: &ClusterBuffers, s: &ClusterStats) -> Result<(), RenderError> {
+    let Some(layout) = c.proxy_layout.filter(|_| s.proxies_unheld != 0) else {
         return Ok(());
-    }
-    let bytes = s.proxies_unheld as u64 * super::clusters::PROXY_BYTES;
+    };
+    let bytes = s.proxies_unheld as u64 * layout.proxy_bytes;
     Err(RenderError::Gpu(GpuError::TooLarge(format!(
         "rasterised binning's {} light proxies this frame take {bytes} bytes, more than the {} bytes adapter `{}` allows in one buffer; use fewer slices or lights",
         s.proxies_unheld,

@@ -22,6 +22,7 @@ mod readback;
 mod reflect;
 mod resources;
 mod screen;
+mod skips;
 mod stats;
 mod truth;
 
@@ -38,9 +39,10 @@ use crate::gpu::{Gpu, GpuError, TimestampSlot, Timings, read_texture};
 use crate::scene::Scene;
 use crate::variant::{Assignment, DepthRangeSource, Variant, ZSlicing};
 use built::{BuiltPass, Pipelines};
-use lists::CpuAssignment;
+use lists::{CpuAssignment, Fit};
 use post::PostChain;
 use resources::FrameResources;
+use skips::Skips;
 
 /// Why a frame could not be rendered.
 #[derive(Debug, thiserror::Error)]
@@ -113,21 +115,6 @@ pub struct Renderer<'g> {
     naive_stand_in: Option<Box<Renderer<'g>>>,
 }
 
-/// What this renderer's frames may leave out (all false when the variant skips nothing).
-#[derive(Clone, Debug, Default)]
-struct Skips {
-    /// The scene has no lights: no clustering at all.
-    no_lights: bool,
-    /// Neither lights nor camera move: after two frames (the second settles a depth range
-    /// taken from the previous frame) the lists, boxes and range stay valid.
-    static_scene: bool,
-    /// No light is a spot: the light loops are composed without the cone (reported as the
-    /// skipped part `spot_cone`).
-    no_spots: bool,
-    /// Skipping is on at all.
-    on: bool,
-}
-
 /// How a frame reports the spot cone it left out of its light loops.
 pub const SPOT_CONE: &str = "spot_cone";
 
@@ -166,12 +153,7 @@ impl<'g> Renderer<'g> {
         limits::check_frame(gpu, variant, scene)?;
         let still_camera = scene.camera == scene.prev_camera;
         let plan = compose::plan(variant, still_camera);
-        let skips = Skips {
-            no_lights: variant.skip_unneeded && scene.lights.is_empty(),
-            static_scene: variant.skip_unneeded && still_camera && !scene.lights_move,
-            no_spots: variant.skip_unneeded && !scene.lights.iter().any(|l| l.is_spot()),
-            on: variant.skip_unneeded,
-        };
+        let skips = Skips::new(variant, scene);
         let frame = compose::frame_features(!skips.no_spots, scene.textures.is_some(), None);
         let instrumented_frame = compose::frame_features(
             !skips.no_spots,
@@ -195,8 +177,12 @@ impl<'g> Renderer<'g> {
             .iter()
             .map(|p| Ok((*p, composer.compose_with(variant, p, &frame)?)))
             .collect::<Result<Vec<_>, RenderError>>()?;
+        let proxies = composed
+            .iter()
+            .find(|(p, _, _)| p.id == PassId::Clustering(compose::ClusterPass::LightAssign))
+            .and_then(|(_, c, _)| culling::ProxyLayout::of(c));
         let res = gpu.scoped("creating resources", || {
-            FrameResources::new(gpu, variant, scene)
+            FrameResources::new(gpu, variant, scene, proxies)
         })?;
         let post_passes: Vec<_> = composed
             .iter()
@@ -337,37 +323,47 @@ impl<'g> Renderer<'g> {
         })
     }
 
-    /// Whether this frame can leave out pass `id`.
-    fn skips_pass(&self, id: PassId, instrumented: bool) -> bool {
-        // An instrumented frame's counters come from assignment and shading: what only
-        // turns shaded colour into pixels (post effects, tonemap, a debug view) is left out.
-        // After a timed frame it counts on that frame's depth, G-buffer and lists (every
-        // frame of a renderer draws the same picture, and assignment's counters stay in
-        // the cluster stats), so only the shading pass runs.
-        if instrumented && (id.after_shading() || (self.last_frame_countable && !id.is_shading())) {
-            return true;
+    /// Run the frame until its light lists fit: the index buffer grows to the exact total a
+    /// frame reports, so one re-run fits; lists that still do not fit are an error, never a
+    /// picture with lights missing.
+    fn run_fitted(&mut self, instrumented: bool) -> Result<FrameRun, RenderError> {
+        for _ in 0..3 {
+            let frame = self.run_frame(instrumented)?;
+            let Some(c) = &self.res.clusters else {
+                return Ok(frame);
+            };
+            match lists::fit(self.gpu, c)? {
+                Fit::Fits => return Ok(frame),
+                Fit::GrowTo(capacity) => self.grow_lists(capacity)?,
+            }
         }
-        let s = &self.skips;
-        if !s.on {
-            return false;
+        Err(RenderError::Gpu(GpuError::Captured(
+            "the light lists still overflowed their buffer after growing it twice".into(),
+        )))
+    }
+
+    /// Replace the index buffer with one of `capacity` entries, and rebind.
+    fn grow_lists(&mut self, capacity: u32) -> Result<(), RenderError> {
+        let c = self.res.clusters.as_mut().expect("clustered");
+        c.grow_indices(self.gpu, capacity);
+        self.reallocations += 1;
+        self.remake_groups()
+    }
+
+    /// Build the light lists on the CPU and upload them (variants with `assignment: Cpu`);
+    /// the milliseconds it took.
+    fn assign_on_cpu(&mut self) -> Result<Option<f64>, RenderError> {
+        let Some(cpu) = &self.cpu_assignment else {
+            return Ok(None);
+        };
+        let (lists, ms) = cpu.assign();
+        let c = self.res.clusters.as_ref().expect("clustered");
+        if !c.upload_lists(self.gpu, &lists) {
+            self.grow_lists(lists::capacity_for(self.gpu, lists.indices.len() as u64)?)?;
+            let c = self.res.clusters.as_ref().expect("clustered");
+            c.upload_lists(self.gpu, &lists);
         }
-        let builds_clusters = matches!(id, PassId::Clustering(_));
-        if s.no_lights && builds_clusters {
-            return true;
-        }
-        // From a still scene's third frame on, the lists are those built before (an
-        // instrumented frame with no countable frame before it builds its own).
-        if s.static_scene && !instrumented && self.frames_done >= 2 && builds_clusters {
-            return true;
-        }
-        // Boxes depend on the projection, the size and the z-range, and with sample bounds
-        // on this frame's depth.
-        let clusters = self.variant.clusters();
-        let static_bounds =
-            !matches!(clusters.slicing, ZSlicing::DynamicRange { .. }) && !clusters.sample_bounds;
-        id == PassId::Clustering(compose::ClusterPass::ClusterBounds)
-            && self.bounds_built
-            && static_bounds
+        Ok(Some(ms))
     }
 
     /// Encode and run every pass of the frame (but those it can skip); returns pass timings,

@@ -241,3 +241,46 @@ impl PassLayout {
             .collect()
     }
 }
+
+/// How a buffer binding of a pass lays out its bytes, read off the module's types: the
+/// size of one element (an array's stride, or the whole type), and each struct member's
+/// byte offset by its declared name.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BufferLayout {
+    pub element_bytes: u64,
+    pub members: Vec<(String, u64)>,
+}
+
+impl BufferLayout {
+    /// The layout of the binding `pass` declares as `name`, if it has one.
+    pub fn of(pass: &ComposedPass, name: &str) -> Option<Self> {
+        let module = &pass.module;
+        let (&(group, binding), _) = pass.slot_names.iter().find(|(_, n)| *n == name)?;
+        let (_, var) = module.global_variables.iter().find(|(_, v)| {
+            v.binding
+                .as_ref()
+                .is_some_and(|b| b.group == group && b.binding == binding)
+        })?;
+        let ty = &module.types[var.ty].inner;
+        let (element_bytes, members) = match ty {
+            TypeInner::Array { stride, .. } => (*stride as u64, Vec::new()),
+            TypeInner::Struct { members, span } => (
+                *span as u64,
+                members
+                    .iter()
+                    .filter_map(|m| Some((m.name.clone()?, m.offset as u64)))
+                    .collect(),
+            ),
+            other => (other.size(module.to_ctx()) as u64, Vec::new()),
+        };
+        Some(Self {
+            element_bytes,
+            members,
+        })
+    }
+
+    /// The byte offset of member `name`.
+    pub fn offset(&self, name: &str) -> Option<u64> {
+        self.members.iter().find(|(n, _)| n == name).map(|&(_, at)| at)
+    }
+}

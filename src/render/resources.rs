@@ -348,8 +348,14 @@ pub struct FrameResources {
 
 impl FrameResources {
     /// Upload `scene` and make the targets, cluster buffers (clustered variants) and
-    /// counters a frame of `variant` needs. Call inside an error scope.
-    pub fn new(gpu: &Gpu, variant: &Variant, scene: &Scene) -> Self {
+    /// counters a frame of `variant` needs (`proxies`: rasterised binning's buffer layouts,
+    /// from its pass). Call inside an error scope.
+    pub fn new(
+        gpu: &Gpu,
+        variant: &Variant,
+        scene: &Scene,
+        proxies: Option<super::culling::ProxyLayout>,
+    ) -> Self {
         let (w, h) = (scene.params.width, scene.params.height);
         let depth = DepthSetup::of(variant);
         let targets = Targets {
@@ -373,7 +379,7 @@ impl FrameResources {
                 .max(1024)
                 .min(bindable) as u32;
             let range = super::ClusterRange::new(scene.camera.near as f32, scene.camera.far as f32);
-            super::ClusterBuffers::new(gpu, &c, lights, capacity, range)
+            super::ClusterBuffers::new(gpu, &c, lights, capacity, range, proxies)
         });
         Self {
             scene: SceneBuffers::upload(gpu, scene, depth.mapping),

@@ -1,4 +1,4 @@
-//! A study's table as text: aligned for the terminal, and Markdown for the studies' write-up (`docs/STUDIES.md`).
+//! A study's table as text: aligned for the terminal, and Markdown for the studies' write-up (`docs/studies/`).
 
 use std::collections::BTreeMap;
 

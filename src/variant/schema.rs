@@ -177,7 +177,7 @@ pub enum Culling {
     /// sorted light reaching it, and each of its x-by-y tiles a bitmask of the lights that
     /// reach the tile; a pixel walks the lights of its bin's range that its tile's mask
     /// holds. Memory is bins + tiles x lights / 32 words. Spots are binned by their bounding
-    /// sphere. Exact lists only, GPU assignment, no active clusters, at most 65536 lights.
+    /// sphere. Exact lists only, GPU assignment, no active clusters.
     ZBinning,
     /// Ortegren and Persson 2016's rasterised binning (Bevy's GPU clustering): a compute pass
     /// splits each light into one proxy per z slice its sphere reaches, the rectangle of

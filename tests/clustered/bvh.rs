@@ -32,7 +32,7 @@ fn the_gpu_builds_the_twins_tree_and_lists_what_one_level_lists() {
                 .map(|r| [r[0], r[1], r[2], r[3]])
                 .collect();
             let order = bvh::order(&ranges, v.clusters().grid);
-            let got_order: Vec<[u32; 2]> = words("bvh_order")
+            let got_order: Vec<[u32; 2]> = words("sorted_lights")
                 .chunks_exact(2)
                 .map(|e| [e[0], e[1]])
                 .collect();

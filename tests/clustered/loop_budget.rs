@@ -43,7 +43,7 @@ fn with_lights(lights: Vec<Light>) -> Scene {
     scene
 }
 
-/// 65536 lights, past the budget of a loop over every light (and z-binning's most), all
+/// 65536 lights, past the budget of a loop over every light, all
 /// but the last far out of view: every method renders what the last light alone renders,
 /// bit for bit (before, every clustered frame past 62494 lights was refused on llvmpipe).
 #[test]

@@ -6,8 +6,9 @@
 //! workgroups beyond the blocks (which return at once), a level is its nodes.
 
 use super::one_level::scan_blocks;
-use super::{Clear, Over, Plan, Step, long_lists};
-use crate::cpu::bvh::{SORT_BLOCK, level_sizes, merge_schedule, sorted_size};
+use super::{Clear, Over, Plan, Step, check_sorted, long_lists, sort_lights, sorted_lights};
+use crate::cpu::bvh::level_sizes;
+use crate::cpu::sort::sorted_size;
 use crate::gpu::{Gpu, GpuError};
 use crate::render::clusters::ClusterBuffers;
 
@@ -16,19 +17,11 @@ use crate::render::clusters::ClusterBuffers;
 const MAX_LIGHTS: u32 = 1 << 20;
 
 pub(super) fn plan(c: &ClusterBuffers, lights: u32) -> Plan<'_> {
-    let n = sorted_size(lights);
-    let blocks = n / SORT_BLOCK;
     let mut clears = vec![Clear::whole(&c.counts)];
     clears.extend(Clear::long_lists(c));
-    let mut steps = vec![
-        Step::Dispatch("transform_lights", Over::Threads(lights, 1)),
-        Step::Dispatch("sort_blocks", Over::Groups(blocks, 1, 1)),
-    ];
-    for (s, (_, j)) in merge_schedule(n).into_iter().enumerate() {
-        let entry = if j == 0 { "merge_blocks" } else { "merge_step" };
-        steps.push(Step::Dispatch(entry, Over::Groups(blocks + s as u32, 1, 1)));
-    }
-    for nodes in level_sizes(n) {
+    let mut steps = vec![Step::Dispatch("transform_lights", Over::Threads(lights, 1))];
+    steps.extend(sort_lights(lights));
+    for nodes in level_sizes(sorted_size(lights)) {
         steps.push(Step::Dispatch("build_nodes", Over::Groups(nodes, 1, 1)));
     }
     steps.extend([
@@ -46,7 +39,7 @@ pub(super) fn plan(c: &ClusterBuffers, lights: u32) -> Plan<'_> {
 pub(super) fn own_buffers(lights: u32) -> Vec<(&'static str, u64)> {
     let n = sorted_size(lights);
     let nodes: u64 = level_sizes(n).iter().map(|&s| s as u64).sum();
-    vec![("bvh_order", n as u64 * 8), ("bvh_nodes", nodes * 16)]
+    vec![sorted_lights(lights), ("bvh_nodes", nodes * 16)]
 }
 
 /// Refuse a frame of more lights than the tree's lowest level can be built for, or whose
@@ -57,13 +50,5 @@ pub(super) fn check(gpu: &Gpu, lights: usize) -> Result<(), GpuError> {
             "the light BVH is built for at most {MAX_LIGHTS} lights and the scene has {lights}; use fewer lights or another `clusters.culling`"
         )));
     }
-    let bytes = sorted_size(lights as u32) as u64 * 8;
-    let max = gpu.max_storage_bytes();
-    if bytes > max {
-        return Err(GpuError::TooLarge(format!(
-            "the light BVH's order of {lights} lights takes {bytes} bytes, more than the {max} bytes adapter `{}` allows in one buffer; use fewer lights",
-            gpu.adapter.name
-        )));
-    }
-    Ok(())
+    check_sorted(gpu, "the light BVH", lights)
 }

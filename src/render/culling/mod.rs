@@ -10,11 +10,12 @@ mod rasterised;
 mod two_level;
 mod zbinning;
 
-pub use rasterised::BinningPipelines;
+pub use rasterised::{BinningPipelines, ProxyLayout};
 
 use super::clusters::{ClusterBuffers, DISPATCH_ARGS_BYTES};
 use super::passes::{ComputePipelines, set_compute_groups};
 use crate::compose::LIGHTS_PER_ROW;
+use crate::cpu::sort::{SORT_BLOCK, merge_schedule, sorted_size};
 use crate::gpu::{Gpu, GpuError, TimestampSlot};
 
 use crate::variant::CullingMethod;
@@ -32,14 +33,18 @@ impl CullingMethod {
     }
 
     /// The buffers only this method's shader root declares (bound by those names), with
-    /// their sizes in bytes, for `lights` lights on `grid`.
-    pub fn own_buffers(self, grid: (u32, u32, u32), lights: u32) -> Vec<(&'static str, u64)> {
+    /// their sizes in bytes, for `lights` lights on `grid` and lists of `entries` entries.
+    pub fn own_buffers(
+        self,
+        grid: (u32, u32, u32),
+        lights: u32,
+        entries: u32,
+    ) -> Vec<(&'static str, u64)> {
         let _ = grid;
         match self {
-            CullingMethod::OneLevel
-            | CullingMethod::TwoLevel { .. }
-            | CullingMethod::ZBinning
-            | CullingMethod::Rasterised => Vec::new(),
+            CullingMethod::OneLevel | CullingMethod::TwoLevel { .. } => Vec::new(),
+            CullingMethod::Rasterised => rasterised::own_buffers(entries),
+            CullingMethod::ZBinning => vec![sorted_lights(lights)],
             CullingMethod::Bvh => bvh::own_buffers(lights),
         }
     }
@@ -116,6 +121,38 @@ fn long_lists<'a>(c: &'a ClusterBuffers, entry: &'static str) -> [Step<'a>; 2] {
         Step::Copy(&c.sort_jobs, 0, &c.sort_dispatch, Some(DISPATCH_ARGS_BYTES)),
         Step::Indirect(entry, &c.sort_dispatch),
     ]
+}
+
+/// The lights sorted by key (`clustering/sort.wesl`, shared by the BVH and z-binning):
+/// each block sorted in a workgroup's memory, then each merge step, which carries its
+/// place in the schedule as workgroups beyond the blocks.
+fn sort_lights(lights: u32) -> Vec<Step<'static>> {
+    let n = sorted_size(lights);
+    let blocks = n / SORT_BLOCK;
+    let mut steps = vec![Step::Dispatch("sort_blocks", Over::Groups(blocks, 1, 1))];
+    for (s, (_, j)) in merge_schedule(n).into_iter().enumerate() {
+        let entry = if j == 0 { "merge_blocks" } else { "merge_step" };
+        steps.push(Step::Dispatch(entry, Over::Groups(blocks + s as u32, 1, 1)));
+    }
+    steps
+}
+
+/// The sort's order: a key and a light an entry.
+fn sorted_lights(lights: u32) -> (&'static str, u64) {
+    ("sorted_lights", sorted_size(lights) as u64 * 8)
+}
+
+/// Refuse a frame whose sorted order does not fit one buffer.
+fn check_sorted(gpu: &Gpu, method: &str, lights: usize) -> Result<(), GpuError> {
+    let (_, bytes) = sorted_lights(lights as u32);
+    let max = gpu.max_storage_bytes();
+    if bytes > max {
+        return Err(GpuError::TooLarge(format!(
+            "{method}'s sorted order of {lights} lights takes {bytes} bytes, more than the {max} bytes adapter `{}` allows in one buffer; use fewer lights",
+            gpu.adapter.name
+        )));
+    }
+    Ok(())
 }
 
 /// Encode light assignment by `method`: its clears, then its steps. The first compute pass

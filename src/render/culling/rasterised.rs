@@ -8,10 +8,31 @@ use super::one_level::scan_blocks;
 use super::{Clear, Over, Plan, Step, long_lists};
 use crate::compose::ComposedPass;
 use crate::gpu::{Gpu, GpuError};
-use crate::render::clusters::{
-    BIN_TARGET_FORMAT, ClusterBuffers, DISPATCH_ARGS_BYTES, SCATTER_DISPATCH_AT,
-};
+use crate::render::clusters::{BIN_TARGET_FORMAT, ClusterBuffers, DISPATCH_ARGS_BYTES};
 use crate::render::passes::{begin_render, color_target, render_pipeline};
+use crate::render::reflect::BufferLayout;
+
+/// Rasterised binning's buffer layouts as its shader root declares them, read off its naga
+/// module: a proxy's bytes (`light_proxies`' stride, the draw's instance stride too), the
+/// bytes of `ProxyDraw`, and where in it the scatter's dispatch starts (`scatter_x`).
+#[derive(Clone, Copy, Debug)]
+pub struct ProxyLayout {
+    pub proxy_bytes: u64,
+    pub draw_bytes: u64,
+    pub scatter_at: u64,
+}
+
+impl ProxyLayout {
+    /// The layout of light assignment pass `pass`; `None` where it declares no proxies.
+    pub fn of(pass: &ComposedPass) -> Option<Self> {
+        let draw = BufferLayout::of(pass, "proxy_draw")?;
+        Some(Self {
+            proxy_bytes: BufferLayout::of(pass, "light_proxies")?.element_bytes,
+            draw_bytes: draw.element_bytes,
+            scatter_at: draw.offset("scatter_x")?,
+        })
+    }
+}
 
 /// The draw of the light proxies, which counts and records the pairs.
 pub struct BinningPipelines {
@@ -24,10 +45,11 @@ impl BinningPipelines {
         gpu: &Gpu,
         pass: &ComposedPass,
         layout: &wgpu::PipelineLayout,
+        proxies: ProxyLayout,
     ) -> Result<Self, GpuError> {
         // One instance per proxy: (light, slice, x0 | x1 << 16, y0 | y1 << 16).
         let instances = wgpu::VertexBufferLayout {
-            array_stride: 16,
+            array_stride: proxies.proxy_bytes,
             step_mode: wgpu::VertexStepMode::Instance,
             attributes: &[wgpu::VertexAttribute {
                 format: wgpu::VertexFormat::Uint32x4,
@@ -50,6 +72,10 @@ impl BinningPipelines {
 }
 
 pub(super) fn plan(c: &ClusterBuffers, lights: u32) -> Plan<'_> {
+    let scatter_at = c
+        .proxy_layout
+        .expect("rasterised binning's buffers have its layout")
+        .scatter_at;
     let mut clears = vec![
         Clear::whole(&c.counts),
         Clear::whole(&c.fill_cursors),
@@ -71,7 +97,7 @@ pub(super) fn plan(c: &ClusterBuffers, lights: u32) -> Plan<'_> {
         Step::Dispatch("size_pair_passes", Over::Groups(1, 1, 1)),
         Step::Copy(
             &c.proxy_draw,
-            SCATTER_DISPATCH_AT,
+            scatter_at,
             &c.scatter_dispatch,
             Some(DISPATCH_ARGS_BYTES),
         ),
@@ -81,6 +107,16 @@ pub(super) fn plan(c: &ClusterBuffers, lights: u32) -> Plan<'_> {
     ];
     steps.extend(long_lists(c, "sort_long_lists"));
     Plan { clears, steps }
+}
+
+/// The pairs the draw records: cluster, light and place arrays, an entry per list entry.
+pub(super) fn own_buffers(entries: u32) -> Vec<(&'static str, u64)> {
+    let bytes = entries as u64 * 4;
+    vec![
+        ("pair_clusters", bytes),
+        ("pair_lights", bytes),
+        ("pair_places", bytes),
+    ]
 }
 
 /// The draw of the proxies into the binning target, which it clears and discards.
