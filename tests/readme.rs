@@ -27,13 +27,9 @@ fn culling(v: &Variant) -> String {
         return "-".into();
     }
     let c = v.clusters();
-    let mut label = match (c.assignment, c.culling, c.big_tiles) {
-        (Assignment::Cpu, ..) => "CPU".to_string(),
-        (_, Culling::ZBinning, _) => "z-binning".into(),
-        (_, Culling::Rasterised, _) => "rasterised".into(),
-        (_, Culling::Bvh, _) => "BVH".into(),
-        (_, Culling::Boxes | Culling::DepthMask, Some(_)) => "two-level".into(),
-        (_, Culling::Boxes | Culling::DepthMask, None) => "one-level".into(),
+    let mut label = match c.assignment {
+        Assignment::Cpu => "CPU".to_string(),
+        Assignment::Gpu => c.method().label().to_string(),
     };
     if c.culling == Culling::DepthMask {
         label += " 2.5D";

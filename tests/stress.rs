@@ -26,10 +26,10 @@ fn the_stress_suite_passes() {
     assert_eq!(ran, expected);
     let guide = std::fs::read_to_string("docs/guide.md").expect("docs/guide.md");
     let guide = guide.split_whitespace().collect::<Vec<_>>().join(" ");
+    // The case count, not the runs': a new culling method adds runs and leaves the guide.
     let claim = format!(
-        "runs {} adversarial cases on every pipeline each applies to ({} runs",
-        listed.len(),
-        expected.len()
+        "runs {} adversarial cases on every pipeline each applies to",
+        listed.len()
     );
     assert!(
         guide.contains(&claim),

@@ -49,10 +49,10 @@ impl Renderer<'_> {
             PassId::Clustering(p) => {
                 let compute = ComputePipelines::all(gpu, composed, l)?;
                 let method = self.variant.clusters().method();
-                let proxies = self.res.clusters.as_ref().and_then(|c| c.proxy_layout);
+                let drawing = self.res.clusters.as_ref().and_then(|c| c.drawing.as_ref());
                 if p == compose::ClusterPass::LightAssign && method == CullingMethod::Rasterised {
-                    let proxies = proxies.ok_or_else(|| no_proxy_layout(composed))?;
-                    Pipelines::Binning(compute, BinningPipelines::new(gpu, composed, l, proxies)?)
+                    let layout = drawing.ok_or_else(|| no_proxy_layout(composed))?.layout;
+                    Pipelines::Binning(compute, BinningPipelines::new(gpu, composed, l, layout)?)
                 } else {
                     Pipelines::Compute(compute)
                 }

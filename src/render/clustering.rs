@@ -44,9 +44,11 @@ pub fn encode(
         }
         ClusterPass::MarkActive => {
             encoder.clear_buffer(&c.active, 0, None);
-            encoder.clear_buffer(&c.sample_depths, 0, None);
-            encoder.clear_buffer(&c.depth_masks, 0, None);
-            encoder.clear_buffer(&c.big_tile_depths, 0, None);
+            for name in ["sample_depths", "depth_masks", "big_tile_depths"] {
+                if let Some(buffer) = c.buffer(name) {
+                    encoder.clear_buffer(buffer, 0, None);
+                }
+            }
             let mut marks = vec![("mark_active", p.groups_for("mark_active", pixels))];
             if c.culling.marks_depth_cells() {
                 marks.push(("mark_cells", p.groups_for("mark_cells", pixels)));

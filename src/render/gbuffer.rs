@@ -4,19 +4,24 @@ use super::resources::{F32_BITS_FORMAT, Target};
 use crate::gpu::Gpu;
 use crate::variant::{GBufferLayout, ShadingModel, Variant};
 
-/// The colour targets of a variant's layout, in location order. Only Compact needs a target
-/// of its own for GGX's roughness and metallic; the others keep them in spare bits.
-pub fn formats(v: &Variant) -> Vec<wgpu::TextureFormat> {
+/// The colour targets of a variant's layout, in location order, each with the name the
+/// resolve passes read it by (`packing/gbuffer.wesl`). Only Compact needs a target of its
+/// own for GGX's roughness and metallic; the others keep them in spare bits.
+pub fn formats(v: &Variant) -> Vec<(&'static str, wgpu::TextureFormat)> {
     match v.gbuffer().layout {
-        GBufferLayout::Wide => vec![F32_BITS_FORMAT; 3],
-        GBufferLayout::Packed => vec![F32_BITS_FORMAT; 2],
+        GBufferLayout::Wide => ["gbuffer0", "gbuffer1", "gbuffer2"]
+            .map(|name| (name, F32_BITS_FORMAT))
+            .to_vec(),
+        GBufferLayout::Packed => ["gbuffer0", "gbuffer1"]
+            .map(|name| (name, F32_BITS_FORMAT))
+            .to_vec(),
         GBufferLayout::Compact => {
             let mut f = vec![
-                wgpu::TextureFormat::Rgba8Unorm,
-                wgpu::TextureFormat::R32Uint,
+                ("albedo_texture", wgpu::TextureFormat::Rgba8Unorm),
+                ("normal_texture", wgpu::TextureFormat::R32Uint),
             ];
             if v.shading.model == ShadingModel::Ggx {
-                f.push(wgpu::TextureFormat::Rg8Unorm);
+                f.push(("material_texture", wgpu::TextureFormat::Rg8Unorm));
             }
             f
         }
@@ -27,14 +32,14 @@ pub fn formats(v: &Variant) -> Vec<wgpu::TextureFormat> {
 pub fn bytes_per_pixel(v: &Variant) -> u32 {
     4 + formats(v)
         .iter()
-        .map(|f| f.block_copy_size(None).unwrap_or(0))
+        .map(|(_, f)| f.block_copy_size(None).unwrap_or(0))
         .sum::<u32>()
 }
 
-pub fn targets(gpu: &Gpu, v: &Variant, w: u32, h: u32) -> Vec<Target> {
+/// The layout's targets, each with its name.
+pub fn targets(gpu: &Gpu, v: &Variant, w: u32, h: u32) -> Vec<(&'static str, Target)> {
     formats(v)
         .into_iter()
-        .enumerate()
-        .map(|(i, f)| Target::new(gpu, &format!("gbuffer {i}"), w, h, f))
+        .map(|(name, f)| (name, Target::new(gpu, name, w, h, f)))
         .collect()
 }

@@ -135,10 +135,10 @@ fn check_walks(gpu: &Gpu, c: &ClusterBuffers, s: &ClusterStats) -> Result<(), Re
 /// binds holds (the buffer is sized for a proxy per light and slice, up to that size; most
 /// lights span a few slices, so most frames past that worst case still fit).
 fn check_proxies(gpu: &Gpu, c: &ClusterBuffers, s: &ClusterStats) -> Result<(), RenderError> {
-    let Some(layout) = c.proxy_layout.filter(|_| s.proxies_unheld != 0) else {
+    let Some(d) = c.drawing.as_ref().filter(|_| s.proxies_unheld != 0) else {
         return Ok(());
     };
-    let bytes = s.proxies_unheld as u64 * layout.proxy_bytes;
+    let bytes = s.proxies_unheld as u64 * d.layout.proxy_bytes;
     Err(RenderError::Gpu(GpuError::TooLarge(format!(
         "rasterised binning's {} light proxies this frame take {bytes} bytes, more than the {} bytes adapter `{}` allows in one buffer; use fewer slices or lights",
         s.proxies_unheld,

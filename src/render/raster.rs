@@ -34,7 +34,7 @@ pub fn pipelines(
         RasterPass::DepthPrepass => vec![build(None, &[], d.state(d.compare(), true))?],
         RasterPass::GBuffer => {
             let formats = gbuffer::formats(variant);
-            let targets: Vec<_> = formats.into_iter().map(color_target).collect();
+            let targets: Vec<_> = formats.into_iter().map(|(_, f)| color_target(f)).collect();
             vec![build(
                 Some("fs_main"),
                 &targets,
@@ -87,7 +87,7 @@ pub fn encode(
             targets
                 .gbuffer
                 .iter()
-                .map(|t| clear_attachment(&t.view))
+                .map(|(_, t)| clear_attachment(&t.view))
                 .collect(),
             depth(true),
         ),

@@ -281,6 +281,9 @@ impl BufferLayout {
 
     /// The byte offset of member `name`.
     pub fn offset(&self, name: &str) -> Option<u64> {
-        self.members.iter().find(|(n, _)| n == name).map(|&(_, at)| at)
+        self.members
+            .iter()
+            .find(|(n, _)| n == name)
+            .map(|&(_, at)| at)
     }
 }

@@ -120,16 +120,18 @@ impl SceneBuffers {
         }
     }
 
-    /// What sits at `@group(0) @binding(binding)` of a raster pass: the view, the lights, the
-    /// base colour textures and their sampler (`common/material.wesl`).
-    pub fn frame_binding(&self, binding: u32) -> Option<wgpu::BindingResource<'_>> {
-        match binding {
-            0 => Some(self.view.as_entire_binding()),
-            1 => Some(self.lights.as_entire_binding()),
-            2 => Some(wgpu::BindingResource::TextureView(
+    /// What fills the frame's binding declared as `name`, if it is one of its: the view, the
+    /// lights, the base colour textures and their sampler (`common/material.wesl`).
+    pub fn frame_binding(&self, name: &str) -> Option<wgpu::BindingResource<'_>> {
+        match name {
+            "view" => Some(self.view.as_entire_binding()),
+            "lights" => Some(self.lights.as_entire_binding()),
+            "base_color_textures" => Some(wgpu::BindingResource::TextureView(
                 &self.base_color.as_ref()?.0,
             )),
-            3 => Some(wgpu::BindingResource::Sampler(&self.base_color.as_ref()?.1)),
+            "base_color_sampler" => {
+                Some(wgpu::BindingResource::Sampler(&self.base_color.as_ref()?.1))
+            }
             _ => None,
         }
     }
@@ -299,7 +301,7 @@ pub struct Targets {
     pub depth: Target,
     pub hdr: Target,
     pub ldr: Target,
-    pub gbuffer: Vec<Target>,
+    pub gbuffer: Vec<(&'static str, Target)>,
 }
 
 /// Per-pixel counters of instrumented frames (group 3 of the shading passes, in
@@ -389,27 +391,33 @@ impl FrameResources {
         }
     }
 
-    /// What fills `slot` of a scene pass. The groups are the same in every scene pass: 0
-    /// the frame (`view`, `lights`), 1 the clusters (by the names `build_bindings.wesl`
-    /// declares, and `lookup.wesl` read-only), 2 the surface (depth, then the G-buffer
-    /// targets; `packing/gbuffer.wesl`), 3 the counters.
+    /// What fills `slot` of a scene pass, by the name its module declares it by (the slot
+    /// numbers are written only in the WGSL): the frame's (`view`, `lights`, the base
+    /// colour textures), the clusters' (by the names `build_bindings.wesl` declares, and
+    /// `lookup.wesl` read-only), the surface's (depth, the G-buffer targets of
+    /// `packing/gbuffer.wesl`), and the counters of `shading/light_loop.wesl`.
     pub fn scene_binding(&self, slot: &Slot) -> Option<wgpu::BindingResource<'_>> {
         fn texture(t: &Target) -> wgpu::BindingResource<'_> {
             wgpu::BindingResource::TextureView(&t.view)
         }
-        match (slot.group, slot.binding) {
-            (0, b) => self.scene.frame_binding(b),
-            (1, _) => self
-                .clusters
-                .as_ref()?
-                .buffer(slot.name)
-                .map(|b| b.as_entire_binding()),
-            (2, 0) => Some(texture(&self.targets.depth)),
-            (2, b) => self.targets.gbuffer.get(b as usize - 1).map(texture),
-            (3, 0) => Some(self.counters.evals.as_entire_binding()),
-            (3, 1) => Some(self.counters.useful.as_entire_binding()),
-            (3, 2) => Some(self.counters.clusters.as_entire_binding()),
-            _ => None,
+        let name = slot.name;
+        if let Some(frame) = self.scene.frame_binding(name) {
+            return Some(frame);
+        }
+        if let Some(buffer) = self.clusters.as_ref().and_then(|c| c.buffer(name)) {
+            return Some(buffer.as_entire_binding());
+        }
+        match name {
+            "depth_texture" => Some(texture(&self.targets.depth)),
+            "pixel_evals" => Some(self.counters.evals.as_entire_binding()),
+            "pixel_useful" => Some(self.counters.useful.as_entire_binding()),
+            "pixel_clusters" => Some(self.counters.clusters.as_entire_binding()),
+            _ => self
+                .targets
+                .gbuffer
+                .iter()
+                .find(|(n, _)| *n == name)
+                .map(|(_, t)| texture(t)),
         }
     }
 }

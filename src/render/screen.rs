@@ -53,9 +53,9 @@ pub fn binding<'a>(
     resources: &'a FrameResources,
     shaded: &'a wgpu::TextureView,
 ) -> Option<wgpu::BindingResource<'a>> {
-    match (pass, slot.group, slot.binding) {
-        (ScreenPass::Tonemap, 0, 0) => Some(wgpu::BindingResource::TextureView(shaded)),
-        (ScreenPass::Tonemap, _, _) => None,
+    match (pass, slot.name) {
+        (ScreenPass::Tonemap, "hdr") => Some(wgpu::BindingResource::TextureView(shaded)),
+        (ScreenPass::Tonemap, _) => None,
         _ => resources.scene_binding(slot),
     }
 }

@@ -203,7 +203,7 @@ impl<'g> Renderer<'g> {
         };
         [&t.depth, &t.hdr, &t.ldr]
             .into_iter()
-            .chain(&t.gbuffer)
+            .chain(t.gbuffer.iter().map(|(_, t)| t))
             .map(size)
             .sum::<u32>()
             + self.post.bytes_per_pixel()

@@ -49,10 +49,7 @@ pub fn raster_truth(
     let depth = DepthSetup::of(variant);
     let textures = gpu.scoped("raster truth", || -> Result<_, RenderError> {
         let buffers = SceneBuffers::upload(gpu, scene, depth.mapping);
-        let frame = |slot: &Slot| match slot.group {
-            0 => buffers.frame_binding(slot.binding),
-            _ => None,
-        };
+        let frame = |slot: &Slot| buffers.frame_binding(slot.name);
         let layout = PassLayout::of(gpu, &pass)?;
         let groups = layout.bind_groups(gpu, "truth", frame)?;
         let vertex = [Some(SceneBuffers::vertex_layout())];

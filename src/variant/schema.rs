@@ -254,6 +254,17 @@ impl CullingMethod {
         }
     }
 
+    /// Its short name, as README's table of variants labels it.
+    pub fn label(self) -> &'static str {
+        match self {
+            CullingMethod::OneLevel => "one-level",
+            CullingMethod::TwoLevel { .. } => "two-level",
+            CullingMethod::ZBinning => "z-binning",
+            CullingMethod::Rasterised => "rasterised",
+            CullingMethod::Bvh => "BVH",
+        }
+    }
+
     /// Whether it builds per-cluster lists (and boxes to test them on); z-binning walks bins
     /// and tile masks instead.
     pub fn builds_lists(self) -> bool {

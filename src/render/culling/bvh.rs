@@ -17,7 +17,7 @@ use crate::render::clusters::ClusterBuffers;
 const MAX_LIGHTS: u32 = 1 << 20;
 
 pub(super) fn plan(c: &ClusterBuffers, lights: u32) -> Plan<'_> {
-    let mut clears = vec![Clear::whole(&c.counts)];
+    let mut clears = vec![Clear::whole(c.named("light_counts"))];
     clears.extend(Clear::long_lists(c));
     let mut steps = vec![Step::Dispatch("transform_lights", Over::Threads(lights, 1))];
     steps.extend(sort_lights(lights));

@@ -12,7 +12,7 @@ mod zbinning;
 
 pub use rasterised::{BinningPipelines, ProxyLayout};
 
-use super::clusters::{ClusterBuffers, DISPATCH_ARGS_BYTES};
+use super::clusters::{ClusterBuffers, DISPATCH_ARGS_BYTES, Sizing};
 use super::passes::{ComputePipelines, set_compute_groups};
 use crate::compose::LIGHTS_PER_ROW;
 use crate::cpu::sort::{SORT_BLOCK, merge_schedule, sorted_size};
@@ -32,20 +32,15 @@ impl CullingMethod {
         }
     }
 
-    /// The buffers only this method's shader root declares (bound by those names), with
-    /// their sizes in bytes, for `lights` lights on `grid` and lists of `entries` entries.
-    pub fn own_buffers(
-        self,
-        grid: (u32, u32, u32),
-        lights: u32,
-        entries: u32,
-    ) -> Vec<(&'static str, u64)> {
-        let _ = grid;
+    /// The buffers only this method binds (its own root's and its own module's), by the
+    /// names they are declared by, with their sizes in bytes.
+    pub fn own_buffers(self, s: &Sizing) -> Vec<(&'static str, u64)> {
         match self {
-            CullingMethod::OneLevel | CullingMethod::TwoLevel { .. } => Vec::new(),
-            CullingMethod::Rasterised => rasterised::own_buffers(entries),
-            CullingMethod::ZBinning => vec![sorted_lights(lights)],
-            CullingMethod::Bvh => bvh::own_buffers(lights),
+            CullingMethod::OneLevel => Vec::new(),
+            CullingMethod::TwoLevel { big_tile } => two_level::own_buffers(s, big_tile),
+            CullingMethod::Rasterised => rasterised::own_buffers(s),
+            CullingMethod::ZBinning => zbinning::own_buffers(s),
+            CullingMethod::Bvh => bvh::own_buffers(s.lights),
         }
     }
 
@@ -78,8 +73,8 @@ impl<'a> Clear<'a> {
     /// The long lists' workgroup and job counts (the header's x and fourth word).
     fn long_lists(c: &'a ClusterBuffers) -> [Self; 2] {
         [
-            Clear(&c.sort_jobs, 0, Some(4)),
-            Clear(&c.sort_jobs, 12, Some(4)),
+            Clear(c.named("sort_jobs"), 0, Some(4)),
+            Clear(c.named("sort_jobs"), 12, Some(4)),
         ]
     }
 }
@@ -118,7 +113,12 @@ fn per_light(lights: u32) -> Over {
 /// (written): as many workgroups as the passes before queued, in a compute pass of their own.
 fn long_lists<'a>(c: &'a ClusterBuffers, entry: &'static str) -> [Step<'a>; 2] {
     [
-        Step::Copy(&c.sort_jobs, 0, &c.sort_dispatch, Some(DISPATCH_ARGS_BYTES)),
+        Step::Copy(
+            c.named("sort_jobs"),
+            0,
+            &c.sort_dispatch,
+            Some(DISPATCH_ARGS_BYTES),
+        ),
         Step::Indirect(entry, &c.sort_dispatch),
     ]
 }

@@ -7,7 +7,10 @@ use crate::compose::SCAN_BLOCK;
 use crate::render::clusters::ClusterBuffers;
 
 pub(super) fn plan(c: &ClusterBuffers, lights: u32) -> Plan<'_> {
-    let mut clears = vec![Clear::whole(&c.counts), Clear::whole(&c.fill_cursors)];
+    let mut clears = vec![
+        Clear::whole(c.named("light_counts")),
+        Clear::whole(c.named("fill_cursors")),
+    ];
     clears.extend(Clear::long_lists(c));
     let mut steps = vec![
         Step::Dispatch("transform_lights", Over::Threads(lights, 1)),

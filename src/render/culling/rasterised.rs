@@ -8,7 +8,9 @@ use super::one_level::scan_blocks;
 use super::{Clear, Over, Plan, Step, long_lists};
 use crate::compose::ComposedPass;
 use crate::gpu::{Gpu, GpuError};
-use crate::render::clusters::{BIN_TARGET_FORMAT, ClusterBuffers, DISPATCH_ARGS_BYTES};
+use crate::render::clusters::{
+    BIN_TARGET_FORMAT, ClusterBuffers, DISPATCH_ARGS_BYTES, ProxyDrawing, Sizing,
+};
 use crate::render::passes::{begin_render, color_target, render_pipeline};
 use crate::render::reflect::BufferLayout;
 
@@ -72,14 +74,12 @@ impl BinningPipelines {
 }
 
 pub(super) fn plan(c: &ClusterBuffers, lights: u32) -> Plan<'_> {
-    let scatter_at = c
-        .proxy_layout
-        .expect("rasterised binning's buffers have its layout")
-        .scatter_at;
+    let d = drawing(c);
+    let proxy_draw = c.named("proxy_draw");
     let mut clears = vec![
-        Clear::whole(&c.counts),
-        Clear::whole(&c.fill_cursors),
-        Clear::whole(&c.proxy_draw),
+        Clear::whole(c.named("light_counts")),
+        Clear::whole(c.named("fill_cursors")),
+        Clear::whole(proxy_draw),
     ];
     clears.extend(Clear::long_lists(c));
     let mut steps = vec![
@@ -89,33 +89,44 @@ pub(super) fn plan(c: &ClusterBuffers, lights: u32) -> Plan<'_> {
         Step::Dispatch("split_lights", Over::Threads(lights, 1)),
         // The draw's indirect arguments and instances (a buffer bound for storage in a pass
         // cannot also be its vertex or indirect buffer).
-        Step::Copy(&c.proxy_draw, 0, &c.proxy_draw_args, Some(16)),
-        Step::Copy(&c.light_proxies, 0, &c.proxy_instances, None),
+        Step::Copy(proxy_draw, 0, &d.draw_args, Some(16)),
+        Step::Copy(c.named("light_proxies"), 0, &d.instances, None),
         Step::DrawProxies,
         Step::Dispatch("scan_local", scan_blocks(c)),
         Step::Dispatch("scan_blocks", Over::Groups(1, 1, 1)),
         Step::Dispatch("size_pair_passes", Over::Groups(1, 1, 1)),
         Step::Copy(
-            &c.proxy_draw,
-            scatter_at,
-            &c.scatter_dispatch,
+            proxy_draw,
+            d.layout.scatter_at,
+            &d.scatter_dispatch,
             Some(DISPATCH_ARGS_BYTES),
         ),
-        Step::Indirect("scatter_pairs", &c.scatter_dispatch),
-        Step::Indirect("find_unsorted", &c.scatter_dispatch),
+        Step::Indirect("scatter_pairs", &d.scatter_dispatch),
+        Step::Indirect("find_unsorted", &d.scatter_dispatch),
         Step::Dispatch("finish_lists", Over::Threads(c.clusters, 1)),
     ];
     steps.extend(long_lists(c, "sort_long_lists"));
     Plan { clears, steps }
 }
 
-/// The pairs the draw records: cluster, light and place arrays, an entry per list entry.
-pub(super) fn own_buffers(entries: u32) -> Vec<(&'static str, u64)> {
-    let bytes = entries as u64 * 4;
+/// The proxies, a proxy per light and slice at most, up to the largest buffer the adapter
+/// binds (a frame with more is refused after it runs: `ClusterStats::proxies_unheld`);
+/// the draw's arguments; each light's proxy count, then place; and the pairs the draw
+/// records, cluster, light and place arrays of an entry per list entry.
+pub(super) fn own_buffers(s: &Sizing) -> Vec<(&'static str, u64)> {
+    let Some(layout) = s.proxies else {
+        return Vec::new();
+    };
+    let proxy = layout.proxy_bytes;
+    let worst = s.lights.max(1) as u64 * s.grid.2 as u64 * proxy;
+    let pairs = s.entries as u64 * 4;
     vec![
-        ("pair_clusters", bytes),
-        ("pair_lights", bytes),
-        ("pair_places", bytes),
+        ("light_proxies", worst.min(s.max_storage / proxy * proxy)),
+        ("proxy_draw", layout.draw_bytes),
+        ("proxy_places", s.lights as u64 * 4),
+        ("pair_clusters", pairs),
+        ("pair_lights", pairs),
+        ("pair_places", pairs),
     ]
 }
 
@@ -126,15 +137,12 @@ pub(super) fn draw(
     encoder: &mut wgpu::CommandEncoder,
     c: &ClusterBuffers,
 ) {
-    let target = c
-        .bin_target
-        .as_ref()
-        .expect("rasterised binning's buffers have its target");
+    let d = drawing(c);
     let mut rp = begin_render(
         encoder,
         "light binning",
         &[Some(wgpu::RenderPassColorAttachment {
-            view: target,
+            view: &d.target,
             depth_slice: None,
             resolve_target: None,
             ops: wgpu::Operations {
@@ -147,6 +155,13 @@ pub(super) fn draw(
         groups,
     );
     rp.set_pipeline(&binning.draw);
-    rp.set_vertex_buffer(0, c.proxy_instances.slice(..));
-    rp.draw_indirect(&c.proxy_draw_args, 0);
+    rp.set_vertex_buffer(0, d.instances.slice(..));
+    rp.draw_indirect(&d.draw_args, 0);
+}
+
+/// The draw's copies and target, which the cluster buffers of rasterised binning have.
+fn drawing(c: &ClusterBuffers) -> &ProxyDrawing {
+    c.drawing
+        .as_ref()
+        .expect("rasterised binning's cluster buffers have its draw")
 }
