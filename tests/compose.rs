@@ -94,16 +94,13 @@ fn composed_wgsl_of_every_distinct_pass() {
     );
 }
 
-/// A shader's snapshot name: its pass and the first 32 bits of the FNV-1a hash of its text
-/// (line ends made `\n`, so a checkout's line ends do not rename it).
+/// A shader's snapshot name: its pass and the first 32 bits of the SHA-256 of its text (line
+/// ends made `\n`, so a checkout's line ends do not rename it).
 fn shader_name(pass: &str, wgsl: &str) -> String {
-    let hash = wgsl
-        .replace("\r\n", "\n")
-        .bytes()
-        .fold(0xcbf2_9ce4_8422_2325_u64, |h, b| {
-            (h ^ b as u64).wrapping_mul(0x0100_0000_01b3)
-        });
-    format!("{pass}@{:08x}", hash >> 32)
+    use sha2::{Digest, Sha256};
+    let hash = Sha256::digest(wgsl.replace("\r\n", "\n"));
+    let hex: String = hash[..4].iter().map(|b| format!("{b:02x}")).collect();
+    format!("{pass}@{hex}")
 }
 
 #[test]

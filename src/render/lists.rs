@@ -33,9 +33,7 @@ impl CpuAssignment {
             },
         }
     }
-}
 
-impl CpuAssignment {
     /// The light lists, built on the CPU, and the milliseconds it took.
     pub fn assign(&self) -> (ClusterLists, f64) {
         let start = Instant::now();
