@@ -162,6 +162,18 @@ pub fn run_scene(
     scene: &Scene,
     options: CellOptions<'_>,
 ) -> Result<CellResult, RunError> {
+    Ok(run_scene_keeping_renderer(gpu, composer, variant, scene, options)?.0)
+}
+
+/// [`run_scene`], and the renderer it ran, for checks that read what its frames left on
+/// the GPU (the stress suite's lists and per-pixel counters).
+pub fn run_scene_keeping_renderer<'g>(
+    gpu: &'g Gpu,
+    composer: &Composer,
+    variant: &LoadedVariant,
+    scene: &Scene,
+    options: CellOptions<'_>,
+) -> Result<(CellResult, Renderer<'g>), RunError> {
     let out = options.out;
     let params = scene.params;
     gpu.check_size(params.width, params.height)?;
@@ -267,12 +279,13 @@ pub fn run_scene(
         cost_ms: cost,
         failure,
     };
-    Ok(CellResult {
+    let cell = CellResult {
         report,
         frame,
         reference,
         debug,
-    })
+    };
+    Ok((cell, renderer))
 }
 
 /// Why a frame measures nothing, if it does not: a score for it would look perfect or

@@ -3,7 +3,7 @@
 
 use std::path::Path;
 
-use clusterlab::compose::{Composer, feature_flags, passes};
+use clusterlab::compose::{Composer, feature_flags, frame_features, passes};
 use clusterlab::variant;
 
 fn snapshot_settings(folder: &str) -> insta::Settings {
@@ -14,7 +14,7 @@ fn snapshot_settings(folder: &str) -> insta::Settings {
 }
 
 /// One snapshot per distinct composed shader: every pass of every variant in variants/ is
-/// composed, and equal WGSL is one snapshot, named after its pass and a hash of its text
+/// composed (a shading pass also instrumented, as `<pass>.counting`), and equal WGSL is one snapshot, named after its pass and a hash of its text
 /// (`shader_name`), whose header lists every variant that shares it. A new variant file then
 /// joins existing snapshots or adds its own with no code change, and renames none; a change
 /// to a module shows as each shader it reaches, under its new name, with the old ones
@@ -29,13 +29,23 @@ fn composed_wgsl_of_every_distinct_pass() {
     for path in &files {
         let loaded = variant::load(path).unwrap_or_else(|e| panic!("{e}"));
         for pass in passes(&loaded.variant) {
-            let composed = composer
-                .compose(&loaded.variant, &pass)
-                .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-            let key = (pass.name().to_string(), composed.wgsl);
-            match shaders.iter_mut().find(|(k, _)| *k == key) {
-                Some((_, users)) => users.push(loaded.name.clone()),
-                None => shaders.push((key, vec![loaded.name.clone()])),
+            // A shading pass also as an instrumented frame composes it: the counting code
+            // behind every evaluation count a table prints.
+            let instrumented = frame_features(true, false, Some(false));
+            let versions = [(pass.name().to_string(), &[][..])].into_iter().chain(
+                pass.id
+                    .is_shading()
+                    .then(|| (format!("{}.counting", pass.name()), &instrumented[..])),
+            );
+            for (name, overrides) in versions {
+                let composed = composer
+                    .compose_with(&loaded.variant, &pass, overrides)
+                    .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+                let key = (name, composed.wgsl);
+                match shaders.iter_mut().find(|(k, _)| *k == key) {
+                    Some((_, users)) => users.push(loaded.name.clone()),
+                    None => shaders.push((key, vec![loaded.name.clone()])),
+                }
             }
         }
     }

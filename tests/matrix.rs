@@ -98,12 +98,47 @@ fn a_broken_variant_fails_its_cells_and_the_rest_run_and_report() {
     assert_eq!(rows, 12);
     let html = std::fs::read_to_string(out.join("index.html")).unwrap();
     assert!(html.contains("forward_plus") && html.contains("Sideways"));
+    at_a_glance_names_each_groups_fastest_exact_cell(&r, &html);
     let leftovers: Vec<_> = walk(&out)
         .into_iter()
         .filter(|p| p.to_string_lossy().contains(".tmp"))
         .collect();
     assert!(leftovers.is_empty(), "{leftovers:?}");
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// The report's "fastest exact" of each group is its quickest cell within 1 LSB with no
+/// light dropped, found here from the cells' own times and errors.
+fn at_a_glance_names_each_groups_fastest_exact_cell(r: &Results, html: &str) {
+    let glance = html
+        .split("<h2>At a glance</h2>")
+        .nth(1)
+        .and_then(|t| t.split("</table>").next())
+        .expect("an At a glance table");
+    let mut groups: Vec<String> = r.cells.iter().map(|c| c.spec.group()).collect();
+    groups.dedup();
+    for group in groups {
+        let cells = r.cells.iter().filter(|c| c.spec.group() == group);
+        let exact = |c: &&clusterlab::matrix::CellRecord| {
+            c.ok()
+                && c.error.as_ref().is_some_and(|e| e.max_abs_8bit <= 1)
+                && c.stats.as_ref().is_none_or(|s| s.dropped_lights == 0)
+        };
+        let fastest = cells
+            .filter(exact)
+            .min_by(|a, b| a.total_ms().unwrap().total_cmp(&b.total_ms().unwrap()))
+            .expect("an exact cell");
+        let row = glance
+            .split("<tr>")
+            .find(|row| row.starts_with(&format!("<td>{group}</td>")))
+            .unwrap_or_else(|| panic!("no row for {group}"));
+        let picked = row.split("<td>").nth(2).unwrap_or_default();
+        assert!(
+            picked.starts_with(&format!("{} (", fastest.spec.variant)),
+            "{group}: the report picks `{picked}`, the fastest exact cell is {}",
+            fastest.spec.id
+        );
+    }
 }
 
 /// Each speed-up is naive forward's time over the cell's in the same group, rounded to

@@ -165,3 +165,18 @@ fn readme_is_a_front_page() {
         );
     }
 }
+
+/// The default matrix's size as README and the measurement notes state it is the size of
+/// the plan `clusterlab matrix` runs with no arguments.
+#[test]
+fn the_default_matrix_has_the_cells_readme_says() {
+    let cells = clusterlab::matrix::expand(&clusterlab::matrix::default_groups().unwrap())
+        .unwrap()
+        .len();
+    let claim = format!("the default matrix ({cells} cells)");
+    for file in ["README.md", "docs/measurement.md"] {
+        let text = std::fs::read_to_string(file).unwrap();
+        let text = text.split_whitespace().collect::<Vec<_>>().join(" ");
+        assert!(text.contains(&claim), "{file} does not say `{claim}`");
+    }
+}

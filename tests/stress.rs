@@ -64,7 +64,8 @@ fn a_failed_check_names_the_case_and_where() {
         .clone();
     v.clusters.as_mut().unwrap().lists =
         clusterlab::variant::LightLists::Capped { max_per_cluster: 1 };
-    let run = stress::run_case(&gpu, &Composer::default(), &case, "capped", &v);
+    let references = clusterlab::reference::ReferenceCache::default();
+    let run = stress::run_case(&gpu, &Composer::default(), &references, &case, "capped", &v);
     assert!(!run.ok);
     let dropped = run
         .checks

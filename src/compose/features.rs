@@ -204,6 +204,7 @@ pub fn constants_module(v: &Variant) -> String {
     let f32s = [
         ("BOUNDS_PADDING", twin::BOUNDS_PADDING as f32),
         ("PLANE_SLACK", twin::PLANE_SLACK as f32),
+        ("MARK_MARGIN", twin::MARK_MARGIN as f32),
         ("CONE_COS_SLACK", twin::CONE_COS_SLACK as f32),
         ("SPOT_SLACK", twin::SPOT_SLACK as f32),
         ("MIN_DISTANCE_SQUARED", shading::MIN_DISTANCE_SQUARED as f32),

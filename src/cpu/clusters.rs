@@ -384,6 +384,12 @@ pub fn light_touches_cluster(
     }
 }
 
+/// Marking finds a sample's depth from the depth buffer, shading from its surface; the two
+/// may round to different sides of a slice boundary, so marking also marks the slices at
+/// z (1 -/+ MARK_MARGIN) and 2.5D cells span [z (1 - MARK_MARGIN), z (1 + MARK_MARGIN)]
+/// (the shaders' `MARK_MARGIN`, generated from this).
+pub const MARK_MARGIN: f64 = 1e-3;
+
 /// Cells of a cluster's sample depth range in 2.5D culling: the bits of a u32 (the shaders'
 /// `DEPTH_CELLS`, generated from this).
 pub const DEPTH_CELLS: u32 = 32;

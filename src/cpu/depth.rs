@@ -42,6 +42,24 @@ impl DepthMapping {
         })
     }
 
+    /// Reed 2015's model: the stored value is the exact d(z) rounded to the nearest one
+    /// `format` holds, so depth read back is off by at most half a step of the format at
+    /// d(z), divided by the slope dd/dz; relative to z.
+    pub fn stored_relative_error(
+        self,
+        format: crate::variant::DepthFormat,
+        z: f64,
+        near: f64,
+        far: f64,
+    ) -> f64 {
+        let d = self.device_depth(z, near, far);
+        let step = match format {
+            crate::variant::DepthFormat::Unorm24 => 1.0 / ((1u32 << 24) - 1) as f64,
+            crate::variant::DepthFormat::Float32 => f32_spacing(d),
+        };
+        0.5 * step / (self.slope(z, near, far) * z)
+    }
+
     /// |dd/dz| at view depth z: how far the stored value moves per unit of depth.
     pub fn slope(self, z: f64, near: f64, far: f64) -> f64 {
         let scale = if self.infinite_far {
@@ -56,6 +74,15 @@ impl DepthMapping {
     pub fn is_background(self, d: f64) -> bool {
         if self.reversed { d <= 0.0 } else { d >= 1.0 }
     }
+}
+
+/// Distance between `x` (in [0, 1]) and the next f32.
+fn f32_spacing(x: f64) -> f64 {
+    let f = x as f32;
+    if f <= 0.0 {
+        return f32::from_bits(1) as f64;
+    }
+    (f32::from_bits(f.to_bits() + 1) - f) as f64
 }
 
 #[cfg(test)]
@@ -122,5 +149,11 @@ mod tests {
                 assert!((far - if m.reversed { 0.0 } else { 1.0 }).abs() < 1e-15);
             }
         }
+    }
+
+    #[test]
+    fn spacing_of_f32() {
+        assert_eq!(f32_spacing(1.0), 2f64.powi(-23));
+        assert_eq!(f32_spacing(0.75), 2f64.powi(-24));
     }
 }

@@ -29,7 +29,7 @@ mod truth;
 pub use clusters::{ClusterBuffers, ClusterRange, ClusterStats, GpuDepthMask};
 pub use passes::{PassRunner, shader_module};
 pub use resources::{DepthSetup, F32_BITS_FORMAT, LDR_FORMAT, SceneBuffers, ViewUniform};
-pub use stats::FrameStats;
+pub use stats::{FrameStats, PixelCounters};
 pub use truth::raster_truth;
 
 use std::time::Instant;

@@ -69,11 +69,22 @@ impl FrameStats {
     }
 }
 
-/// What the shading pass counted: evaluations, useful ones, most useful at one pixel.
-struct ShadingCounts {
-    evals: u64,
-    useful: u64,
-    max_useful_per_pixel: u32,
+/// The per-pixel counters of the last instrumented frame, as the shading pass left them.
+#[derive(Clone, Debug, Default)]
+pub struct PixelCounters {
+    /// Light evaluations at each pixel (summed over the fragments shaded there).
+    pub evals: Vec<u32>,
+    /// Those with the surface in the light's range.
+    pub useful: Vec<u32>,
+    /// 1 + the largest cluster index a pixel's fragments looked up (0: none; clustered).
+    pub clusters: Vec<u32>,
+}
+
+impl PixelCounters {
+    /// The cluster a pixel's fragments looked up, if any did.
+    pub fn cluster(&self, pixel: usize) -> Option<u32> {
+        self.clusters[pixel].checked_sub(1)
+    }
 }
 
 impl<'g> Renderer<'g> {
@@ -101,22 +112,30 @@ impl<'g> Renderer<'g> {
             .map(Box::new);
     }
 
-    /// Run an instrumented frame and sum its shading counters.
-    fn count_shading(&mut self) -> Result<ShadingCounts, RenderError> {
-        let gpu = self.gpu;
+    /// Run an instrumented frame and read its per-pixel counters.
+    fn count_shading(&mut self) -> Result<PixelCounters, RenderError> {
         self.run_fitted(true)?;
-        // Sum and maximum of a per-pixel counter.
-        let total = |b: &wgpu::Buffer| -> Result<(u64, u32), GpuError> {
-            let bytes = read_buffer(gpu, b, 0, b.size())?;
-            let counts: &[u32] = bytemuck::cast_slice(&bytes);
-            let sum = counts.iter().map(|&v| v as u64).sum();
-            Ok((sum, counts.iter().copied().max().unwrap_or(0)))
+        Ok(self.read_pixel_counters()?)
+    }
+
+    fn read_pixel_counters(&self) -> Result<PixelCounters, GpuError> {
+        let read = |b: &wgpu::Buffer| -> Result<Vec<u32>, GpuError> {
+            Ok(bytemuck::cast_slice(&read_buffer(self.gpu, b, 0, b.size())?).to_vec())
         };
-        let useful = total(&self.res.counters.useful)?;
-        Ok(ShadingCounts {
-            evals: total(&self.res.counters.evals)?.0,
-            useful: useful.0,
-            max_useful_per_pixel: useful.1,
+        let c = &self.res.counters;
+        Ok(PixelCounters {
+            evals: read(&c.evals)?,
+            useful: read(&c.useful)?,
+            clusters: read(&c.clusters)?,
+        })
+    }
+
+    /// The per-pixel counters of the last instrumented frame (`stats` runs one; naive
+    /// forward's are its stand-in's), for checking the counters by another summation.
+    pub fn pixel_counters(&self) -> Result<PixelCounters, RenderError> {
+        Ok(match &self.naive_stand_in {
+            Some(stand_in) => stand_in.read_pixel_counters()?,
+            None => self.read_pixel_counters()?,
         })
     }
 
@@ -124,14 +143,15 @@ impl<'g> Renderer<'g> {
     /// (naive forward's shading counters on its stand-in, once `prepare_counting` made it).
     pub fn stats(&mut self) -> Result<FrameStats, RenderError> {
         let gpu = self.gpu;
-        let counts = match &mut self.naive_stand_in {
+        let pixels = match &mut self.naive_stand_in {
             Some(stand_in) => stand_in.count_shading()?,
             None => self.count_shading()?,
         };
+        let sum = |counts: &[u32]| counts.iter().map(|&n| n as u64).sum();
         let mut stats = FrameStats {
-            light_evals: counts.evals,
-            useful_light_evals: counts.useful,
-            max_useful_per_pixel: counts.max_useful_per_pixel,
+            light_evals: sum(&pixels.evals),
+            useful_light_evals: sum(&pixels.useful),
+            max_useful_per_pixel: pixels.useful.iter().copied().max().unwrap_or(0),
             gbuffer_bytes_per_pixel: if self.variant.pipeline.is_deferred() {
                 gbuffer::bytes_per_pixel(&self.variant)
             } else {
@@ -157,9 +177,7 @@ impl<'g> Renderer<'g> {
                 c.clusters as u64
             };
             stats.active_clusters = self.count_visible_clusters()? as u64;
-            let pixel_clusters = &self.res.counters.clusters;
-            let bytes = read_buffer(gpu, pixel_clusters, 0, pixel_clusters.size())?;
-            let used: &[u32] = bytemuck::cast_slice(&bytes);
+            let used = &pixels.clusters;
             let outside = |&(_, &v): &(usize, &u32)| v > c.clusters;
             stats.clusters_out_of_grid = used.iter().enumerate().filter(outside).count() as u64;
             stats.first_out_of_grid = used.iter().enumerate().find(outside).map(|(i, &v)| {

@@ -88,26 +88,11 @@ impl Setup {
         }
     }
 
-    /// Reed 2015's model: the stored value is the exact d(z) rounded to the nearest
-    /// representable one, so depth is off by at most half a step of the format at d(z),
-    /// divided by the slope dd/dz; relative to z.
+    /// Reed 2015's model (`DepthMapping::stored_relative_error`) at the study's planes.
     pub fn model_relative_error(&self, z: f64) -> f64 {
-        let d = self.mapping.device_depth(z, NEAR, FAR);
-        let step = match self.format {
-            DepthFormat::Unorm24 => 1.0 / ((1u32 << 24) - 1) as f64,
-            DepthFormat::Float32 => f32_spacing(d),
-        };
-        0.5 * step / (self.mapping.slope(z, NEAR, FAR) * z)
+        self.mapping
+            .stored_relative_error(self.format, z, NEAR, FAR)
     }
-}
-
-/// Distance between `x` (in [0, 1]) and the next f32.
-fn f32_spacing(x: f64) -> f64 {
-    let f = x as f32;
-    if f <= 0.0 {
-        return f32::from_bits(1) as f64;
-    }
-    (f32::from_bits(f.to_bits() + 1) - f) as f64
 }
 
 /// The frame: `columns` fronto-parallel strips, one per pixel column, at view depths spaced
@@ -521,11 +506,5 @@ mod tests {
         let fs = s(DepthFormat::Float32, false, true);
         let ratio = fs.model_relative_error(1e4) / u.model_relative_error(1e4);
         assert!((0.9..1.1).contains(&ratio), "{ratio}");
-    }
-
-    #[test]
-    fn spacing_of_f32() {
-        assert_eq!(f32_spacing(1.0), 2f64.powi(-23));
-        assert_eq!(f32_spacing(0.75), 2f64.powi(-24));
     }
 }

@@ -1,6 +1,7 @@
 //! 2.5D culling (Harada 2012): its masks keep every light that reaches a visible sample.
 
 use super::*;
+use clusterlab::render::GpuDepthMask;
 
 /// 2.5D culling never leaves out a light that reaches a visible sample, on the GPU and in
 /// its f64 twin (masks built from the raster truth's depths), and culls more than the boxes
@@ -54,6 +55,36 @@ fn depth_masks_keep_every_light_that_reaches_a_sample() {
                     m.range
                 );
             }
+            let size = (scene.params.width, scene.params.height);
+            let (near, far) = (scene.camera.near as f32, scene.camera.far as f32);
+            let depth = clusterlab::kernels::gpu_depth_samples(
+                &gpu,
+                &composer,
+                &v,
+                r.depth_texture(),
+                near,
+                far,
+            )
+            .unwrap();
+            let mapping = v.depth.mapping();
+            let gpu_depths: Vec<Option<f64>> = (depth.device.iter().zip(&depth.view_depth))
+                .map(|(&d, &z)| (!mapping.is_background(d as f64)).then_some(z as f64))
+                .collect();
+            let masks_of = |m: &[GpuDepthMask]| mask_bits_problem(&grid, size, &gpu_depths, m);
+            if let Some(problem) = masks_of(&gpu_masks) {
+                panic!("{what}: {problem}");
+            }
+            // The break: one bit of one mask off must be seen.
+            let mut off = gpu_masks.clone();
+            let c = off
+                .iter()
+                .position(|m| m.mask != 0)
+                .expect("a marked cluster");
+            off[c].mask &= off[c].mask - 1;
+            assert!(
+                masks_of(&off).is_some(),
+                "{what}: a mask bit off went unseen"
+            );
             let (missing, checked) =
                 missing_lights(&grid, &scene, &samples, |c| gpu_lists.list(c).to_vec());
             assert!(
@@ -110,4 +141,66 @@ fn depth_masks_keep_every_light_that_reaches_a_sample() {
             );
         }
     }
+}
+
+/// Whether the GPU's 2.5D masks are the cells its own sample ranges give its own samples,
+/// marked as `mark_cells` marks them: each sample at depth z sets the cells of
+/// [z (1 - m), z (1 + m)] (m: `MARK_MARGIN`) in the clusters of the depths z (1 - m), z
+/// and z (1 + m). `depths` are the view depths the GPU rebuilds from its depth buffer (its
+/// own function, in f32; None: background), so the twin differs only where f32 rounds the
+/// cell arithmetic (z (1 +/- m), z - z0 and the product: a few f32 steps of z, under
+/// 1e-6 relative) and the slice (its logarithm: 1e-5). Every bit of the cells narrowed by
+/// that slack must be set, and no bit outside them widened by it; a depth within the slice
+/// slack of a boundary may mark either slice.
+fn mask_bits_problem(
+    grid: &Grid,
+    (w, h): (u32, u32),
+    depths: &[Option<f64>],
+    gpu: &[GpuDepthMask],
+) -> Option<String> {
+    use clusterlab::cpu::clusters::{MARK_MARGIN, cell_span};
+    const CELL_SLACK: f64 = 1e-6;
+    const SLICE_SLACK: f64 = 1e-5;
+    let slices = grid.slices();
+    let tile = |p: usize, size: u32, tiles: u32| {
+        (((p as f64 + 0.5) * tiles as f64 / size as f64) as u32).min(tiles - 1)
+    };
+    let (mut narrow, mut wide) = (vec![0u32; gpu.len()], vec![0u32; gpu.len()]);
+    for (i, z) in depths.iter().enumerate() {
+        let Some(z) = *z else { continue };
+        let (x, y) = (
+            tile(i % w as usize, w, grid.x),
+            tile(i / w as usize, h, grid.y),
+        );
+        let (a, b) = (z * (1.0 - MARK_MARGIN), z * (1.0 + MARK_MARGIN));
+        for s in [-1.0, 0.0, 1.0] {
+            let zi = z * (1.0 + s * MARK_MARGIN);
+            let lo = slices.slice(zi * (1.0 - SLICE_SLACK));
+            let hi = slices.slice(zi * (1.0 + SLICE_SLACK));
+            for k in lo..=hi {
+                let c = grid.index(x, y, k);
+                let [z0, z1] = gpu[c].range.map(f64::from);
+                if z1 <= 0.0 {
+                    if lo == hi {
+                        return Some(format!("cluster {c} holds a sample at {z} but is unmarked"));
+                    }
+                    continue;
+                }
+                let span = |slack: f64| cell_span(a * (1.0 + slack), b * (1.0 - slack), z0, z1);
+                wide[c] |= span(-CELL_SLACK);
+                if lo == hi {
+                    narrow[c] |= span(CELL_SLACK);
+                }
+            }
+        }
+    }
+    (0..gpu.len()).find_map(|c| {
+        let m = gpu[c].mask;
+        (narrow[c] & !m != 0 || m & !wide[c] != 0).then(|| {
+            format!(
+                "cluster {c}: GPU mask {m:032b}, the samples set {:032b} and may set {:032b}",
+                narrow[c], wide[c]
+            )
+        })
+    })
 }
