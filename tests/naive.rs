@@ -279,3 +279,80 @@ fn every_pipeline_adds_exactly_nothing_past_a_lights_radius() {
         );
     }
 }
+
+/// The spot factor's closed form on the GPU, every pipeline: the one light made a spot
+/// (straight down, inner 35 and outer 55 degrees) adds exactly what the point light adds
+/// inside its inner cone, exactly nothing beyond its outer cone or its radius, and between
+/// them the point light's times the smoothstep of the cosine. Bounds: the cosine comes from
+/// f32 surface positions (a relative 1e-5 keeps a pixel off the cones' edges), and in the
+/// band the smoothstep's slope, at most 1.5 / (cos 35 - cos 55) = 6.1 per unit of cosine,
+/// turns that 1e-5 into 6.1e-5 of the factor; the ratio's own f32 rounding adds 1e-6.
+#[test]
+fn the_spot_factor_is_one_inside_zero_outside_and_a_smoothstep_between() {
+    use clusterlab::compose::Composer;
+    use clusterlab::cpu::shading::spot_factor;
+    use clusterlab::render::{Renderer, raster_truth};
+    use clusterlab::scene::Light;
+    let gpu = gpu();
+    let composer = Composer::default();
+    let point =
+        clusterlab::scene::generate("one_light", small("one_light", 96, 54, Some(1))).unwrap();
+    let l = point.lights[0];
+    let mut spot = point.clone();
+    spot.lights[0] = Light::spot(
+        l.position,
+        l.radius,
+        l.color,
+        1.0,
+        [0.0, -1.0, 0.0],
+        35.0,
+        55.0,
+    );
+    let mut dark = point.clone();
+    dark.lights[0].color = [0.0; 3];
+    let centre = glam::DVec3::from(l.position.map(f64::from));
+    let (cos_inner, cos_outer) = (35f64.to_radians().cos(), 55f64.to_radians().cos());
+    let slope = 1.5 / (cos_inner - cos_outer);
+    for name in [
+        "naive_forward",
+        "forward_plus",
+        "clustered_deferred_16x16x24",
+        "deferred_scissor",
+    ] {
+        let v = load(name).variant;
+        let truth = raster_truth(&gpu, &composer, &v, &point).unwrap();
+        let frame = |scene| {
+            let mut r = Renderer::new(&gpu, &composer, &v, scene).unwrap();
+            r.render().unwrap().hdr
+        };
+        let (by_point, by_spot, unlit) = (frame(&point), frame(&spot), frame(&dark));
+        let mut seen = [0; 3];
+        for i in (0..truth.position.len()).filter(|&i| truth.covered(i)) {
+            let p = truth.surface(i).position;
+            let to_light = centre - p;
+            let d = to_light.length();
+            let cos = -to_light.normalize().dot(glam::DVec3::NEG_Y);
+            let added = |f: &[[f32; 4]]| f[i][0] - unlit[i][0];
+            let what = format!("{name}: pixel {i}, cosine {cos}, distance {d}");
+            if d > l.radius as f64 * (1.0 + 1e-5) || cos < cos_outer - 1e-5 {
+                assert_eq!(by_spot[i], unlit[i], "{what}: outside");
+                seen[0] += 1;
+            } else if cos > cos_inner + 1e-5 {
+                assert_eq!(by_spot[i], by_point[i], "{what}: inside the inner cone");
+                seen[1] += 1;
+            } else if cos > cos_outer + 1e-5 && added(&by_point) > 1e-3 {
+                let factor = spot_factor(&spot.lights[0], to_light.normalize());
+                let ratio = (added(&by_spot) / added(&by_point)) as f64;
+                assert!(
+                    (ratio - factor).abs() <= slope * 1e-5 + 1e-6,
+                    "{what}: GPU factor {ratio}, closed form {factor}"
+                );
+                seen[2] += 1;
+            }
+        }
+        assert!(
+            seen.iter().all(|&n| n > 20),
+            "{name}: {seen:?} outside, inside, between"
+        );
+    }
+}

@@ -199,10 +199,10 @@ fn every_effect_matches_its_cpu_twin_on_the_gpu_input() {
                 }
                 None => twin.clone(),
             };
-            // Band edges, outline thresholds and rounded motion samples are decisions: f32
-            // and f64 may decide a pixel on the edge differently, and only such pixels.
-            let decisions = effect != PostEffect::Bloom;
-            let allowed = if decisions { pixels / 1000 } else { 0 };
+            // Fed the same input, a decision (band edge, outline threshold, rounded motion
+            // sample) falls the other way only within f32 rounding of its edge: none does on
+            // these frames (lavapipe and OpenGL), and one that does fails here.
+            let allowed = 0;
             let what = format!("{name}, {effect:?}");
             let (worst, decided) = effect_matches(&what, &run.output, &twin, &scale, allowed)
                 .unwrap_or_else(|e| panic!("{e}"));
@@ -257,26 +257,72 @@ fn naive_and_separable_bloom_agree_within_rounding() {
     assert!(worst < 2e-5, "{worst:e}");
 }
 
+/// The whole chain within 1 LSB of the reference at every pixel but where the toon pass's
+/// band decision fell the other way: the band of the GPU's shaded colour (before the post
+/// passes) is not the band of the reference's there (a colour within f32 rounding of a band
+/// edge; OpenGL has one such pixel in the toon variant). Outlines and motion samples are
+/// decided on the same geometry and must agree.
 #[test]
 fn the_whole_chain_is_close_to_the_reference() {
+    use clusterlab::cpu::frame::shade_reference;
+    use clusterlab::cpu::shading::ShadingParams;
     let gpu = gpu();
+    let composer = Composer::default();
     for name in POST_VARIANTS {
         let v = load(name);
         let c = cell(&gpu, &v, "atrium", small("atrium", 160, 90, Some(128)));
         let e = c.report.error.as_ref().expect("a shaded image");
-        let pixels = 160 * 90;
         eprintln!(
             "{name}: max 8-bit {}, {} pixels over 1 LSB, PSNR {:?}",
             e.max_abs_8bit, e.pixels_over_1lsb, e.psnr_db
         );
         assert_eq!(e.nan_pixels, 0, "{name}");
-        // Off by more than 1 LSB only where a decision (band, outline, motion sample)
-        // fell the other way on the reference's exact geometry.
-        assert!(
-            e.pixels_over_1lsb <= pixels / 200,
-            "{name}: {} pixels over 1 LSB",
-            e.pixels_over_1lsb
+        let over: Vec<usize> = (0..c.frame.ldr.len())
+            .filter(|&i| (0..3).any(|k| c.frame.ldr[i][k].abs_diff(c.reference.ldr[i][k]) > 1))
+            .collect();
+        if over.is_empty() {
+            continue;
+        }
+        let bands = v
+            .variant
+            .post
+            .toon
+            .as_ref()
+            .filter(|t| t.mode == ToonMode::PostProcess)
+            .map(|t| t.bands)
+            .unwrap_or_else(|| {
+                panic!("{name}: pixels {over:?} over 1 LSB, no band to explain them")
+            });
+        let scene = scene::generate("atrium", small("atrium", 160, 90, Some(128))).unwrap();
+        let mut r = Renderer::new(&gpu, &composer, &v.variant, &scene).unwrap();
+        r.render().unwrap();
+        let shaded = r.read_shaded().unwrap();
+        let truth = clusterlab::render::raster_truth(&gpu, &composer, &v.variant, &scene).unwrap();
+        let params = ShadingParams::of(&v.variant);
+        let reference = shade_reference(
+            &truth,
+            &scene.lights,
+            scene.camera.eye,
+            &params,
+            clusterlab::reference::EXPOSURE,
         );
+        let band = |c: DVec3| {
+            let n = c.length();
+            ((n / (1.0 + n)) * bands as f64).floor()
+        };
+        for i in over {
+            let gpu_colour = DVec3::new(
+                shaded[i][0] as f64,
+                shaded[i][1] as f64,
+                shaded[i][2] as f64,
+            );
+            let reference_colour = DVec3::from(reference.hdr[i]);
+            assert_ne!(
+                band(gpu_colour),
+                band(reference_colour),
+                "{name}: pixel {i} over 1 LSB in the same band (GPU {gpu_colour}, reference {reference_colour})"
+            );
+        }
     }
 }
 

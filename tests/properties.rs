@@ -580,6 +580,7 @@ fn gpu_light_assignment_keeps_every_touching_light() {
     };
     let mut runner =
         TestRunner::new_with_rng(config, TestRng::deterministic_rng(RngAlgorithm::ChaCha));
+    let drawn = std::cell::RefCell::new(std::collections::BTreeSet::<usize>::new());
     runner
         .run(
             &(proptest::collection::vec(light, 1..200), camera, grid),
@@ -604,6 +605,7 @@ fn gpu_light_assignment_keeps_every_touching_light() {
                 c.grid = (gx, gy, gz.max(min_z));
                 // CPU assignment takes no dynamic range: such a draw is not a variant.
                 prop_assume!(clusterlab::variant::check(&v).is_empty());
+                drawn.borrow_mut().insert(method);
                 let (count, first) =
                     clusterlab::stress::missing_lights(&gpu, &composer, &v, &scene)
                         .map_err(TestCaseError::fail)?;
@@ -618,4 +620,9 @@ fn gpu_light_assignment_keeps_every_touching_light() {
             },
         )
         .unwrap_or_else(|e| panic!("{e}"));
+    let missed: Vec<&str> = (0..methods.len())
+        .filter(|m| !drawn.borrow().contains(m))
+        .map(|m| methods[m].0.as_str())
+        .collect();
+    assert!(missed.is_empty(), "methods no case drew: {missed:?}");
 }

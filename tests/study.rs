@@ -15,7 +15,9 @@ fn rel(a: f64, b: f64) -> f64 {
 #[test]
 fn codecs_on_the_gpu_match_the_cpu_twin_and_the_published_figures() {
     let gpu = common::gpu();
-    let rows = codecs::run(&gpu, &Composer::default(), 50_000, 5).expect("codecs study");
+    // The study's own sample and seed: the figures docs/studies/codecs.md states.
+    let seed = clusterlab::study::StudyOptions::default().seed;
+    let rows = codecs::run(&gpu, &Composer::default(), 1 << 20, seed).expect("codecs study");
     for g in rows.iter().filter(|r| r.source == "gpu") {
         let c = rows
             .iter()
@@ -69,27 +71,33 @@ fn codecs_on_the_gpu_match_the_cpu_twin_and_the_published_figures() {
             })
             .unwrap()
     };
-    // Tyler 2024, cube-normalized sampling: plain octahedral with 8 and 12 bits a component,
-    // mean 0.3505 and 0.02184 degrees over 1M vectors. Sampled the same way, the means
-    // agree within 1%; uniform on the sphere they come out 4% lower.
-    for (bits, published) in [(16, 0.350526), (24, 0.021842)] {
-        let cube = find("octahedral", "cube", bits).mean_deg;
-        assert!(rel(cube, published) < 0.01, "{bits} bits: {cube}");
-        let uniform = find("octahedral", "uniform", bits).mean_deg;
+    // Tyler 2024, cube-normalized sampling: plain octahedral at 8, 10 and 12 bits a
+    // component over 1M vectors. Sampled the same way, the means agree within 0.3% and the
+    // maxima within 0.9%, as docs/studies/codecs.md says; uniform on the sphere the means
+    // come out 4% lower (3.5% to 4.5%).
+    for (bits, mean, max) in codecs::TYLER_OCT {
+        let cube = find("octahedral", "cube", 2 * bits);
         assert!(
-            (0.93..0.98).contains(&(uniform / published)),
+            rel(cube.mean_deg, mean) < 0.003,
+            "{bits}: {}",
+            cube.mean_deg
+        );
+        assert!(rel(cube.max_deg, max) < 0.009, "{bits}: {}", cube.max_deg);
+        let uniform = find("octahedral", "uniform", 2 * bits).mean_deg;
+        assert!(
+            (0.955..0.965).contains(&(uniform / mean)),
             "{bits} bits: {uniform}"
         );
     }
-    assert!(rel(find("octahedral", "cube", 16).max_deg, 0.946480) < 0.02);
     // The precise encoder lowers the max error at every bit count, to what Meyer 2010
     // predicts: the optimal discretisation's error with one bit fewer.
     for bits in [16, 20, 24, 32] {
         let precise = find("octahedral precise", "uniform", bits).max_deg;
         assert!(precise < 0.8 * find("octahedral", "uniform", bits).max_deg);
         let meyer = codecs::meyer_octahedral_max_deg(bits);
+        // Within 1%, as the study's table prints them (0.0025 beside 0.0025 at 32 bits).
         assert!(
-            rel(precise, meyer) < 0.03,
+            rel(precise, meyer) < 0.01,
             "{bits} bits: {precise} against {meyer}"
         );
     }
@@ -117,9 +125,11 @@ fn depth_comes_back_as_reeds_model_says() {
         assert!(r.samples > 0);
         let reversed_float = r.format == "Float32" && r.reversed_z;
         if reversed_float && as_24_bit {
+            // Stored as 24-bit reversed depth is: held to that row's window of its model.
+            let ratio = r.max_relative_gpu / model_24_bit(r.from);
             assert!(
-                r.max_relative_gpu < 10.0 * model_24_bit(r.from),
-                "{} {}: {} against the 24-bit model {}",
+                (0.4..=5.0).contains(&ratio),
+                "{} {}: {} is {ratio} times the 24-bit model {}",
                 r.setup,
                 r.from,
                 r.max_relative_gpu,
@@ -355,5 +365,77 @@ fn the_study_command_writes_every_file() {
         msg.contains("codecs") && msg.contains("depth") && msg.contains("slicing"),
         "{msg}"
     );
+    let _ = std::fs::remove_dir_all(dir.parent().unwrap());
+}
+
+/// `study cones` and `study culling` exit 0 when every run is exact and 1 when a light is
+/// missed: run again on a copy of the shaders with a deliberate break (through
+/// `CLUSTERLAB_SHADERS`): for cones, light ranges that leave out every light of radius over
+/// 1; for culling, z-binning's walk skipping every other light of a mask word (the methods'
+/// useful evaluations then differ). In the cones rows, the cone test lights the same
+/// samples as the sphere test (equal useful evaluations), never evaluates more, and its
+/// "cone / sphere" is its evaluations over the sphere test's.
+#[test]
+fn the_cones_and_culling_studies_exit_1_when_a_light_is_missed() {
+    let cones_broken = common::EditedShaders::of(
+        "clustering/light_range.wesl",
+        "study-lights-dropped",
+        &[(
+            "if (c.z - r > -near) {",
+            "if (c.z - r > -near || r > 1.0) {",
+        )],
+    );
+    let culling_broken = common::EditedShaders::of(
+        "shading/light_loop.wesl",
+        "study-walk-halved",
+        &[(
+            "var bits = tile_masks[base + w] & span_bits(w, span);",
+            "var bits = tile_masks[base + w] & span_bits(w, span) & 0x55555555u;",
+        )],
+    );
+    let dir = scratch("exit").join("results");
+    let study = |name: &str, shaders: &std::path::Path| {
+        let args = [
+            "study", name, "--scenes", "stage", "--size", "48x27", "--lights", "64",
+        ];
+        cli(args)
+            .args(["--frames", "1", "--json", "--out"])
+            .arg(&dir)
+            .env("CLUSTERLAB_SHADERS", shaders)
+            .run()
+    };
+    let shipped = Composer::default().shader_root().to_path_buf();
+    for name in ["cones", "culling"] {
+        let out = study(name, &shipped);
+        assert_eq!(out.code, Some(0), "{name}: {}", out.stderr);
+        if name == "cones" {
+            let doc: serde_json::Value = serde_json::from_str(&out.stdout).unwrap();
+            let rows = doc["rows"].as_array().unwrap();
+            for pair in rows.chunks(2) {
+                let (sphere, cone) = (&pair[0], &pair[1]);
+                assert_eq!(
+                    (&sphere["spot_test"], &cone["spot_test"]),
+                    (&"Sphere".into(), &"Cone".into())
+                );
+                let evals = |r: &serde_json::Value| r["evaluations"].as_f64().unwrap();
+                assert_eq!(sphere["useful_evaluations"], cone["useful_evaluations"]);
+                assert!(evals(cone) <= evals(sphere), "{cone}");
+                let ratio = cone["over_sphere"].as_f64().unwrap();
+                assert_eq!(ratio, evals(cone) / evals(sphere), "{cone}");
+            }
+        }
+        let broken = if name == "cones" {
+            &cones_broken
+        } else {
+            &culling_broken
+        };
+        let out = study(name, broken.root());
+        assert_eq!(
+            out.code,
+            Some(1),
+            "{name} on the broken shaders: {}",
+            out.stderr
+        );
+    }
     let _ = std::fs::remove_dir_all(dir.parent().unwrap());
 }

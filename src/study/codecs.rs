@@ -32,7 +32,7 @@ pub fn degrees(x: f64) -> String {
 /// Published figures for plain octahedral encoding over 1M random unit vectors (arccos of
 /// the dot product, degrees): Liam Tyler, "Analyzing Octahedral Encoded Normals" (2024),
 /// bits per component, mean, max.
-const TYLER_OCT: [(u32, f64, f64); 3] = [
+pub const TYLER_OCT: [(u32, f64, f64); 3] = [
     (8, 0.350526, 0.946480),
     (10, 0.087357, 0.235790),
     (12, 0.021842, 0.058642),

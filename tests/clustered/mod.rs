@@ -14,7 +14,7 @@ mod zbinning;
 
 use std::collections::BTreeSet;
 
-use crate::common::{self, gpu, small};
+use crate::common::{self, EditedShaders, gpu, small};
 use clusterlab::common::MAX_LIGHT_RADIUS;
 use clusterlab::compose::Composer;
 use clusterlab::cpu::clusters::{self as cpu, Grid};
@@ -24,6 +24,7 @@ use clusterlab::gpu::Gpu;
 use clusterlab::reference::reference_frame;
 use clusterlab::render::{FrameOutput, Renderer, raster_truth};
 use clusterlab::scene::{self, Light, SCENES, Scene};
+use clusterlab::stress::clearly_reaches;
 use clusterlab::variant::*;
 use glam::DVec3;
 
@@ -907,22 +908,6 @@ fn culling_scenes() -> Vec<(String, Scene)> {
     .collect()
 }
 
-/// Whether `light` clearly reaches world point `p`: closer than its radius by a relative
-/// 1e-4 and inside its outer cone by 2e-6 in cosine, so no rounding of the GPU's can decide
-/// it otherwise.
-fn clearly_reaches(light: &Light, p: DVec3) -> bool {
-    let to_p = p - DVec3::from(light.position.map(f64::from));
-    let d = to_p.length();
-    if d >= light.radius as f64 * (1.0 - 1e-4) {
-        return false;
-    }
-    if !light.is_spot() {
-        return true;
-    }
-    let axis = DVec3::from(light.direction.map(f64::from)).normalize();
-    d > 0.0 && to_p.dot(axis) / d > light.cos_outer as f64 + 2e-6
-}
-
 /// Each covered pixel of `truth`: its index, world position and view depth.
 fn visible_samples(truth: &RasterTruth, scene: &Scene) -> Vec<(usize, DVec3, f64)> {
     let view = scene.camera.view();
@@ -992,34 +977,4 @@ fn assert_sorted_and_equal(got: &cpu::ClusterLists, want: &cpu::ClusterLists, wh
         long > 100,
         "{what}: only {long} lists of two lights or more"
     );
-}
-
-/// A copy of the shipped shaders with edits to one module, each replacing text that must be
-/// there; removed when dropped.
-struct EditedShaders {
-    root: std::path::PathBuf,
-    composer: Composer,
-}
-
-impl EditedShaders {
-    /// A copy with edits to `module` (a path under `shaders/`).
-    fn of(module: &str, name: &str, edits: &[(&str, &str)]) -> Self {
-        let root = common::scratch(name);
-        common::copy_tree(Composer::default().shader_root(), &root);
-        let file = root.join(module);
-        let mut source = std::fs::read_to_string(&file).unwrap();
-        for (from, to) in edits {
-            assert!(source.contains(from), "{module} no longer has `{from}`");
-            source = source.replace(from, to);
-        }
-        std::fs::write(&file, source).unwrap();
-        let composer = Composer::new(&root);
-        EditedShaders { root, composer }
-    }
-}
-
-impl Drop for EditedShaders {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.root);
-    }
 }

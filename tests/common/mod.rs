@@ -143,6 +143,11 @@ impl Cli {
         self
     }
 
+    pub fn args<S: AsRef<OsStr>>(mut self, args: impl IntoIterator<Item = S>) -> Cli {
+        self.0.args(args);
+        self
+    }
+
     /// Set `key` to `value`; an empty value removes it.
     pub fn env(mut self, key: &str, value: impl AsRef<OsStr>) -> Cli {
         if value.as_ref().is_empty() {
@@ -219,5 +224,42 @@ impl Cli {
             stdout: stdout.join().expect("stdout"),
             stderr: stderr.join().expect("stderr"),
         }
+    }
+}
+
+/// A copy of the shipped shaders with edits to one module, each replacing text that must be
+/// there; removed when dropped.
+pub struct EditedShaders {
+    root: PathBuf,
+    /// Composes from the edited copy.
+    pub composer: Composer,
+}
+
+impl EditedShaders {
+    /// A copy with edits to `module` (a path under `shaders/`).
+    #[track_caller]
+    pub fn of(module: &str, name: &str, edits: &[(&str, &str)]) -> Self {
+        let root = scratch(name);
+        copy_tree(Composer::default().shader_root(), &root);
+        let file = root.join(module);
+        let mut source = std::fs::read_to_string(&file).unwrap();
+        for (from, to) in edits {
+            assert!(source.contains(from), "{module} no longer has `{from}`");
+            source = source.replace(from, to);
+        }
+        std::fs::write(&file, source).unwrap();
+        let composer = Composer::new(&root);
+        EditedShaders { root, composer }
+    }
+
+    /// The copy's folder (for `CLUSTERLAB_SHADERS`).
+    pub fn root(&self) -> &Path {
+        &self.root
+    }
+}
+
+impl Drop for EditedShaders {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.root);
     }
 }
