@@ -638,3 +638,84 @@ fn nested_node_transforms_apply_parent_first_and_mirrors_keep_their_facing() {
         s.notes
     );
 }
+
+/// A file without a camera is framed (docs/guide.md): 60 degrees, looking at the centre of
+/// the bounds' sphere from twice its radius along (0, 0.5, 1), every vertex in view between
+/// near and far; a light without a `range` ends where its brightest channel falls to 1/256.
+#[test]
+fn a_file_without_camera_or_ranges_is_framed_and_its_lights_end_at_1_in_256() {
+    let dir = scratch("no-camera");
+    let params = SceneParams {
+        lights: 16,
+        ..scene::find_scene("atrium").unwrap().defaults
+    };
+    let built = scene::generate("atrium", params).unwrap();
+    let (mut json, bin) = common::split_glb(&to_glb(&built).unwrap());
+    json.as_object_mut().unwrap().remove("cameras");
+    for node in json["nodes"].as_array_mut().unwrap() {
+        node.as_object_mut().unwrap().remove("camera");
+    }
+    for l in json["extensions"]["KHR_lights_punctual"]["lights"]
+        .as_array_mut()
+        .unwrap()
+    {
+        let l = l.as_object_mut().unwrap();
+        l.remove("range");
+        l.remove("extras");
+    }
+    let path = dir.join("bare.glb");
+    std::fs::write(
+        &path,
+        clusterlab::scene::export::glb(serde_json::to_vec(&json).unwrap(), bin).unwrap(),
+    )
+    .unwrap();
+    let name = path.to_str().unwrap();
+    let loaded = scene::generate(name, scene::defaults(name).unwrap()).unwrap();
+    let cam = loaded.camera;
+    assert!((cam.fov_y - 60f64.to_radians()).abs() < 1e-6, "{cam:?}");
+    let (lo, hi) = loaded.vertices.iter().fold(
+        (glam::DVec3::splat(f64::MAX), glam::DVec3::splat(f64::MIN)),
+        |(lo, hi), v| {
+            let p = glam::DVec3::from(v.position.map(f64::from));
+            (lo.min(p), hi.max(p))
+        },
+    );
+    let (centre, radius) = ((lo + hi) / 2.0, (hi - lo).length() / 2.0);
+    let along = (cam.eye - centre).normalize();
+    // The pose goes through f32: a few 1e-7 of the distance.
+    assert!(
+        along.distance(glam::DVec3::new(0.0, 0.5, 1.0).normalize()) < 1e-5,
+        "{cam:?}"
+    );
+    assert!(
+        ((cam.eye - centre).length() / (2.0 * radius) - 1.0).abs() < 1e-5,
+        "{cam:?}"
+    );
+    let view = cam.view();
+    let tan = (cam.fov_y / 2.0).tan();
+    let aspect = loaded.aspect();
+    for v in &loaded.vertices {
+        let p = view.transform_point3(glam::DVec3::from(v.position.map(f64::from)));
+        let z = -p.z;
+        assert!(
+            z >= cam.near && z <= cam.far,
+            "vertex at depth {z}: {cam:?}"
+        );
+        assert!(
+            p.x.abs() <= z * tan * aspect && p.y.abs() <= z * tan,
+            "{p} out of view"
+        );
+    }
+    assert_eq!(loaded.lights.len(), built.lights.len());
+    for l in &loaded.lights {
+        // Colour carries intensity; the brightest channel over the radius squared is the
+        // cut-off, to f32 rounding of the radius (2 x 2^-24 relative on the square).
+        let brightest = l.color.iter().fold(0.0f32, |a, &c| a.max(c)) as f64;
+        let at_radius = brightest / (l.radius as f64).powi(2);
+        assert!(
+            (at_radius * 256.0 - 1.0).abs() < 4.0 * 2f64.powi(-24),
+            "{l:?}: {at_radius} at its radius"
+        );
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
