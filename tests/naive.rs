@@ -229,6 +229,25 @@ fn light_loops_past_the_adapters_loop_cap_are_refused() {
     }
 }
 
+/// A shipped variant of each pipeline.
+const ONE_OF_EACH_PIPELINE: [&str; 4] = [
+    "naive_forward",
+    "forward_plus",
+    "clustered_deferred_16x16x24",
+    "deferred_scissor",
+];
+
+/// The HDR image of one frame of `v` on `scene`.
+fn hdr_frame(
+    gpu: &clusterlab::gpu::Gpu,
+    composer: &clusterlab::compose::Composer,
+    v: &clusterlab::variant::Variant,
+    scene: &clusterlab::scene::Scene,
+) -> Vec<[f32; 4]> {
+    let mut r = clusterlab::render::Renderer::new(gpu, composer, v, scene).unwrap();
+    r.render().unwrap().hdr
+}
+
 /// README: every pipeline shades with the same finite-range falloff, exactly zero at a
 /// light's radius. On the GPU: with one light, every pixel farther from it than its radius
 /// (by more than f32 rounding of the distance, 1e-5) is exactly the unlit image's, and every
@@ -236,7 +255,7 @@ fn light_loops_past_the_adapters_loop_cap_are_refused() {
 #[test]
 fn every_pipeline_adds_exactly_nothing_past_a_lights_radius() {
     use clusterlab::compose::Composer;
-    use clusterlab::render::{Renderer, raster_truth};
+    use clusterlab::render::raster_truth;
     let gpu = gpu();
     let composer = Composer::default();
     let lit = clusterlab::scene::generate("one_light", small("one_light", 96, 54, None)).unwrap();
@@ -245,18 +264,10 @@ fn every_pipeline_adds_exactly_nothing_past_a_lights_radius() {
     let light = lit.lights[0];
     let centre = glam::DVec3::from(light.position.map(f64::from));
     let radius = light.radius as f64;
-    for name in [
-        "naive_forward",
-        "forward_plus",
-        "clustered_deferred_16x16x24",
-        "deferred_scissor",
-    ] {
+    for name in ONE_OF_EACH_PIPELINE {
         let v = load(name).variant;
         let truth = raster_truth(&gpu, &composer, &v, &lit).unwrap();
-        let frame = |scene| {
-            let mut r = Renderer::new(&gpu, &composer, &v, scene).unwrap();
-            r.render().unwrap().hdr
-        };
+        let frame = |scene| hdr_frame(&gpu, &composer, &v, scene);
         let (with, without) = (frame(&lit), frame(&dark));
         let (mut outside, mut inside) = (0, 0);
         for i in 0..truth.position.len() {
@@ -292,7 +303,7 @@ fn every_pipeline_adds_exactly_nothing_past_a_lights_radius() {
 fn the_spot_factor_is_one_inside_zero_outside_and_a_smoothstep_between() {
     use clusterlab::compose::Composer;
     use clusterlab::cpu::shading::spot_factor;
-    use clusterlab::render::{Renderer, raster_truth};
+    use clusterlab::render::raster_truth;
     use clusterlab::scene::Light;
     let gpu = gpu();
     let composer = Composer::default();
@@ -319,18 +330,10 @@ fn the_spot_factor_is_one_inside_zero_outside_and_a_smoothstep_between() {
         wgpu::TextureFormat::Rgba16Float => 2f64.powi(-11),
         _ => 2f64.powi(-24),
     };
-    for name in [
-        "naive_forward",
-        "forward_plus",
-        "clustered_deferred_16x16x24",
-        "deferred_scissor",
-    ] {
+    for name in ONE_OF_EACH_PIPELINE {
         let v = load(name).variant;
         let truth = raster_truth(&gpu, &composer, &v, &point).unwrap();
-        let frame = |scene| {
-            let mut r = Renderer::new(&gpu, &composer, &v, scene).unwrap();
-            r.render().unwrap().hdr
-        };
+        let frame = |scene| hdr_frame(&gpu, &composer, &v, scene);
         let (by_point, by_spot, unlit) = (frame(&point), frame(&spot), frame(&dark));
         let mut seen = [0; 3];
         for i in (0..truth.position.len()).filter(|&i| truth.covered(i)) {
