@@ -664,21 +664,22 @@ fn counters_are_exact_where_they_can_be_computed() {
     r.render().unwrap();
     let s = r.stats().unwrap();
     assert_eq!(s.light_evals, covered * 256);
-    // Useful evaluations are a property of the picture, the same for every pipeline.
-    let useful: u64 = (0..truth.position.len())
-        .filter(|&i| truth.covered(i))
-        .map(|i| {
-            let p = truth.surface(i).position;
-            scene
-                .lights
-                .iter()
-                .filter(|l| DVec3::from(l.position.map(f64::from)).distance(p) < l.radius as f64)
-                .count() as u64
-        })
-        .sum();
+    // Useful evaluations are a property of the picture, the same for every pipeline. The
+    // GPU tests the same f32 positions (interpolated, or stored whole in the wide G-buffer)
+    // as the raster truth, in f32: its distance is within 8 x 2^-24 of the exact one, so
+    // it may decide otherwise only the pairs that close to the radius.
+    let (mut useful, mut borderline) = (0u64, 0u64);
+    for i in (0..truth.position.len()).filter(|&i| truth.covered(i)) {
+        let p = truth.surface(i).position;
+        for l in &scene.lights {
+            let d = DVec3::from(l.position.map(f64::from)).distance(p) / l.radius as f64;
+            useful += u64::from(d < 1.0);
+            borderline += u64::from((d - 1.0).abs() <= 8.0 * 2f64.powi(-24));
+        }
+    }
     assert!(
-        s.useful_light_evals.abs_diff(useful) <= useful / 1000 + 2,
-        "{} vs {useful}",
+        s.useful_light_evals.abs_diff(useful) <= borderline,
+        "{} vs {useful} ({borderline} on the edge)",
         s.useful_light_evals
     );
     for v in exact_variants() {
@@ -690,8 +691,8 @@ fn counters_are_exact_where_they_can_be_computed() {
             assert!(c.useful_light_evals > useful, "{}", v.name);
         } else {
             assert!(
-                c.useful_light_evals.abs_diff(useful) <= useful / 1000 + 2,
-                "{}: {} vs {useful}",
+                c.useful_light_evals.abs_diff(useful) <= borderline,
+                "{}: {} vs {useful} ({borderline} on the edge)",
                 v.name,
                 c.useful_light_evals
             );
