@@ -16,7 +16,7 @@ use crate::cpu::clusters::{self as cpu, Grid};
 use crate::gpu::{Gpu, expect};
 use crate::reference::{EXPOSURE, ReferenceCache};
 use crate::render::FrameOutput;
-use crate::render::Renderer;
+use crate::render::{PixelCounters, Renderer};
 use crate::run::{CellOptions, run_scene_keeping_renderer};
 use crate::scene::Scene;
 use crate::variant::{LoadedVariant, Variant};
@@ -177,6 +177,7 @@ pub fn run_case(
                 },
             ));
             let stats = cell.report.stats.clone().unwrap_or_default();
+            let pixels = renderer.pixel_counters().map_err(|e| e.to_string());
             if v.pipeline.is_clustered() {
                 checks.push(check(
                     "cluster index in grid",
@@ -189,7 +190,11 @@ pub fn run_case(
                         ),
                     },
                 ));
-                checks.push(match missing_at_samples(gpu, composer, &renderer, v, &case.scene) {
+                let missing = pixels
+                    .as_ref()
+                    .map_err(Clone::clone)
+                    .and_then(|p| missing_at_samples(gpu, composer, &renderer, p, v, &case.scene));
+                checks.push(match missing {
                     Ok((0, _)) => check(
                         "no light missing at a sample",
                         true,
@@ -231,10 +236,10 @@ pub fn run_case(
                 ));
             }
             // The lights that reach each pixel, as the frame counted them.
-            let reach = match renderer.pixel_counters() {
+            let reach = match pixels {
                 Ok(p) => p.useful,
                 Err(e) => {
-                    checks.push(check("counted", false, e.to_string()));
+                    checks.push(check("counted", false, e));
                     vec![case.scene.lights.len() as u32; f.ldr.len()]
                 }
             };
@@ -308,18 +313,19 @@ pub fn clearly_reaches(light: &crate::scene::Light, p: glam::DVec3) -> bool {
 
 /// Sample-light pairs where the light clearly reaches a visible sample (the raster truth's
 /// surface at a pixel) but is not in the list of the cluster that pixel's shading looked up
-/// (as the renderer's last instrumented frame recorded it): their count, and the first.
+/// (as `pixels`, the renderer's last instrumented frame, recorded it): their count, and the
+/// first.
 /// Holds for every culling method, also those whose lists keep only the lights that reach
 /// a cluster's samples (2.5D, sample bounds, active clusters).
 pub fn missing_at_samples(
     gpu: &Gpu,
     composer: &Composer,
     r: &Renderer,
+    pixels: &PixelCounters,
     v: &Variant,
     scene: &Scene,
 ) -> Result<(u64, Option<String>), String> {
     let truth = crate::render::raster_truth(gpu, composer, v, scene).map_err(|e| e.to_string())?;
-    let pixels = r.pixel_counters().map_err(|e| e.to_string())?;
     let lists = r
         .cluster_lists()
         .map_err(|e| e.to_string())?
@@ -366,7 +372,8 @@ pub fn missing_lights(
         r.render().map_err(|e| e.to_string())?;
     }
     r.stats().map_err(|e| e.to_string())?;
-    let (mut missing, mut first) = missing_at_samples(gpu, composer, &r, v, scene)?;
+    let pixels = r.pixel_counters().map_err(|e| e.to_string())?;
+    let (mut missing, mut first) = missing_at_samples(gpu, composer, &r, &pixels, v, scene)?;
     if covers_every_cluster(v) {
         let (n, why) = missing_lights_of(&r, v, scene)?;
         missing += n;
