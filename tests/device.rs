@@ -73,16 +73,23 @@ fn a_cell_that_breaks_the_device_fails_alone_and_later_cells_get_a_new_one() {
 }
 
 /// A renderer of naive forward on atrium at `(width, height, lights)`, after its warm-up
-/// frame, and the wall time of a frame.
+/// frame, and the shortest wall time of three frames: the shortest, because a frame slowed by
+/// other tests sharing the CPU would set a limit the next, unhindered frame stays under.
 fn timed_frame(gpu: &Gpu, (width, height, lights): (u32, u32, u32)) -> (Duration, Renderer<'_>) {
     let params = common::small("atrium", width, height, Some(lights));
     let scene = scene::generate("atrium", params).expect("atrium");
     let v = common::load("naive_forward").variant;
     let mut r = Renderer::new(gpu, &Composer::default(), &v, &scene).expect("renderer");
     r.render().expect("warm-up frame");
-    let start = Instant::now();
-    r.render().expect("timed frame");
-    (start.elapsed(), r)
+    let shortest = (0..3)
+        .map(|_| {
+            let start = Instant::now();
+            r.render().expect("timed frame");
+            start.elapsed()
+        })
+        .min()
+        .expect("three frames");
+    (shortest, r)
 }
 
 #[test]
