@@ -139,6 +139,18 @@ pub enum SpotTest {
     Cone,
 }
 
+/// How the samples of a pixel are resolved to one HDR colour.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize, JsonSchema, EnumIter)]
+pub enum MsaaResolve {
+    /// The mean of the samples' linear HDR colours, then tonemapping: what a hardware
+    /// resolve does. A bright sample dominates its pixel, so HDR edges alias.
+    Box,
+    /// Filament's custom resolve: each sample weighted by `1 / (1 + max(r, g, b))` (Karis
+    /// 2013's reversible tonemap), the weighted mean turned back into HDR; close to
+    /// tonemapping each sample and averaging, so HDR edges stay smooth.
+    Tonemapped,
+}
+
 /// Which way depth runs and where the projection's far plane is.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct DepthMapping {

@@ -183,7 +183,7 @@ struct MatrixArgs {
     #[arg(long, value_delimiter = ',')]
     scenes: Vec<String>,
     /// A swept parameter: lights=64,256,...  radius=1,2..4,...  grid=16x9x24,...
-    /// spots=0,0.5,1  skipping=on,off. Repeat for a grid of sweeps.
+    /// spots=0,0.5,1  skipping=on,off  msaa=1,4. Repeat for a grid of sweeps.
     #[arg(long, value_parser = clusterlab::matrix::parse_sweep)]
     sweep: Vec<clusterlab::matrix::Sweep>,
     /// Image size of every cell, WIDTHxHEIGHT (default: each scene's).

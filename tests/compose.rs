@@ -1,10 +1,13 @@
-//! Composition: every pass of every variant in variants/ composes and validates, and its
-//! WGSL matches the reviewed snapshot; bad input gives the reviewed error text.
+//! Composition: every pass of every variant in variants/ (and of the default matrix's MSAA
+//! group at 4 samples) composes and validates, and its WGSL matches the reviewed snapshot;
+//! bad input gives the reviewed error text.
 
 use std::path::Path;
 
 use clusterlab::compose::{Composer, feature_flags, frame_features, passes};
-use clusterlab::variant;
+use clusterlab::variant::{self, Msaa, MsaaResolve};
+
+use crate::common;
 
 fn snapshot_settings(folder: &str) -> insta::Settings {
     let mut settings = insta::Settings::clone_current();
@@ -26,8 +29,29 @@ fn composed_wgsl_of_every_distinct_pass() {
     files.sort();
     // (pass, WGSL) -> the variants that compose it, in name order.
     let mut shaders: Vec<((String, String), Vec<String>)> = Vec::new();
-    for path in &files {
-        let loaded = variant::load(path).unwrap_or_else(|e| panic!("{e}"));
+    let mut variants: Vec<variant::LoadedVariant> = files
+        .iter()
+        .map(|path| variant::load(path).unwrap_or_else(|e| panic!("{e}")))
+        .collect();
+    // The default matrix's MSAA group at 4 samples (its multisampled shaders), the
+    // tonemapped resolve on one forward and one deferred pipeline.
+    for (i, name) in clusterlab::matrix::MSAA_GROUP.iter().enumerate() {
+        let resolves: &[MsaaResolve] = match i {
+            1 | 2 => &[MsaaResolve::Box, MsaaResolve::Tonemapped],
+            _ => &[MsaaResolve::Box],
+        };
+        for &resolve in resolves {
+            let mut v = common::load(name);
+            v.variant.msaa = Msaa {
+                samples: 4,
+                resolve,
+            };
+            v.name = format!("{name}[msaa=4,{resolve:?}]");
+            variants.push(v);
+        }
+    }
+    for loaded in &variants {
+        let path = &loaded.path;
         for pass in passes(&loaded.variant) {
             // A shading pass also as an instrumented frame composes it: the counting code
             // behind every evaluation count a table prints.

@@ -6,7 +6,7 @@ use crate::common::{self, cli, scratch};
 
 use clusterlab::compose::Composer;
 use clusterlab::gpu::expect::{self, Allowance, Check};
-use clusterlab::study::{codecs, culling, depth, slicing};
+use clusterlab::study::{codecs, culling, depth, msaa, slicing};
 
 fn rel(a: f64, b: f64) -> f64 {
     (a - b).abs() / b.abs().max(1e-30)
@@ -438,4 +438,48 @@ fn the_cones_and_culling_studies_exit_1_when_a_light_is_missed() {
         );
     }
     let _ = std::fs::remove_dir_all(dir.parent().unwrap());
+}
+
+/// The MSAA study: the group's seven variants at every sample count the adapter
+/// multisamples (1 and 4 on lavapipe; 1 alone through OpenGL, which refuses), each exact;
+/// with more than one count, a multisampled frame costs more memory per pixel and has edge
+/// pixels, and the table sets each deferred/forward ratio beside the published one.
+#[test]
+fn the_msaa_study_runs_every_pipeline_at_every_sample_count_exactly() {
+    let gpu = common::gpu();
+    let counts = gpu.multisample_counts();
+    if gpu.backend == wgpu::Backend::Gl {
+        assert_eq!(counts, [1]);
+    } else {
+        assert!(counts.contains(&4), "{counts:?}");
+    }
+    let rows = msaa::run(
+        &gpu,
+        &Composer::default(),
+        &["atrium"],
+        (64, 36),
+        Some(64),
+        1,
+    )
+    .expect("msaa study");
+    assert_eq!(
+        rows.len(),
+        clusterlab::matrix::MSAA_GROUP.len() * counts.len()
+    );
+    assert!(msaa::all_exact(&rows), "{rows:#?}");
+    for r in rows.iter().filter(|r| r.samples > 1) {
+        let one = rows
+            .iter()
+            .find(|o| o.variant == r.variant && o.samples == 1)
+            .expect("a one-sample row");
+        assert!(r.bytes_per_pixel > one.bytes_per_pixel, "{}", r.variant);
+        assert!(r.edge_fraction > 0.0, "{}", r.variant);
+    }
+    let notes = msaa::table(&rows, &counts).notes.join("\n");
+    assert_eq!(
+        msaa::ratios(&rows).len(),
+        msaa::PAIRS.len() * counts.len(),
+        "{notes}"
+    );
+    assert!(notes.contains("GPU Pro 4"), "{notes}");
 }

@@ -82,6 +82,11 @@ pub fn feature_flags(v: &Variant) -> Vec<(&'static str, bool)> {
         ("clustered", p.is_clustered()),
         ("deferred", deferred),
         ("depth_prepass", v.depth_prepass),
+        ("msaa", v.msaa.on()),
+        (
+            "resolve_tonemapped",
+            v.msaa.on() && v.msaa.resolve == MsaaResolve::Tonemapped,
+        ),
         ("reversed_z", v.depth.reversed_z),
         ("infinite_far", v.depth.mapping().infinite_far),
         (
@@ -199,6 +204,7 @@ pub fn constants_module(v: &Variant) -> String {
         ("BLOOM_RADIUS", bloom.radius),
         ("MOTION_BLUR_SAMPLES", motion.samples),
         ("GBUFFER_CHANNEL", gbuffer_channel),
+        ("MSAA_SAMPLES", v.msaa.samples),
     ]);
     // The CPU twins' slack and clamps, in single precision: the same numbers on both sides.
     let f32s = [

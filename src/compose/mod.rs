@@ -84,8 +84,10 @@ fn naga_text(
 
 /// Shader capabilities beyond the WebGPU baseline that passes may use: forced early depth
 /// testing, so instrumented passes count only the fragments a GPU with early-Z shades
-/// (wgpu feature SHADER_EARLY_DEPTH_TEST, which lavapipe and llvmpipe have).
-pub const CAPABILITIES: naga::valid::Capabilities = naga::valid::Capabilities::EARLY_DEPTH_TEST;
+/// (wgpu feature SHADER_EARLY_DEPTH_TEST, which lavapipe and llvmpipe have); per-sample
+/// shading, for multisampled scissor deferred (downlevel flag MULTISAMPLED_SHADING).
+pub const CAPABILITIES: naga::valid::Capabilities = naga::valid::Capabilities::EARLY_DEPTH_TEST
+    .union(naga::valid::Capabilities::MULTISAMPLED_SHADING);
 
 /// Composes passes from one shader folder.
 #[derive(Clone, Debug)]

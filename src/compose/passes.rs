@@ -26,6 +26,8 @@ pub enum RasterPass {
 #[strum(serialize_all = "snake_case")]
 pub enum ScreenPass {
     Resolve,
+    /// The forward passes' multisampled colour resolved to one sample a pixel.
+    SampleResolve,
     ScissorLights,
     DebugView,
     Tonemap,
@@ -208,6 +210,10 @@ pub fn passes(v: &Variant) -> Vec<Pass> {
         Pipeline::ClusteredDeferred => screen(ScreenPass::Resolve, "passes::resolve"),
         Pipeline::DeferredScissor => screen(ScreenPass::ScissorLights, "passes::scissor_lights"),
     });
+    // The clustered deferred resolve resolves the samples as it shades them.
+    if v.msaa.on() && v.pipeline != Pipeline::ClusteredDeferred {
+        out.push(screen(ScreenPass::SampleResolve, "passes::sample_resolve"));
+    }
     if range_from(DepthRangeSource::PreviousFrame) {
         // Reduced after shading, for the next frame.
         out.push(clustering(ClusterPass::DepthRange, "passes::depth_range"));

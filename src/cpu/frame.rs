@@ -6,6 +6,7 @@ use rayon::prelude::*;
 
 use super::color::display8;
 use super::light_grid::LightGrid;
+use super::msaa::resolve;
 use super::post::{Geometry, Image, PostParams};
 use super::shading::{ShadingParams, direct_light};
 use super::truth::RasterTruth;
@@ -24,7 +25,8 @@ pub struct ReferenceFrame {
     pub lit: u64,
 }
 
-/// Shade every covered pixel of `truth` with all `lights`; background stays black. Where a
+/// Shade every covered sample of `truth` with all `lights` and resolve each pixel's samples
+/// (`params.resolve`); background stays black. Where a
 /// `LightGrid` is made and culls, each pixel sums the lights of its cell, in index order:
 /// the sum of every light's contribution, bit for bit, since the others add exactly 0.
 pub fn shade_reference(
@@ -39,8 +41,8 @@ pub fn shade_reference(
         .map(|i| truth.surface(i).position)
         .collect();
     let grid = LightGrid::new(&covered, lights).filter(|g| g.culls(&covered, lights.len()));
-    // Each pixel's colour, and whether some light reaches it with light.
-    let (hdr, lit): (Vec<[f64; 3]>, Vec<bool>) = (0..truth.position.len())
+    // Each sample's colour, and whether some light reaches it with light.
+    let (colours, lit): (Vec<[f64; 3]>, Vec<bool>) = (0..truth.position.len())
         .into_par_iter()
         .map(|i| {
             if !truth.covered(i) {
@@ -59,9 +61,25 @@ pub fn shade_reference(
             (colour.to_array(), direct.max_element() > 0.0)
         })
         .unzip();
+    // A pixel's samples resolved to one colour; a pixel is covered and lit where one of its
+    // samples is.
+    let n = truth.samples.max(1) as usize;
+    let hdr: Vec<[f64; 3]> = if n == 1 {
+        colours
+    } else {
+        colours
+            .chunks(n)
+            .map(|samples| resolve(samples, params.resolve))
+            .collect()
+    };
+    let any =
+        |flags: &[bool]| -> u64 { flags.chunks(n).filter(|c| c.contains(&true)).count() as u64 };
+    let covered_samples: Vec<bool> = (0..truth.position.len())
+        .map(|i| truth.covered(i))
+        .collect();
     let ldr = hdr.iter().map(|&c| display8(c, exposure)).collect();
-    let covered = covered.len() as u64;
-    let lit = lit.iter().filter(|&&l| l).count() as u64;
+    let covered = any(&covered_samples);
+    let lit = any(&lit);
     ReferenceFrame {
         width: truth.width,
         height: truth.height,

@@ -8,6 +8,7 @@ pub mod color;
 pub mod depth;
 pub mod frame;
 pub mod light_grid;
+pub mod msaa;
 pub mod normals;
 pub mod post;
 pub mod shading;

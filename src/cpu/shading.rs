@@ -16,6 +16,8 @@ pub struct ShadingParams {
     pub ambient: f64,
     /// Toon bands applied to each light's diffuse term (toon in the shading pass).
     pub toon_bands: Option<u32>,
+    /// How a pixel's samples become its colour, when it has more than one.
+    pub resolve: crate::common::MsaaResolve,
 }
 
 /// The BRDF of a shading model.

@@ -10,6 +10,8 @@ use super::shading::Surface;
 pub struct RasterTruth {
     pub width: u32,
     pub height: u32,
+    /// Samples a pixel; the planes hold a pixel's samples one after another.
+    pub samples: u32,
     /// World position; w = 1 where covered, 0 where background.
     pub position: Vec<[f32; 4]>,
     /// Unit world normal (xyz), perceptual roughness (w).
@@ -27,9 +29,25 @@ impl RasterTruth {
         }
         self.width == other.width
             && self.height == other.height
+            && self.samples == other.samples
             && bytes(&self.position) == bytes(&other.position)
             && bytes(&self.normal) == bytes(&other.normal)
             && bytes(&self.albedo) == bytes(&other.albedo)
+    }
+
+    /// The first sample of every pixel: one sample a pixel, for what reads the geometry
+    /// per pixel (the post effects' twins).
+    pub fn first_samples(&self) -> RasterTruth {
+        let n = self.samples.max(1) as usize;
+        let first = |plane: &[[f32; 4]]| plane.iter().step_by(n).copied().collect();
+        RasterTruth {
+            width: self.width,
+            height: self.height,
+            samples: 1,
+            position: first(&self.position),
+            normal: first(&self.normal),
+            albedo: first(&self.albedo),
+        }
     }
 
     pub fn covered(&self, i: usize) -> bool {

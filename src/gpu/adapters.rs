@@ -168,6 +168,35 @@ pub fn timing_override() -> Result<Option<bool>, String> {
     }
 }
 
+/// The formats a multisampled frame may render to: HDR targets, the G-buffers' targets,
+/// the truth pass's, depth.
+pub const MULTISAMPLED_FORMATS: [wgpu::TextureFormat; 8] = [
+    wgpu::TextureFormat::Rgba32Float,
+    wgpu::TextureFormat::Rgba16Float,
+    wgpu::TextureFormat::Rgba32Uint,
+    wgpu::TextureFormat::Rgba8Unorm,
+    wgpu::TextureFormat::R32Uint,
+    wgpu::TextureFormat::Rg8Unorm,
+    wgpu::TextureFormat::Depth32Float,
+    wgpu::TextureFormat::Depth24Plus,
+];
+
+/// The sample counts (of 1, 2, 4, 8) the adapter can render `format` with.
+pub fn sample_counts(adapter: &wgpu::Adapter, format: wgpu::TextureFormat) -> Vec<u32> {
+    let flags = adapter.get_texture_format_features(format).flags;
+    [1, 2, 4, 8]
+        .into_iter()
+        .filter(|&n| flags.sample_count_supported(n))
+        .collect()
+}
+
+/// A format and the sample counts an adapter renders it with.
+#[derive(Clone, Debug, Serialize)]
+pub struct FormatSamples {
+    pub format: String,
+    pub samples: Vec<u32>,
+}
+
 /// One capability clusterlab uses, and whether an adapter has it.
 #[derive(Clone, Debug, Serialize)]
 pub struct Capability {
@@ -188,6 +217,8 @@ pub struct AdapterReport {
     pub vendor_id: u32,
     pub device_id: u32,
     pub capabilities: Vec<Capability>,
+    /// Sample counts per format (`msaa.samples`).
+    pub multisampling: Vec<FormatSamples>,
     pub hdr_format: String,
     pub timing: String,
     pub max_texture_side: u32,
@@ -230,6 +261,11 @@ fn capabilities(adapter: &wgpu::Adapter) -> Vec<Capability> {
             name: "storage writes in fragment shaders",
             present: d(wgpu::DownlevelFlags::FRAGMENT_WRITABLE_STORAGE),
             use_: "required: the counters of instrumented frames",
+        },
+        Capability {
+            name: "per-sample shading",
+            present: d(wgpu::DownlevelFlags::MULTISAMPLED_SHADING),
+            use_: "multisampled scissor deferred, which shades every sample",
         },
         Capability {
             name: "indirect dispatch",
@@ -281,6 +317,13 @@ fn report(adapter: &wgpu::Adapter, chosen: bool) -> AdapterReport {
         vendor_id: info.vendor,
         device_id: info.device,
         capabilities: capabilities(adapter),
+        multisampling: MULTISAMPLED_FORMATS
+            .iter()
+            .map(|&f| FormatSamples {
+                format: format!("{f:?}").to_lowercase(),
+                samples: sample_counts(adapter, f),
+            })
+            .collect(),
         hdr_format: format!("{hdr:?}").to_lowercase(),
         timing: if timestamps {
             "gpu timestamps".into()
@@ -403,6 +446,15 @@ impl Survey {
                 a.vendor_id, a.device_id
             );
             let _ = writeln!(s, "   HDR target: {}", a.hdr_format);
+            let counts: Vec<String> = a
+                .multisampling
+                .iter()
+                .map(|f| format!("{} {:?}", f.format, f.samples))
+                .collect();
+            let _ = writeln!(s, "   sample counts: {}", counts.join(", "));
+            if a.backend == wgpu::Backend::Gl.to_string() {
+                let _ = writeln!(s, "   multisampling: refused: {}", super::MSAA_ON_GL);
+            }
             let _ = writeln!(s, "   pass times: {}", a.timing);
             let _ = writeln!(
                 s,

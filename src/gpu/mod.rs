@@ -80,6 +80,10 @@ const READBACK_BYTES_PER_PIXEL: u64 = 16;
 /// How long one cell's GPU work may take by default (`--cell-timeout`).
 pub const DEFAULT_CELL_TIMEOUT: Duration = Duration::from_secs(600);
 
+/// Why a multisampled frame cannot run on wgpu 30's OpenGL backend, though the driver
+/// offers the sample counts.
+pub const MSAA_ON_GL: &str = "wgpu's OpenGL backend creates a multisampled texture that shaders read with the target GL_TEXTURE_2D, which OpenGL rejects (GL_INVALID_ENUM; gfx-rs/wgpu#6084), so nothing renders into it and no pass can read its samples";
+
 /// An open device and what it can do.
 pub struct Gpu {
     pub device: wgpu::Device,
@@ -93,6 +97,8 @@ pub struct Gpu {
     /// it, else rgba16float (OpenGL through wgpu).
     pub hdr_format: wgpu::TextureFormat,
     pub limits: wgpu::Limits,
+    /// The sample counts the adapter renders each of `adapters::MULTISAMPLED_FORMATS` with.
+    sample_counts: Vec<(wgpu::TextureFormat, Vec<u32>)>,
     uncaptured: Arc<Mutex<Vec<String>>>,
     /// Why the device was lost, once it was (set by wgpu's device-lost callback).
     lost: Arc<Mutex<Option<String>>>,
@@ -174,6 +180,10 @@ impl Gpu {
                 && adapters::timestamps_are_per_pass(info.device_type),
             hdr_format,
             limits: with_buffer_cap(limits),
+            sample_counts: adapters::MULTISAMPLED_FORMATS
+                .iter()
+                .map(|&f| (f, adapters::sample_counts(&adapter, f)))
+                .collect(),
             uncaptured,
             lost,
             overran: AtomicBool::new(false),
@@ -325,6 +335,49 @@ impl Gpu {
             w * h * COUNTER_BYTES_PER_PIXEL,
             READBACK_BYTES_PER_PIXEL
         )))
+    }
+
+    /// Check that the adapter renders every target of `targets` (what it is, its format)
+    /// with `samples` samples a pixel (`msaa.samples`).
+    pub fn check_samples(
+        &self,
+        samples: u32,
+        targets: &[(&str, wgpu::TextureFormat)],
+    ) -> Result<(), GpuError> {
+        if samples > 1 && self.backend == wgpu::Backend::Gl {
+            return Err(GpuError::TooLarge(format!(
+                "msaa.samples {samples}: {MSAA_ON_GL}; use samples: 1 on adapter `{}`, or Vulkan (lavapipe) for multisampling",
+                self.adapter.name
+            )));
+        }
+        for &(what, format) in targets {
+            let counts = self
+                .sample_counts
+                .iter()
+                .find(|(f, _)| *f == format)
+                .map_or(&[1][..], |(_, c)| c.as_slice());
+            if !counts.contains(&samples) {
+                return Err(GpuError::TooLarge(format!(
+                    "msaa.samples {samples}: adapter `{}` renders the {what} ({}) with {counts:?} samples a pixel only; use one of those (`clusterlab adapters` lists every format's counts)",
+                    self.adapter.name,
+                    format!("{format:?}").to_lowercase(),
+                )));
+            }
+        }
+        Ok(())
+    }
+
+    /// The sample counts (of 1, 2, 4, 8) every multisampled target renders with here.
+    pub fn multisample_counts(&self) -> Vec<u32> {
+        let every: Vec<(&str, wgpu::TextureFormat)> = adapters::MULTISAMPLED_FORMATS
+            .iter()
+            .map(|&f| ("target", f))
+            .filter(|&(_, f)| f != wgpu::TextureFormat::Rgba32Float || self.hdr_format == f)
+            .collect();
+        [1, 2, 4, 8]
+            .into_iter()
+            .filter(|&n| self.check_samples(n, &every).is_ok())
+            .collect()
     }
 
     /// The limit on one cell's GPU work (`--cell-timeout`).

@@ -323,6 +323,13 @@ pub const COLUMNS: &[Column] = &[
         },
     },
     Column {
+        key: "edge_fraction",
+        heading: "edge px",
+        shown: CSV_AND_HTML,
+        value: |m| m.stats.map(|s| s.edge_fraction).into(),
+        text: |m| or_dash(m.stats, |s| format!("{:.1}%", 100.0 * s.edge_fraction)),
+    },
+    Column {
         key: "frame_bytes_per_pixel",
         heading: "B/px",
         shown: EVERYWHERE,

@@ -21,10 +21,12 @@ pub enum Sweep {
     Skipping(Vec<bool>),
     /// Fractions of spot lights, each in 0..=1.
     Spots(Vec<f32>),
+    /// MSAA sample counts (`msaa.samples`).
+    Msaa(Vec<u32>),
 }
 
 /// Parse `lights=64,256`, `radius=1,2..4` (a single value r means r..r),
-/// `grid=16x9x24,32x18x48`, `skipping=on,off` or `spots=0,0.5,1`.
+/// `grid=16x9x24,32x18x48`, `skipping=on,off`, `spots=0,0.5,1` or `msaa=1,4`.
 pub fn parse_sweep(s: &str) -> Result<Sweep, String> {
     let (name, values) = s
         .split_once('=')
@@ -111,8 +113,23 @@ pub fn parse_sweep(s: &str) -> Result<Sweep, String> {
             })
             .collect::<Result<_, _>>()
             .map(Sweep::Spots),
+        "msaa" => items
+            .iter()
+            .map(|v| {
+                v.parse::<u32>()
+                    .ok()
+                    .filter(|n| variant::SAMPLE_COUNTS.contains(n))
+                    .ok_or_else(|| {
+                        bad(
+                            v,
+                            &format!("a sample count of {:?}", variant::SAMPLE_COUNTS),
+                        )
+                    })
+            })
+            .collect::<Result<_, _>>()
+            .map(Sweep::Msaa),
         other => Err(format!(
-            "`{other}` cannot be swept; sweep lights, radius, grid, skipping or spots"
+            "`{other}` cannot be swept; sweep lights, radius, grid, skipping, spots or msaa"
         )),
     }
 }
@@ -163,8 +180,21 @@ pub struct Group {
     pub size: Option<(u32, u32)>,
 }
 
-/// The default matrix: every variant on every built-in scene, and a light-count sweep of
-/// naive forward, Forward+ and clustered deferred on the atrium.
+/// The pipelines of the default matrix's MSAA group: naive forward, Forward+ and clustered
+/// deferred, tiled and two-level both ways.
+pub const MSAA_GROUP: [&str; 7] = [
+    "naive_forward",
+    "forward_plus",
+    "clustered_deferred_16x16x24",
+    "forward_plus_tiled",
+    "clustered_deferred_tiled",
+    "forward_plus_two_level",
+    "clustered_deferred_two_level",
+];
+
+/// The default matrix: every variant on every built-in scene, a light-count sweep of naive
+/// forward, Forward+ and clustered deferred on the atrium, and those with 1 and 4 samples
+/// (`MSAA_GROUP`).
 pub fn default_groups() -> Result<Vec<Group>, String> {
     let scenes = crate::scene::SCENES
         .iter()
@@ -188,6 +218,14 @@ pub fn default_groups() -> Result<Vec<Group>, String> {
             scenes: vec!["atrium".into()],
             sweeps: vec![Sweep::Lights(vec![64, 256, 1024, 5000, 16384])],
             size: Some((256, 144)),
+        },
+        // Where Forward+ and deferred trade places (Billeter et al. 2013, at 4x MSAA).
+        Group {
+            name: "msaa".into(),
+            variants: find_variants(&MSAA_GROUP.map(String::from))?,
+            scenes: vec!["atrium".into()],
+            sweeps: vec![Sweep::Lights(vec![1024]), Sweep::Msaa(vec![1, 4])],
+            size: Some((640, 360)),
         },
     ])
 }
@@ -387,6 +425,7 @@ struct Point {
     grid: Option<(u32, u32, u32)>,
     skipping: Option<bool>,
     spots: Option<f32>,
+    msaa: Option<u32>,
 }
 
 fn sweep_points(sweeps: &[Sweep]) -> Vec<Point> {
@@ -413,6 +452,10 @@ fn sweep_points(sweeps: &[Sweep]) -> Vec<Point> {
                 })),
                 Sweep::Spots(v) => next.extend(v.iter().map(|&f| Point {
                     spots: Some(f),
+                    ..p.clone()
+                })),
+                Sweep::Msaa(v) => next.extend(v.iter().map(|&n| Point {
+                    msaa: Some(n),
                     ..p.clone()
                 })),
             }
@@ -449,6 +492,15 @@ fn make_cell(
         sweep.insert("skipping".into(), if on { "on" } else { "off" }.into());
         if let Ok(v) = &mut loaded {
             v.variant.skip_unneeded = on;
+        }
+    }
+    if let Some(n) = point.msaa {
+        sweep.insert("msaa".into(), n.to_string());
+        if let Ok(v) = &mut loaded {
+            v.variant.msaa.samples = n;
+            if let Some(p) = variant::check(&v.variant).first() {
+                loaded = Err(format!("msaa {n}: {} {}", p.field, p.message));
+            }
         }
     }
     // A grid sweep leaves unclustered variants alone: their cells for every grid share one
@@ -649,7 +701,11 @@ mod tests {
             ("radius=4..2", "MIN is above MAX"),
             ("grid=16x9", "is not a grid XxYxZ"),
             ("grid=0x1x1", "whole numbers >= 1"),
-            ("fov=60", "sweep lights, radius, grid, skipping or spots"),
+            (
+                "fov=60",
+                "sweep lights, radius, grid, skipping, spots or msaa",
+            ),
+            ("msaa=3", "is not a sample count of [1, 2, 4, 8]"),
             ("skipping=maybe", "is not on or off"),
             (
                 "spots=1.5",

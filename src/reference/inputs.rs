@@ -23,6 +23,7 @@ impl ShadingParams {
                 ShadingModel::Ggx => Brdf::Ggx,
             },
             ambient: v.shading.ambient as f64,
+            resolve: v.msaa.resolve,
             toon_bands: v
                 .post
                 .toon

@@ -82,8 +82,8 @@ impl ReferenceCache {
         );
         // Everything the raster truth, the shading and the post chain depend on.
         let key = format!(
-            "{scene_key}|{shading:?}|{post_params:?}|{:?}|{}",
-            v.depth, v.depth_prepass
+            "{scene_key}|{shading:?}|{post_params:?}|{:?}|{}|{:?}",
+            v.depth, v.depth_prepass, v.msaa
         );
         if let Some(hit) = self.frames.lock().expect("cache lock").get(&key) {
             return Ok(hit.clone());
@@ -169,7 +169,8 @@ fn post(
     scene: &Scene,
 ) {
     let cams = CameraPair::of(scene, variant.variant.depth.mapping());
-    post_process(frame, params, &Geometry::from_truth(truth, &cams), EXPOSURE);
+    let geometry = Geometry::from_truth(&truth.first_samples(), &cams);
+    post_process(frame, params, &geometry, EXPOSURE);
 }
 
 /// The raster truth of the variant's rasterisation, shaded and post-processed on the CPU

@@ -45,7 +45,13 @@ impl Renderer<'_> {
                 &self.variant,
                 instrumented,
             )?),
-            PassId::Screen(p) => Pipelines::Render(screen::pipelines(gpu, p, composed, l)?),
+            PassId::Screen(p) => Pipelines::Render(screen::pipelines(
+                gpu,
+                p,
+                composed,
+                l,
+                self.variant.msaa.samples,
+            )?),
             PassId::Clustering(p) => {
                 let compute = ComputePipelines::all(gpu, composed, l)?;
                 let method = self.variant.clusters().method();

@@ -28,18 +28,22 @@ pub fn formats(v: &Variant) -> Vec<(&'static str, wgpu::TextureFormat)> {
     }
 }
 
-/// Bytes a pixel of the variant's layout takes, depth included (4 bytes).
+/// Bytes a pixel of the variant's layout takes, depth included (4 bytes), every sample.
 pub fn bytes_per_pixel(v: &Variant) -> u32 {
-    4 + formats(v)
+    let sample = 4 + formats(v)
         .iter()
         .map(|(_, f)| f.block_copy_size(None).unwrap_or(0))
-        .sum::<u32>()
+        .sum::<u32>();
+    sample * v.msaa.samples
 }
 
 /// The layout's targets, each with its name.
 pub fn targets(gpu: &Gpu, v: &Variant, w: u32, h: u32) -> Vec<(&'static str, Target)> {
     formats(v)
         .into_iter()
-        .map(|(name, f)| (name, Target::new(gpu, name, w, h, f)))
+        .map(|(name, f)| {
+            let t = Target::multisampled(gpu, name, (w, h), f, v.msaa.samples);
+            (name, t)
+        })
         .collect()
 }

@@ -18,6 +18,7 @@ pub fn check_frame(gpu: &Gpu, variant: &Variant, scene: &Scene) -> Result<(), Re
         c.method().check(gpu, c.grid, scene.lights.len())?;
     }
     check_for_scene(variant, scene)?;
+    check_samples(gpu, variant)?;
     // Naive forward loops over every light per pixel; scissor deferred draws them instead,
     // and a clustered frame's loops are checked on the lengths it builds (`check_walks`).
     let loops_over_every_light = match variant.pipeline {
@@ -38,6 +39,34 @@ pub fn check_frame(gpu: &Gpu, variant: &Variant, scene: &Scene) -> Result<(), Re
         ))));
     }
     Ok(())
+}
+
+/// The targets a frame of `variant` multisamples, and the raster truth's, all rendered with
+/// its sample count.
+fn check_samples(gpu: &Gpu, variant: &Variant) -> Result<(), RenderError> {
+    let samples = variant.msaa.samples;
+    if samples == 1 {
+        return Ok(());
+    }
+    let mut targets = vec![
+        ("depth buffer", super::DepthSetup::of(variant).format),
+        ("raster truth", super::F32_BITS_FORMAT),
+    ];
+    if variant.pipeline.is_deferred() {
+        targets.extend(
+            super::gbuffer::formats(variant)
+                .into_iter()
+                .map(|(_, f)| ("G-buffer", f)),
+        );
+    }
+    // Scissor deferred blends into multisampled colour, as forward shades into it.
+    if variant.pipeline != Pipeline::ClusteredDeferred {
+        targets.push(("HDR target", gpu.hdr_format));
+    }
+    if variant.depth_prepass {
+        targets.push(("shading depth", super::resources::SHADING_DEPTH_FORMAT));
+    }
+    Ok(gpu.check_samples(samples, &targets)?)
 }
 
 /// Variant values whose valid range depends on the scene's camera.

@@ -66,7 +66,8 @@ pub fn shader_module(gpu: &Gpu, pass: &ComposedPass) -> Result<wgpu::ShaderModul
 
 /// A render pipeline of a composed pass with vertex and (optional) fragment entry points,
 /// created once per device for its WGSL and state (`layout` is the pass's own, which its
-/// WGSL determines).
+/// WGSL determines), drawing `samples` samples a pixel.
+#[allow(clippy::too_many_arguments)]
 pub fn render_pipeline(
     gpu: &Gpu,
     pass: &ComposedPass,
@@ -75,9 +76,10 @@ pub fn render_pipeline(
     vertex_buffers: &[Option<wgpu::VertexBufferLayout<'_>>],
     targets: &[Option<wgpu::ColorTargetState>],
     depth: Option<wgpu::DepthStencilState>,
+    samples: u32,
 ) -> Result<wgpu::RenderPipeline, GpuError> {
     let key = format!(
-        "{}\0{vs}|{fs:?}|{vertex_buffers:?}|{targets:?}|{depth:?}",
+        "{}\0{vs}|{fs:?}|{vertex_buffers:?}|{targets:?}|{depth:?}|{samples}",
         pass.wgsl
     );
     let module = shader_module(gpu, pass)?;
@@ -94,7 +96,10 @@ pub fn render_pipeline(
                 },
                 primitive: wgpu::PrimitiveState::default(),
                 depth_stencil: depth.clone(),
-                multisample: wgpu::MultisampleState::default(),
+                multisample: wgpu::MultisampleState {
+                    count: samples,
+                    ..Default::default()
+                },
                 fragment: fs.map(|fs| wgpu::FragmentState {
                     module: &module,
                     entry_point: Some(fs),

@@ -28,9 +28,15 @@ pub fn pipelines(
             &vertex,
             targets,
             Some(depth),
+            variant.msaa.samples,
         )
     };
     Ok(match pass {
+        RasterPass::DepthPrepass if variant.msaa.on() => {
+            let target = color_target(super::resources::SHADING_DEPTH_FORMAT);
+            let depth = d.state(d.compare(), true);
+            vec![build(Some("fs_shading_depth"), &[target], depth)?]
+        }
         RasterPass::DepthPrepass => vec![build(None, &[], d.state(d.compare(), true))?],
         RasterPass::GBuffer => {
             let formats = gbuffer::formats(variant);
@@ -81,8 +87,16 @@ pub fn encode(
             stencil_ops: None,
         })
     };
+    let forward_target = targets.hdr_samples.as_ref().unwrap_or(&targets.hdr);
     let (colors, depth): (Vec<_>, _) = match pass {
-        RasterPass::DepthPrepass => (vec![], depth(true)),
+        RasterPass::DepthPrepass => (
+            targets
+                .shading_depth
+                .iter()
+                .map(|t| clear_attachment(&t.view))
+                .collect(),
+            depth(true),
+        ),
         RasterPass::GBuffer => (
             targets
                 .gbuffer
@@ -92,7 +106,7 @@ pub fn encode(
             depth(true),
         ),
         RasterPass::Forward => (
-            vec![clear_attachment(&targets.hdr.view)],
+            vec![clear_attachment(&forward_target.view)],
             depth(!variant.depth_prepass),
         ),
     };

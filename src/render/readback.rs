@@ -36,6 +36,7 @@ impl Renderer<'_> {
                 compose::ScreenPass::DebugView,
                 &composed,
                 &layout.pipeline,
+                1,
             )?;
             let groups = layout.bind_groups(gpu, id.name(), |slot| self.res.scene_binding(slot))?;
             let mut e = gpu.device.create_command_encoder(&Default::default());

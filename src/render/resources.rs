@@ -9,7 +9,7 @@ use super::reflect::Slot;
 use crate::cpu::depth::DepthMapping;
 use crate::gpu::Gpu;
 use crate::scene::{Light, Scene, Vertex};
-use crate::variant::{DepthFormat, Variant};
+use crate::variant::{DepthFormat, Pipeline, Variant};
 
 /// Mirrors `View` in `shaders/common/view.wesl` (432 bytes).
 #[repr(C)]
@@ -211,6 +211,8 @@ fn upload_textures(
 /// Targets that hold f32 data exactly on every adapter: the f32 bits in rgba32uint
 /// (rgba32float is not renderable through wgpu's OpenGL backend).
 pub const F32_BITS_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Uint;
+/// The shading depth of multisampled forward frames: f32 bits.
+pub const SHADING_DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Uint;
 /// The display format; sRGB encoding is done in the shader so the CPU can match it.
 pub const LDR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
 
@@ -256,14 +258,20 @@ impl DepthSetup {
     }
 }
 
-/// A 2D texture usable as a render target, sampled texture and copy source.
-pub fn target(
+/// A 2D render target of `samples` samples a pixel that passes read; with one sample it
+/// is also a copy source (a multisampled texture cannot be copied).
+pub fn multisampled_target(
     gpu: &Gpu,
     label: &str,
-    w: u32,
-    h: u32,
+    (w, h): (u32, u32),
     format: wgpu::TextureFormat,
+    samples: u32,
 ) -> wgpu::Texture {
+    let copy = if samples == 1 {
+        wgpu::TextureUsages::COPY_SRC
+    } else {
+        wgpu::TextureUsages::empty()
+    };
     gpu.device.create_texture(&wgpu::TextureDescriptor {
         label: Some(label),
         size: wgpu::Extent3d {
@@ -272,12 +280,10 @@ pub fn target(
             depth_or_array_layers: 1,
         },
         mip_level_count: 1,
-        sample_count: 1,
+        sample_count: samples,
         dimension: wgpu::TextureDimension::D2,
         format,
-        usage: wgpu::TextureUsages::RENDER_ATTACHMENT
-            | wgpu::TextureUsages::TEXTURE_BINDING
-            | wgpu::TextureUsages::COPY_SRC,
+        usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING | copy,
         view_formats: &[],
     })
 }
@@ -290,16 +296,32 @@ pub struct Target {
 
 impl Target {
     pub fn new(gpu: &Gpu, label: &str, w: u32, h: u32, format: wgpu::TextureFormat) -> Self {
-        let texture = target(gpu, label, w, h, format);
+        Self::multisampled(gpu, label, (w, h), format, 1)
+    }
+
+    pub fn multisampled(
+        gpu: &Gpu,
+        label: &str,
+        size: (u32, u32),
+        format: wgpu::TextureFormat,
+        samples: u32,
+    ) -> Self {
+        let texture = multisampled_target(gpu, label, size, format, samples);
         let view = texture.create_view(&Default::default());
         Self { texture, view }
     }
 }
 
 /// The images of a frame: depth, HDR colour, the 8-bit output and the G-buffer (deferred).
+/// Depth and the G-buffer hold `msaa.samples` samples a pixel, and so does the forward
+/// and scissor deferred's colour (`hdr_samples`, resolved into `hdr`); the rest one.
 pub struct Targets {
     pub depth: Target,
     pub hdr: Target,
+    pub hdr_samples: Option<Target>,
+    /// Multisampled forward frames with a pre-pass: the depth each sample is shaded at
+    /// (`clustering/shading_depth.wesl`), as f32 bits.
+    pub shading_depth: Option<Target>,
     pub ldr: Target,
     pub gbuffer: Vec<(&'static str, Target)>,
 }
@@ -311,10 +333,12 @@ pub struct Counters {
     pub evals: wgpu::Buffer,
     pub useful: wgpu::Buffer,
     pub clusters: wgpu::Buffer,
+    /// Multisampled frames: the shadings of each pixel.
+    pub shadings: Option<wgpu::Buffer>,
 }
 
 impl Counters {
-    pub fn new(gpu: &Gpu, pixels: u64) -> Self {
+    pub fn new(gpu: &Gpu, pixels: u64, multisampled: bool) -> Self {
         let buffer = |label| {
             gpu.device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some(label),
@@ -329,12 +353,16 @@ impl Counters {
             evals: buffer("pixel light evaluations"),
             useful: buffer("pixel useful evaluations"),
             clusters: buffer("pixel cluster indices"),
+            shadings: multisampled.then(|| buffer("pixel shadings")),
         }
     }
 
     /// Zero every counter.
     pub fn clear(&self, encoder: &mut wgpu::CommandEncoder) {
-        for b in [&self.evals, &self.useful, &self.clusters] {
+        for b in [&self.evals, &self.useful, &self.clusters]
+            .into_iter()
+            .chain(&self.shadings)
+        {
             encoder.clear_buffer(b, 0, None);
         }
     }
@@ -360,9 +388,15 @@ impl FrameResources {
     ) -> Self {
         let (w, h) = (scene.params.width, scene.params.height);
         let depth = DepthSetup::of(variant);
+        let samples = variant.msaa.samples;
         let targets = Targets {
-            depth: Target::new(gpu, "depth", w, h, depth.format),
+            depth: Target::multisampled(gpu, "depth", (w, h), depth.format, samples),
             hdr: Target::new(gpu, "hdr", w, h, gpu.hdr_format),
+            hdr_samples: (variant.msaa.on() && variant.pipeline != Pipeline::ClusteredDeferred)
+                .then(|| Target::multisampled(gpu, "hdr samples", (w, h), gpu.hdr_format, samples)),
+            shading_depth: (variant.msaa.on() && variant.depth_prepass).then(|| {
+                Target::multisampled(gpu, "shading depth", (w, h), SHADING_DEPTH_FORMAT, samples)
+            }),
             ldr: Target::new(gpu, "ldr", w, h, LDR_FORMAT),
             gbuffer: if variant.pipeline.is_deferred() {
                 super::gbuffer::targets(gpu, variant, w, h)
@@ -387,7 +421,7 @@ impl FrameResources {
             scene: SceneBuffers::upload(gpu, scene, depth.mapping),
             targets,
             clusters,
-            counters: Counters::new(gpu, w as u64 * h as u64),
+            counters: Counters::new(gpu, w as u64 * h as u64, variant.msaa.on()),
         }
     }
 
@@ -409,9 +443,15 @@ impl FrameResources {
         }
         match name {
             "depth_texture" => Some(texture(&self.targets.depth)),
+            "shading_depth" => self.targets.shading_depth.as_ref().map(texture),
             "pixel_evals" => Some(self.counters.evals.as_entire_binding()),
             "pixel_useful" => Some(self.counters.useful.as_entire_binding()),
             "pixel_clusters" => Some(self.counters.clusters.as_entire_binding()),
+            "pixel_shadings" => self
+                .counters
+                .shadings
+                .as_ref()
+                .map(|b| b.as_entire_binding()),
             _ => self
                 .targets
                 .gbuffer

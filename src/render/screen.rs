@@ -1,6 +1,6 @@
 //! The screen family: passes that draw over the screen without the scene's geometry
-//! (deferred resolve, scissor-rectangle lights, the debug views, tonemapping). Their
-//! pipelines, bindings, attachments and draws.
+//! (deferred resolve, the forward passes' sample resolve, scissor-rectangle lights, the
+//! debug views, tonemapping). Their pipelines, bindings, attachments and draws.
 
 use super::passes::{begin_render, clear_attachment, color_target, render_pipeline};
 use super::reflect::Slot;
@@ -14,12 +14,30 @@ pub fn pipelines(
     pass: ScreenPass,
     composed: &ComposedPass,
     layout: &wgpu::PipelineLayout,
+    samples: u32,
 ) -> Result<Vec<wgpu::RenderPipeline>, GpuError> {
+    // Only scissor lights draw into multisampled colour; the rest write one sample a pixel.
+    let samples = if pass == ScreenPass::ScissorLights {
+        samples
+    } else {
+        1
+    };
     let build = |vs: &str, fs: &str, target: Option<wgpu::ColorTargetState>| {
-        render_pipeline(gpu, composed, layout, (vs, Some(fs)), &[], &[target], None)
+        render_pipeline(
+            gpu,
+            composed,
+            layout,
+            (vs, Some(fs)),
+            &[],
+            &[target],
+            None,
+            samples,
+        )
     };
     Ok(match pass {
-        ScreenPass::Resolve => vec![build("vs_main", "fs_main", color_target(gpu.hdr_format))?],
+        ScreenPass::Resolve | ScreenPass::SampleResolve => {
+            vec![build("vs_main", "fs_main", color_target(gpu.hdr_format))?]
+        }
         // The ambient term over every pixel, then each light added in its rectangle.
         ScreenPass::ScissorLights => {
             let additive = Some(wgpu::ColorTargetState {
@@ -56,6 +74,12 @@ pub fn binding<'a>(
     match (pass, slot.name) {
         (ScreenPass::Tonemap, "hdr") => Some(wgpu::BindingResource::TextureView(shaded)),
         (ScreenPass::Tonemap, _) => None,
+        (ScreenPass::SampleResolve, "hdr_samples") => resources
+            .targets
+            .hdr_samples
+            .as_ref()
+            .map(|t| wgpu::BindingResource::TextureView(&t.view)),
+        (ScreenPass::SampleResolve, _) => None,
         _ => resources.scene_binding(slot),
     }
 }
@@ -72,7 +96,8 @@ pub fn encode(
 ) {
     let t = &resources.targets;
     let target = match pass {
-        ScreenPass::Resolve | ScreenPass::ScissorLights => &t.hdr.view,
+        ScreenPass::ScissorLights => &t.hdr_samples.as_ref().unwrap_or(&t.hdr).view,
+        ScreenPass::Resolve | ScreenPass::SampleResolve => &t.hdr.view,
         ScreenPass::DebugView | ScreenPass::Tonemap => &t.ldr.view,
     };
     let colors = [clear_attachment(target)];

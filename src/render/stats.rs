@@ -22,6 +22,11 @@ pub struct FrameStats {
     /// (summed over the fragments shaded there).
     #[serde(default)]
     pub max_useful_per_pixel: u32,
+    /// Multisampled frames: the fraction of the frame's pixels shaded more than once (edge
+    /// pixels: forward shades each fragment, the deferred resolve each distinct surface;
+    /// forward without a pre-pass also each fragment drawn over later).
+    #[serde(default)]
+    pub edge_fraction: f64,
     /// Light-cluster pairs left out by a per-cluster cap.
     pub dropped_lights: u64,
     /// Clusters that hold at least one visible sample.
@@ -78,6 +83,8 @@ pub struct PixelCounters {
     pub useful: Vec<u32>,
     /// 1 + the largest cluster index a pixel's fragments looked up (0: none; clustered).
     pub clusters: Vec<u32>,
+    /// Multisampled frames: how many times each pixel was shaded (empty with one sample).
+    pub shadings: Vec<u32>,
 }
 
 impl PixelCounters {
@@ -127,6 +134,12 @@ impl<'g> Renderer<'g> {
             evals: read(&c.evals)?,
             useful: read(&c.useful)?,
             clusters: read(&c.clusters)?,
+            shadings: c
+                .shadings
+                .as_ref()
+                .map(read)
+                .transpose()?
+                .unwrap_or_default(),
         })
     }
 
@@ -152,6 +165,8 @@ impl<'g> Renderer<'g> {
             light_evals: sum(&pixels.evals),
             useful_light_evals: sum(&pixels.useful),
             max_useful_per_pixel: pixels.useful.iter().copied().max().unwrap_or(0),
+            edge_fraction: pixels.shadings.iter().filter(|&&n| n > 1).count() as f64
+                / pixels.evals.len().max(1) as f64,
             gbuffer_bytes_per_pixel: if self.variant.pipeline.is_deferred() {
                 gbuffer::bytes_per_pixel(&self.variant)
             } else {
@@ -211,16 +226,20 @@ impl<'g> Renderer<'g> {
 
     fn frame_bytes_per_pixel(&self) -> u32 {
         let t = &self.res.targets;
+        // Every sample of a multisampled target.
         let size = |tex: &Target| {
             // Depth formats have no copy size for the whole texture; 24-bit depth takes 4.
             let format = tex.texture.format();
-            format
+            let sample = format
                 .block_copy_size(None)
                 .or_else(|| format.block_copy_size(Some(wgpu::TextureAspect::DepthOnly)))
-                .unwrap_or(4)
+                .unwrap_or(4);
+            sample * tex.texture.sample_count()
         };
         [&t.depth, &t.hdr, &t.ldr]
             .into_iter()
+            .chain(&t.hdr_samples)
+            .chain(&t.shading_depth)
             .chain(t.gbuffer.iter().map(|(_, t)| t))
             .map(size)
             .sum::<u32>()

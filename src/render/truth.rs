@@ -7,18 +7,21 @@
 //! wins, where a plain `Less` test keeps the first.
 
 use super::RenderError;
-use super::passes::{clear_attachment, color_target, render_pipeline};
+use super::passes::{
+    ComputePipelines, clear_attachment, color_target, render_pipeline, set_compute_groups,
+};
 use super::reflect::{PassLayout, Slot};
-use super::resources::{DepthSetup, SceneBuffers, target};
+use super::resources::{DepthSetup, SceneBuffers, multisampled_target};
 use crate::compose::Composer;
 use crate::cpu::truth::RasterTruth;
-use crate::gpu::{Gpu, read_texture};
+use crate::gpu::{Gpu, read_buffer, read_texture};
 use crate::scene::Scene;
 use crate::variant::Variant;
 
 use super::resources::F32_BITS_FORMAT as TRUTH_FORMAT;
 
-/// Rasterise `scene` with `variant`'s depth set-up and read back position, normal, albedo.
+/// Rasterise `scene` with `variant`'s depth set-up and sample count, and read back position,
+/// normal, albedo of every sample.
 pub fn raster_truth(
     gpu: &Gpu,
     composer: &Composer,
@@ -70,6 +73,7 @@ pub fn raster_truth(
                 color_target(TRUTH_FORMAT),
             ],
             Some(depth_state),
+            variant.msaa.samples,
         )?;
         let prepass_pipeline = match &prepass {
             Some(p) => {
@@ -83,16 +87,18 @@ pub fn raster_truth(
                     &vertex,
                     &[],
                     Some(depth.state(depth.compare(), true)),
+                    variant.msaa.samples,
                 )?;
                 Some((pipeline, groups))
             }
             None => None,
         };
+        let samples = variant.msaa.samples;
         let textures: Vec<wgpu::Texture> = ["truth position", "truth normal", "truth albedo"]
             .iter()
-            .map(|label| target(gpu, label, w, h, TRUTH_FORMAT))
+            .map(|label| multisampled_target(gpu, label, (w, h), TRUTH_FORMAT, samples))
             .collect();
-        let depth_texture = target(gpu, "truth depth", w, h, depth.format);
+        let depth_texture = multisampled_target(gpu, "truth depth", (w, h), depth.format, samples);
         let views: Vec<wgpu::TextureView> = textures
             .iter()
             .map(|t| t.create_view(&Default::default()))
@@ -145,7 +151,11 @@ pub fn raster_truth(
     })??;
     let mut planes = Vec::with_capacity(3);
     for t in &textures {
-        let bytes = read_texture(gpu, t, 16)?;
+        let bytes = if variant.msaa.on() {
+            read_samples(gpu, composer, t)?
+        } else {
+            read_texture(gpu, t, 16)?
+        };
         // The targets hold f32 bit patterns: read them back as f32.
         planes.push(bytemuck::cast_slice::<u8, [f32; 4]>(&bytes).to_vec());
     }
@@ -155,8 +165,52 @@ pub fn raster_truth(
     Ok(RasterTruth {
         width: w,
         height: h,
+        samples: variant.msaa.samples,
         position,
         normal,
         albedo,
     })
+}
+
+/// Every sample of a multisampled truth target, pixel by pixel (`passes/truth_samples.wesl`).
+fn read_samples(
+    gpu: &Gpu,
+    composer: &Composer,
+    texture: &wgpu::Texture,
+) -> Result<Vec<u8>, RenderError> {
+    let pass = composer.compose_root("truth samples", "passes::truth_samples", &[], "")?;
+    let (w, h) = (texture.width(), texture.height());
+    let size = w as u64 * h as u64 * texture.sample_count() as u64 * 16;
+    let buffer = gpu.scoped(
+        "reading the truth's samples",
+        || -> Result<_, RenderError> {
+            let buffer = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("truth samples"),
+                size,
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+                mapped_at_creation: false,
+            });
+            let view = texture.create_view(&Default::default());
+            let layout = PassLayout::of(gpu, &pass)?;
+            let groups = layout.bind_groups(gpu, "truth samples", |slot| match slot.name {
+                "truth_target" => Some(wgpu::BindingResource::TextureView(&view)),
+                "truth_samples" => Some(buffer.as_entire_binding()),
+                _ => None,
+            })?;
+            let pipelines = ComputePipelines::new(gpu, &pass, &layout.pipeline, &["copy_samples"])?;
+            let mut encoder = gpu
+                .device
+                .create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
+            {
+                let mut cp = encoder.begin_compute_pass(&Default::default());
+                cp.set_pipeline(pipelines.get("copy_samples"));
+                set_compute_groups(&mut cp, &groups);
+                let [x, y, z] = pipelines.groups_for("copy_samples", [w, h, 1]);
+                cp.dispatch_workgroups(x, y, z);
+            }
+            gpu.queue.submit([encoder.finish()]);
+            Ok(buffer)
+        },
+    )??;
+    Ok(read_buffer(gpu, &buffer, 0, size)?)
 }

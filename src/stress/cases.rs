@@ -1046,4 +1046,56 @@ fn spot_cases(cases: &mut Vec<Case>) {
         lit_room("spots_10000_at_one_point", SIZE, crowd),
         with_spot_tests(),
     ));
+
+    // Multisampling: every method at 4 samples (skipped where the adapter has not 4).
+    for (name, size, lights, what) in [
+        (
+            "msaa_1x1",
+            (1, 1),
+            lattice(27, 3.0),
+            "4 samples in a 1x1 frame: every sample an edge of the sphere, walls or floor",
+        ),
+        (
+            "msaa_odd_size",
+            (13, 7),
+            lattice(27, 3.0),
+            "4 samples at 13x7: tile and pixel edges apart, corners where three walls meet",
+        ),
+        (
+            "msaa_small_lights",
+            SIZE,
+            lattice(512, 0.3),
+            "4 samples, 512 lights of radius 0.3 (a few pixels): lights that reach some samples of an edge pixel and not others",
+        ),
+    ] {
+        cases.push(case(
+            name,
+            what,
+            lit_room(name, size, lights),
+            multisampled(),
+        ));
+    }
+    {
+        // The near plane through the sphere and the walls: edges on the near plane.
+        let m = room();
+        let eye = DVec3::new(0.0, 1.0, 3.0);
+        let cam = camera(eye, DVec3::new(0.0, 1.0, 0.0), 60.0, 2.6, 40.0);
+        cases.push(case(
+            "msaa_near_plane",
+            "4 samples, the near plane cutting the sphere: edges on the near plane",
+            scene("msaa_near_plane", SIZE, m, lattice(27, 3.0), cam),
+            multisampled(),
+        ));
+    }
+}
+
+/// Every pipeline at 4 samples.
+fn multisampled() -> Vec<(String, Variant)> {
+    pipelines()
+        .into_iter()
+        .map(|(name, mut v)| {
+            v.msaa.samples = 4;
+            (format!("{name}_msaa4"), v)
+        })
+        .collect()
 }

@@ -6,6 +6,7 @@ pub mod codecs;
 pub mod cones;
 pub mod culling;
 pub mod depth;
+pub mod msaa;
 pub mod slicing;
 pub mod table;
 
@@ -87,6 +88,10 @@ pub enum StudyName {
     /// two-level) on each built-in scene at 64 to 16384 lights (or `--lights`), spot
     /// fractions 0 and 0.5.
     Culling,
+    /// Naive forward, Forward+ and clustered deferred (tiled and two-level both ways) at
+    /// every sample count the adapter multisamples, 1024 lights (or `--lights`): time,
+    /// memory, edge pixels, and where deferred and forward cross over.
+    Msaa,
 }
 
 impl StudyName {
@@ -97,6 +102,7 @@ impl StudyName {
             StudyName::Slicing => "slicing",
             StudyName::Cones => "cones",
             StudyName::Culling => "culling",
+            StudyName::Msaa => "msaa",
         }
     }
 }
@@ -163,7 +169,7 @@ pub struct StudyOutput {
     /// False when the study found a disagreement it exists to rule out (codecs: GPU and
     /// CPU differ at the printed precision; slicing: a run failed; cones: a run failed or
     /// missed a light; culling: a run failed or its useful evaluations differ from the other
-    /// methods' on the same frame).
+    /// methods' on the same frame; msaa: a run failed or was over 1 LSB).
     pub ok: bool,
 }
 
@@ -265,6 +271,19 @@ pub fn run(
             )?;
             let ok = culling::all_exact(&rows);
             output(name, culling::table(&rows), &rows, culling::plot(&rows), ok)
+        }
+        StudyName::Msaa => {
+            let rows = msaa::run(
+                gpu,
+                composer,
+                &scenes,
+                options.size,
+                options.lights,
+                options.frames,
+            )?;
+            let ok = msaa::all_exact(&rows);
+            let table = msaa::table(&rows, &gpu.multisample_counts());
+            output(name, table, &rows, None, ok)
         }
     }
 }

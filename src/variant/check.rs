@@ -78,6 +78,7 @@ pub fn check(v: &Variant) -> Vec<Problem> {
         ));
     }
     check_post(&v.post, v, &mut out);
+    check_msaa(v, &mut out);
     check_debug_view(v, &mut out);
     out
 }
@@ -335,6 +336,49 @@ fn check_post(post: &Post, v: &Variant, out: &mut Vec<Problem>) {
             "debug_view",
             "a debug view replaces the shaded image, so post effects would have nothing to work on; turn one of them off",
         ));
+    }
+}
+
+/// Sample counts a variant may ask for (the adapter may offer fewer).
+pub const SAMPLE_COUNTS: [u32; 4] = [1, 2, 4, 8];
+
+fn check_msaa(v: &Variant, out: &mut Vec<Problem>) {
+    let samples = v.msaa.samples;
+    if !SAMPLE_COUNTS.contains(&samples) {
+        out.push(problem(
+            "msaa.samples",
+            format!("is {samples}; it must be one of {SAMPLE_COUNTS:?}"),
+        ));
+        return;
+    }
+    if !v.msaa.on() {
+        return;
+    }
+    // What reads one sample per pixel of depth or the G-buffer today.
+    let single_sample_readers = [
+        (
+            v.debug_view != DebugView::Off,
+            "debug_view",
+            "debug views read one sample a pixel; use samples: 1 with a debug view",
+        ),
+        (
+            v.post.toon.as_ref().is_some_and(|t| t.outlines.is_some()),
+            "post.toon.outlines",
+            "outlines read one depth sample a pixel; remove them or use samples: 1",
+        ),
+        (
+            v.post.motion_blur.is_some(),
+            "post.motion_blur",
+            "motion blur reads one depth sample a pixel; remove it or use samples: 1",
+        ),
+    ];
+    for (refused, field, why) in single_sample_readers {
+        if refused {
+            out.push(problem(
+                field,
+                format!("with msaa.samples {samples}: {why}"),
+            ));
+        }
     }
 }
 

@@ -4,7 +4,8 @@ mod check;
 mod schema;
 
 pub use check::{
-    MAX_BIG_TILES, MAX_CAP, MAX_CLUSTERS, MAX_GRID_XY, MAX_GRID_Z, NORMAL_BITS, Problem, check,
+    MAX_BIG_TILES, MAX_CAP, MAX_CLUSTERS, MAX_GRID_XY, MAX_GRID_Z, NORMAL_BITS, Problem,
+    SAMPLE_COUNTS, check,
 };
 pub use schema::*;
 

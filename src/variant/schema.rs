@@ -5,7 +5,9 @@
 //! that `schemars` derives from these types.
 
 use crate::common::DepthMapping;
-pub use crate::common::{DepthRangeSource, NormalCodec, PostEffect, SpotTest, ZSlicing};
+pub use crate::common::{
+    DepthRangeSource, MsaaResolve, NormalCodec, PostEffect, SpotTest, ZSlicing,
+};
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 use strum::IntoEnumIterator;
@@ -29,6 +31,9 @@ pub struct Variant {
     pub gbuffer: Option<GBuffer>,
     /// The depth buffer every raster pass uses.
     pub depth: Depth,
+    /// Multisampling: samples per pixel of the depth buffer, the G-buffer and the forward
+    /// passes' colour, and how a pixel's samples become one colour.
+    pub msaa: Msaa,
     /// Deferred pipelines only: how the G-buffer stores normals. Left out: `Xyz` for the
     /// Wide layout, `Octahedral(bits: 32, precise: true)` for Packed and Compact.
     pub normals: Option<NormalCodec>,
@@ -55,6 +60,7 @@ impl Default for Variant {
             clusters: None,
             gbuffer: None,
             depth: Depth::default(),
+            msaa: Msaa::default(),
             normals: None,
             shading: Shading::default(),
             post: Post::default(),
@@ -375,6 +381,33 @@ impl Depth {
             reversed: self.reversed_z,
             infinite_far: self.infinite_far.unwrap_or(self.reversed_z),
         }
+    }
+}
+
+/// Multisampling (MSAA).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields, default)]
+pub struct Msaa {
+    /// Samples per pixel: 1 (no multisampling), 2, 4 or 8, where the adapter renders every
+    /// format the variant uses with that count (`clusterlab adapters` lists them).
+    pub samples: u32,
+    /// How a pixel's samples become its colour (the reference resolves the same way).
+    pub resolve: MsaaResolve,
+}
+
+impl Default for Msaa {
+    fn default() -> Self {
+        Self {
+            samples: 1,
+            resolve: MsaaResolve::Box,
+        }
+    }
+}
+
+impl Msaa {
+    /// Whether a pixel holds more than one sample.
+    pub fn on(&self) -> bool {
+        self.samples > 1
     }
 }
 

@@ -336,6 +336,7 @@ fn a_hand_built_scene_counts_what_was_worked_out_by_hand() {
                 light_evals: evals,
                 useful_light_evals: 60,
                 max_useful_per_pixel: 1,
+                edge_fraction: 0.0,
                 dropped_lights: 0,
                 active_clusters: 6,
                 assigned_clusters: assigned,

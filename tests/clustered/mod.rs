@@ -7,6 +7,7 @@ mod bvh;
 mod counters;
 mod depth_mask;
 mod loop_budget;
+mod msaa;
 mod one_level;
 mod rasterised;
 mod two_level;
@@ -206,6 +207,7 @@ fn naive_twin(v: &Variant) -> Variant {
         depth_prepass: v.depth_prepass,
         depth: v.depth.clone(),
         shading: v.shading.clone(),
+        msaa: v.msaa.clone(),
         ..Default::default()
     }
 }

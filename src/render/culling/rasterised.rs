@@ -68,6 +68,7 @@ impl BinningPipelines {
                 &[Some(instances)],
                 &[color_target(BIN_TARGET_FORMAT)],
                 None,
+                1,
             )?,
         })
     }
