@@ -8,8 +8,10 @@ use clusterlab::stress;
 #[test]
 fn the_stress_suite_passes() {
     let mut gpu = common::gpu();
+    let counts = gpu.multisample_counts();
     let runs = stress::run(&mut gpu, &Composer::default(), None, &|_| {});
-    // Every case of the list ran, on every variant it lists, and the guide states those counts.
+    // Every case of the list ran, on every variant it lists but those with a sample count the
+    // adapter lacks (through OpenGL, all multisampled ones), and the guide states those counts.
     let listed = stress::cases();
     let ran: Vec<(&str, &str)> = runs
         .iter()
@@ -20,6 +22,7 @@ fn the_stress_suite_passes() {
         .flat_map(|c| {
             c.variants
                 .iter()
+                .filter(|(_, v)| counts.contains(&v.msaa.samples))
                 .map(|(v, _)| (c.name.as_str(), v.as_str()))
         })
         .collect();

@@ -354,7 +354,7 @@ fn check_msaa(v: &Variant, out: &mut Vec<Problem>) {
     if !v.msaa.on() {
         return;
     }
-    // What reads one sample per pixel of depth or the G-buffer today.
+    // What reads one sample a pixel of depth or the G-buffer.
     let single_sample_readers = [
         (
             v.debug_view != DebugView::Off,
