@@ -22,6 +22,22 @@ pub struct Vertex {
     /// Layer of the scene's base colour texture array that multiplies `albedo`, or
     /// [`NO_TEXTURE`].
     pub texture: u32,
+    /// Base colour alpha (glTF's base colour factor times COLOR_0; the texture's alpha
+    /// multiplies it) and the alpha cutoff: a fragment whose alpha is below the cutoff is
+    /// discarded (glTF's `MASK`). Opaque surfaces have cutoff 0, which discards nothing;
+    /// blended surfaces (`BLEND`) are the scene's `blended` triangles, whatever the cutoff.
+    pub alpha: [f32; 2],
+}
+
+/// How a material's base colour alpha is used (glTF's `alphaMode`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum AlphaMode {
+    /// Alpha is ignored: the surface is opaque.
+    Opaque,
+    /// Fragments whose alpha is below `cutoff` are discarded, the rest are opaque.
+    Mask { cutoff: f32 },
+    /// The surface is drawn over what lies behind it, back to front, with the over operator.
+    Blend,
 }
 
 /// `Vertex::texture` of a vertex whose albedo is its colour alone.

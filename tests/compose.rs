@@ -4,7 +4,7 @@
 
 use std::path::Path;
 
-use clusterlab::compose::{Composer, feature_flags, frame_features, passes};
+use clusterlab::compose::{Composer, SceneFeatures, feature_flags, frame_features, passes};
 use clusterlab::variant::{self, Msaa, MsaaResolve};
 
 use crate::common;
@@ -55,7 +55,13 @@ fn composed_wgsl_of_every_distinct_pass() {
         for pass in passes(&loaded.variant) {
             // A shading pass also as an instrumented frame composes it: the counting code
             // behind every evaluation count a table prints.
-            let instrumented = frame_features(true, false, Some(false));
+            let instrumented = frame_features(
+                SceneFeatures {
+                    spots: true,
+                    ..Default::default()
+                },
+                Some(false),
+            );
             let versions = [(pass.name().to_string(), &[][..])].into_iter().chain(
                 pass.id
                     .is_shading()

@@ -23,17 +23,52 @@ pub const SCAN_BLOCK: u32 = SCAN_LANES * CLUSTERS_PER_LANE;
 /// `assign_bvh.wesl`).
 pub const WALK_CUT_SHORT: u32 = u32::MAX;
 
-/// The flags a frame sets over its variant's: `spot_lights` (a scene without spots needs no
-/// cone in its light loops: on a software rasteriser, which runs both sides of a branch, the
-/// cone costs point lights about half again), `base_color_texture`, and for an instrumented
+/// What a scene turns on in its frames' shaders.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct SceneFeatures {
+    /// Spot lights (a scene without spots needs no cone in its light loops: on a software
+    /// rasteriser, which runs both sides of a branch, the cone costs point lights about half
+    /// again).
+    pub spots: bool,
+    /// Base colour textures.
+    pub textures: bool,
+    /// Masked materials: the raster passes discard below the cutoff.
+    pub masks: bool,
+    /// Blended materials: the transparent passes.
+    pub blend: bool,
+}
+
+impl SceneFeatures {
+    /// What `scene` needs; its spot cone only where `spots` (a renderer that skips nothing
+    /// keeps it).
+    pub fn of(scene: &crate::scene::Scene, spots: bool) -> Self {
+        SceneFeatures {
+            spots,
+            textures: scene.textures.is_some(),
+            masks: scene.has_masks(),
+            blend: scene.has_blend(),
+        }
+    }
+
+    /// The flags they set.
+    pub fn flags(self) -> [(&'static str, bool); 4] {
+        [
+            ("spot_lights", self.spots),
+            ("base_color_texture", self.textures),
+            ("alpha_mask", self.masks),
+            ("blend", self.blend),
+        ]
+    }
+}
+
+/// The flags a frame sets over its variant's: what its scene needs, and for an instrumented
 /// frame `stats` with `count_every_light` (`Some`: whether it counts every light, as the
 /// clustered stand-in of naive forward does).
 pub fn frame_features(
-    spots: bool,
-    textures: bool,
+    scene: SceneFeatures,
     instrumented: Option<bool>,
 ) -> Vec<(&'static str, bool)> {
-    let mut flags = vec![("spot_lights", spots), ("base_color_texture", textures)];
+    let mut flags = scene.flags().to_vec();
     if let Some(count_every_light) = instrumented {
         flags.extend([("stats", true), ("count_every_light", count_every_light)]);
     }
@@ -75,6 +110,10 @@ pub fn feature_flags(v: &Variant) -> Vec<(&'static str, bool)> {
         // The base colour texture: off for every variant; a renderer turns it on for a scene
         // that has textures (a file scene).
         ("base_color_texture", false),
+        // Masked and blended materials: off for every variant; a renderer turns them on for
+        // a scene that has them.
+        ("alpha_mask", false),
+        ("blend", false),
         (
             "spot_cone_test",
             p.is_clustered() && clusters.spot_test == SpotTest::Cone,

@@ -12,11 +12,12 @@ mod resolver;
 
 pub use diagnostics::SourceLocation;
 pub use features::{
-    CLUSTERS_PER_LANE, LIGHTS_PER_ROW, SCAN_BLOCK, SCAN_LANES, WALK_CUT_SHORT, constants_module,
-    feature_flags, features_with, frame_features,
+    CLUSTERS_PER_LANE, LIGHTS_PER_ROW, SCAN_BLOCK, SCAN_LANES, SceneFeatures, WALK_CUT_SHORT,
+    constants_module, feature_flags, features_with, frame_features,
 };
 pub use passes::{
-    ClusterPass, FramePlan, Pass, PassId, PassKind, PostPass, RasterPass, ScreenPass, passes, plan,
+    ClusterPass, FramePlan, Pass, PassId, PassKind, PostPass, RasterPass, ScreenPass, passes,
+    passes_for, plan, reads_visible_depths,
 };
 pub use resolver::ShaderResolver;
 

@@ -19,6 +19,12 @@ pub enum RasterPass {
     #[strum(serialize = "gbuffer")]
     GBuffer,
     Forward,
+    /// Scenes with blended materials: the nearest and farthest blended depth of each pixel,
+    /// for the clustering passes that fit lists to the visible depths.
+    TransparentDepths,
+    /// Scenes with blended materials: the blended triangles shaded forward (with the
+    /// clusters, in clustered pipelines) and drawn over the opaque frame, back to front.
+    Transparent,
 }
 
 /// Passes that draw over the screen without the scene's geometry.
@@ -107,7 +113,7 @@ impl PassId {
     pub fn is_shading(self) -> bool {
         matches!(
             self,
-            PassId::Raster(RasterPass::Forward)
+            PassId::Raster(RasterPass::Forward | RasterPass::Transparent)
                 | PassId::Screen(ScreenPass::Resolve | ScreenPass::ScissorLights)
         )
     }
@@ -167,9 +173,23 @@ fn post(p: PostPass, root: &'static str) -> Pass {
     }
 }
 
-/// The passes of a variant's frame, in the order they run. A pass the variant does not need
-/// is not in the list.
+/// The passes of a variant's frame on a scene without blended materials, in the order they
+/// run. A pass the variant does not need is not in the list.
 pub fn passes(v: &Variant) -> Vec<Pass> {
+    passes_for(v, false)
+}
+
+/// Whether a clustering pass of `v` fits the lists to the visible depths, so that blended
+/// fragments must be measured for it (`passes/transparent_depths.wesl`).
+pub fn reads_visible_depths(v: &Variant) -> bool {
+    let clusters = v.clusters();
+    v.pipeline.is_clustered()
+        && (clusters.active_clusters || matches!(clusters.slicing, ZSlicing::DynamicRange { .. }))
+}
+
+/// The passes of a variant's frame, in the order they run, on a scene with blended materials
+/// (`blend`) or without.
+pub fn passes_for(v: &Variant, blend: bool) -> Vec<Pass> {
     let mut out = Vec::new();
     let clusters = v.clusters();
     let clustered = v.pipeline.is_clustered();
@@ -180,6 +200,12 @@ pub fn passes(v: &Variant) -> Vec<Pass> {
     }
     if v.pipeline.is_deferred() {
         out.push(raster(RasterPass::GBuffer, "passes::gbuffer"));
+    }
+    if blend && reads_visible_depths(v) {
+        out.push(raster(
+            RasterPass::TransparentDepths,
+            "passes::transparent_depths",
+        ));
     }
     if clustered {
         if range_from(DepthRangeSource::CurrentFrame) {
@@ -213,6 +239,11 @@ pub fn passes(v: &Variant) -> Vec<Pass> {
     // The clustered deferred resolve resolves the samples as it shades them.
     if v.msaa.on() && v.pipeline != Pipeline::ClusteredDeferred {
         out.push(screen(ScreenPass::SampleResolve, "passes::sample_resolve"));
+    }
+    // Blended surfaces over the opaque frame, shaded forward in every pipeline (deferred's
+    // hybrid: the G-buffer holds one surface a pixel).
+    if blend {
+        out.push(raster(RasterPass::Transparent, "passes::forward"));
     }
     if range_from(DepthRangeSource::PreviousFrame) {
         // Reduced after shading, for the next frame.
@@ -273,9 +304,10 @@ pub struct FramePlan {
     pub support: Vec<Pass>,
 }
 
-/// The passes of `v` on a scene whose camera is still (`still_camera`) or moves.
-pub fn plan(v: &Variant, still_camera: bool) -> FramePlan {
-    let mut passes = passes(v);
+/// The passes of `v` on a scene whose camera is still (`still_camera`) or moves, with
+/// blended materials (`blend`) or without.
+pub fn plan(v: &Variant, still_camera: bool, blend: bool) -> FramePlan {
+    let mut passes = passes_for(v, blend);
     let mut never = Vec::new();
     // Motion blur has nothing to do when the camera does not move.
     if v.skip_unneeded && still_camera {

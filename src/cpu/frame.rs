@@ -26,7 +26,9 @@ pub struct ReferenceFrame {
 }
 
 /// Shade every covered sample of `truth` with all `lights` and resolve each pixel's samples
-/// (`params.resolve`); background stays black. Where a
+/// (`params.resolve`); background stays black. Then each pixel's blended fragments, in the
+/// order the frame blends them, each shaded as an opaque surface is and laid over the
+/// colour with the over operator: `c = alpha shade + (1 - alpha) c`. Where a
 /// `LightGrid` is made and culls, each pixel sums the lights of its cell, in index order:
 /// the sum of every light's contribution, bit for bit, since the others add exactly 0.
 pub fn shade_reference(
@@ -39,32 +41,38 @@ pub fn shade_reference(
     let covered: Vec<DVec3> = (0..truth.position.len())
         .filter(|&i| truth.covered(i))
         .map(|i| truth.surface(i).position)
+        .chain(truth.blended.iter().map(|f| f.surface().position))
         .collect();
     let grid = LightGrid::new(&covered, lights).filter(|g| g.culls(&covered, lights.len()));
-    // Each sample's colour, and whether some light reaches it with light.
+    // A surface's colour, and whether some light reaches it with light.
+    let shade = |s: &super::shading::Surface| {
+        let direct = match &grid {
+            Some(grid) => {
+                let near = grid.lights_at(s.position).iter();
+                direct_light(s, eye, near.map(|&l| &lights[l as usize]), params)
+            }
+            None => direct_light(s, eye, lights.iter(), params),
+        };
+        // As `shade_lights` sums them, bit for bit.
+        (
+            direct + s.albedo * params.ambient,
+            direct.max_element() > 0.0,
+        )
+    };
     let (colours, lit): (Vec<[f64; 3]>, Vec<bool>) = (0..truth.position.len())
         .into_par_iter()
         .map(|i| {
             if !truth.covered(i) {
                 return ([0.0; 3], false);
             }
-            let s = truth.surface(i);
-            let direct = match &grid {
-                Some(grid) => {
-                    let near = grid.lights_at(s.position).iter();
-                    direct_light(&s, eye, near.map(|&l| &lights[l as usize]), params)
-                }
-                None => direct_light(&s, eye, lights.iter(), params),
-            };
-            // As `shade_lights` sums them, bit for bit.
-            let colour = direct + s.albedo * params.ambient;
-            (colour.to_array(), direct.max_element() > 0.0)
+            let (colour, lit) = shade(&truth.surface(i));
+            (colour.to_array(), lit)
         })
         .unzip();
     // A pixel's samples resolved to one colour; a pixel is covered and lit where one of its
     // samples is.
     let n = truth.samples.max(1) as usize;
-    let hdr: Vec<[f64; 3]> = if n == 1 {
+    let mut hdr: Vec<[f64; 3]> = if n == 1 {
         colours
     } else {
         colours
@@ -74,9 +82,29 @@ pub fn shade_reference(
     };
     let any =
         |flags: &[bool]| -> u64 { flags.chunks(n).filter(|c| c.contains(&true)).count() as u64 };
-    let covered_samples: Vec<bool> = (0..truth.position.len())
+    let mut covered_samples: Vec<bool> = (0..truth.position.len())
         .map(|i| truth.covered(i))
         .collect();
+    let mut lit = lit;
+    if !truth.blended.is_empty() {
+        // Blended materials are drawn at one sample a pixel (`render::limits`).
+        hdr.par_iter_mut()
+            .zip(lit.par_iter_mut())
+            .enumerate()
+            .for_each(|(i, (c, lit))| {
+                let mut colour = DVec3::from(*c);
+                for f in truth.blended_at(i) {
+                    let (shaded, reached) = shade(&f.surface());
+                    let alpha = f.alpha();
+                    colour = alpha * shaded + (1.0 - alpha) * colour;
+                    *lit |= reached;
+                }
+                *c = colour.to_array();
+            });
+        for (i, covered) in covered_samples.iter_mut().enumerate() {
+            *covered |= !truth.blended_at(i).is_empty();
+        }
+    }
     let ldr = hdr.iter().map(|&c| display8(c, exposure)).collect();
     let covered = any(&covered_samples);
     let lit = any(&lit);

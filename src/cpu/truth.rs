@@ -18,6 +18,51 @@ pub struct RasterTruth {
     pub normal: Vec<[f32; 4]>,
     /// Linear albedo (rgb), metallic (w).
     pub albedo: Vec<[f32; 4]>,
+    /// Scenes with blended materials: every blended fragment in front of the opaque surface,
+    /// pixel by pixel, each pixel's in the order the frame blends them.
+    pub blended: Vec<BlendedFragment>,
+    /// Where each pixel's blended fragments start in `blended`, and after the last pixel
+    /// their total (empty without blended materials).
+    pub blended_offsets: Vec<u32>,
+}
+
+/// Most blended fragments a pixel's reference blends (a frame with more is refused, naming
+/// the pixel).
+pub const MAX_BLENDED_FRAGMENTS: u32 = 256;
+
+/// A blended fragment as the truth pass records it (`passes/truth.wesl`, `BlendedFragment`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct BlendedFragment {
+    /// World position; w = alpha.
+    pub position: [f32; 4],
+    /// Unit world normal; w = perceptual roughness.
+    pub normal: [f32; 4],
+    /// Linear albedo; w = metallic.
+    pub albedo: [f32; 4],
+    /// x: the triangle's place in the blended draw (draw order); the rest 0.
+    pub order: [u32; 4],
+}
+
+impl BlendedFragment {
+    pub fn alpha(&self) -> f64 {
+        self.position[3] as f64
+    }
+
+    pub fn surface(&self) -> Surface {
+        surface_of(self.position, self.normal, self.albedo)
+    }
+}
+
+/// A surface from its three rows: position, normal and roughness, albedo and metallic.
+fn surface_of(p: [f32; 4], n: [f32; 4], a: [f32; 4]) -> Surface {
+    Surface {
+        position: DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64),
+        normal: DVec3::new(n[0] as f64, n[1] as f64, n[2] as f64).normalize_or_zero(),
+        albedo: DVec3::new(a[0] as f64, a[1] as f64, a[2] as f64),
+        roughness: n[3] as f64,
+        metallic: a[3] as f64,
+    }
 }
 
 impl RasterTruth {
@@ -33,6 +78,16 @@ impl RasterTruth {
             && bytes(&self.position) == bytes(&other.position)
             && bytes(&self.normal) == bytes(&other.normal)
             && bytes(&self.albedo) == bytes(&other.albedo)
+            && self.blended == other.blended
+            && self.blended_offsets == other.blended_offsets
+    }
+
+    /// The blended fragments of pixel `i`, in the order they are blended.
+    pub fn blended_at(&self, i: usize) -> &[BlendedFragment] {
+        match self.blended_offsets.get(i..i + 2) {
+            Some(&[a, b]) => &self.blended[a as usize..b as usize],
+            _ => &[],
+        }
     }
 
     /// The first sample of every pixel: one sample a pixel, for what reads the geometry
@@ -47,6 +102,8 @@ impl RasterTruth {
             position: first(&self.position),
             normal: first(&self.normal),
             albedo: first(&self.albedo),
+            blended: self.blended.clone(),
+            blended_offsets: self.blended_offsets.clone(),
         }
     }
 
@@ -55,15 +112,6 @@ impl RasterTruth {
     }
 
     pub fn surface(&self, i: usize) -> Surface {
-        let p = self.position[i];
-        let n = self.normal[i];
-        let a = self.albedo[i];
-        Surface {
-            position: DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64),
-            normal: DVec3::new(n[0] as f64, n[1] as f64, n[2] as f64).normalize_or_zero(),
-            albedo: DVec3::new(a[0] as f64, a[1] as f64, a[2] as f64),
-            roughness: n[3] as f64,
-            metallic: a[3] as f64,
-        }
+        surface_of(self.position[i], self.normal[i], self.albedo[i])
     }
 }

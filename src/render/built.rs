@@ -44,6 +44,7 @@ impl Renderer<'_> {
                 l,
                 &self.variant,
                 instrumented,
+                self.frame_features.contains(&("alpha_mask", true)),
             )?),
             PassId::Screen(p) => Pipelines::Render(screen::pipelines(
                 gpu,

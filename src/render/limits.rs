@@ -69,8 +69,17 @@ fn check_samples(gpu: &Gpu, variant: &Variant) -> Result<(), RenderError> {
     Ok(gpu.check_samples(samples, &targets)?)
 }
 
-/// Variant values whose valid range depends on the scene's camera.
+/// Variant values whose valid range depends on the scene's camera or materials.
 fn check_for_scene(variant: &Variant, scene: &Scene) -> Result<(), RenderError> {
+    if variant.msaa.on() && scene.has_blend() {
+        return Err(RenderError::VariantForScene {
+            field: "msaa.samples".into(),
+            message: format!(
+                "is {}; scene `{}` has blended materials, which clusterlab draws at 1 sample a pixel: its reference records each pixel's blended fragments once, not per sample (masked materials multisample)",
+                variant.msaa.samples, scene.name
+            ),
+        });
+    }
     if variant.pipeline.is_clustered()
         && let crate::common::ZSlicing::NearSliceThenExponential { near_slice_end } =
             variant.clusters().slicing

@@ -54,6 +54,9 @@ pub enum RenderError {
     /// A pass's module binds something clusterlab cannot fill.
     #[error("{0}")]
     Reflection(String),
+    /// A scene the frame cannot be measured on, and why.
+    #[error("{0}")]
+    Scene(String),
     /// A variant value that only the scene can check (a depth against its camera).
     #[error("field `{field}` {message}")]
     VariantForScene { field: String, message: String },
@@ -152,14 +155,11 @@ impl<'g> Renderer<'g> {
         let (width, height) = (scene.params.width, scene.params.height);
         limits::check_frame(gpu, variant, scene)?;
         let still_camera = scene.camera == scene.prev_camera;
-        let plan = compose::plan(variant, still_camera);
+        let plan = compose::plan(variant, still_camera, scene.has_blend());
         let skips = Skips::new(variant, scene);
-        let frame = compose::frame_features(!skips.no_spots, scene.textures.is_some(), None);
-        let instrumented_frame = compose::frame_features(
-            !skips.no_spots,
-            scene.textures.is_some(),
-            Some(count_every_light),
-        );
+        let scene_features = compose::SceneFeatures::of(scene, !skips.no_spots);
+        let frame = compose::frame_features(scene_features, None);
+        let instrumented_frame = compose::frame_features(scene_features, Some(count_every_light));
         let mut composed: Composed = Vec::new();
         for p in &plan.passes {
             if composed.iter().any(|(q, _, _)| q.id == p.id) {
@@ -449,6 +449,7 @@ impl<'g> Renderer<'g> {
                 slot,
                 &res.targets,
                 &res.scene,
+                res.transparent_depths.as_ref(),
                 &self.variant,
             ),
             (PassId::Screen(p), Pipelines::Render(pl)) => {

@@ -8,7 +8,12 @@ use crate::compose::{ComposedPass, RasterPass};
 use crate::gpu::{Gpu, GpuError, TimestampSlot};
 use crate::variant::Variant;
 
-/// The render pipelines of a raster pass, drawn in order.
+/// The over operator on premultiplied colour (`fs_blend` writes colour times alpha, alpha):
+/// `dst = src + (1 - src_alpha) dst`, in linear HDR.
+pub const OVER: wgpu::BlendState = wgpu::BlendState::PREMULTIPLIED_ALPHA_BLENDING;
+
+/// The render pipelines of a raster pass, drawn in order (`masked`: the scene has masked
+/// materials).
 pub fn pipelines(
     gpu: &Gpu,
     pass: RasterPass,
@@ -16,6 +21,7 @@ pub fn pipelines(
     layout: &wgpu::PipelineLayout,
     variant: &Variant,
     instrumented: bool,
+    masked: bool,
 ) -> Result<Vec<wgpu::RenderPipeline>, GpuError> {
     let d = DepthSetup::of(variant);
     let vertex = [Some(SceneBuffers::vertex_layout())];
@@ -37,7 +43,27 @@ pub fn pipelines(
             let depth = d.state(d.compare(), true);
             vec![build(Some("fs_shading_depth"), &[target], depth)?]
         }
-        RasterPass::DepthPrepass => vec![build(None, &[], d.state(d.compare(), true))?],
+        // Masked materials need a fragment shader that discards.
+        RasterPass::DepthPrepass => {
+            let fs = masked.then_some("fs_mask");
+            vec![build(fs, &[], d.state(d.compare(), true))?]
+        }
+        // Both test against the opaque depth and leave it as it is.
+        RasterPass::TransparentDepths => {
+            vec![build(Some("fs_main"), &[], d.state(d.compare(), false))?]
+        }
+        RasterPass::Transparent => {
+            let fs = if instrumented { "fs_stats" } else { "fs_blend" };
+            let target = wgpu::ColorTargetState {
+                blend: (!instrumented).then_some(OVER),
+                ..color_target(gpu.hdr_format).expect("a target")
+            };
+            vec![build(
+                Some(fs),
+                &[Some(target)],
+                d.state(d.compare(), false),
+            )?]
+        }
         RasterPass::GBuffer => {
             let formats = gbuffer::formats(variant);
             let targets: Vec<_> = formats.into_iter().map(|(_, f)| color_target(f)).collect();
@@ -70,6 +96,7 @@ pub fn encode(
     slot: Option<TimestampSlot<'_>>,
     targets: &Targets,
     scene: &SceneBuffers,
+    transparent_depths: Option<&wgpu::Buffer>,
     variant: &Variant,
 ) {
     let d = DepthSetup::of(variant);
@@ -88,6 +115,17 @@ pub fn encode(
         })
     };
     let forward_target = targets.hdr_samples.as_ref().unwrap_or(&targets.hdr);
+    let load = |view| {
+        Some(wgpu::RenderPassColorAttachment {
+            view,
+            depth_slice: None,
+            resolve_target: None,
+            ops: wgpu::Operations {
+                load: wgpu::LoadOp::Load,
+                store: wgpu::StoreOp::Store,
+            },
+        })
+    };
     let (colors, depth): (Vec<_>, _) = match pass {
         RasterPass::DepthPrepass => (
             targets
@@ -109,11 +147,31 @@ pub fn encode(
             vec![clear_attachment(&forward_target.view)],
             depth(!variant.depth_prepass),
         ),
+        RasterPass::TransparentDepths => {
+            if let Some(b) = transparent_depths {
+                encoder.clear_buffer(b, 0, None);
+            }
+            // Read-only: the shader reads it too.
+            let read_only = wgpu::RenderPassDepthStencilAttachment {
+                view: &targets.depth.view,
+                depth_ops: None,
+                stencil_ops: None,
+            };
+            (Vec::new(), Some(read_only))
+        }
+        RasterPass::Transparent => (vec![load(&targets.hdr.view)], depth(false)),
+    };
+    let (indices, count) = match pass {
+        RasterPass::TransparentDepths | RasterPass::Transparent => match &scene.blended {
+            Some((buffer, count)) => (buffer, *count),
+            None => return,
+        },
+        _ => (&scene.indices, scene.index_count),
     };
     let label = <&str>::from(pass);
     let mut rp = begin_render(encoder, label, &colors, depth, slot, groups);
     rp.set_pipeline(&pipelines[0]);
     rp.set_vertex_buffer(0, scene.vertices.slice(..));
-    rp.set_index_buffer(scene.indices.slice(..), wgpu::IndexFormat::Uint32);
-    rp.draw_indexed(0..scene.index_count, 0, 0..1);
+    rp.set_index_buffer(indices.slice(..), wgpu::IndexFormat::Uint32);
+    rp.draw_indexed(0..count, 0, 0..1);
 }

@@ -68,6 +68,9 @@ pub struct SceneBuffers {
     pub vertices: wgpu::Buffer,
     pub indices: wgpu::Buffer,
     pub index_count: u32,
+    /// The blended triangles in the order they are drawn (`Scene::blend_order`), and their
+    /// index count (scenes with blended materials).
+    pub blended: Option<(wgpu::Buffer, u32)>,
     pub lights: wgpu::Buffer,
     pub view: wgpu::Buffer,
     pub light_count: u32,
@@ -105,6 +108,15 @@ impl SceneBuffers {
                 wgpu::BufferUsages::INDEX,
             ),
             index_count: scene.indices.len() as u32,
+            blended: scene.has_blend().then(|| {
+                let order = scene.blend_order();
+                let buffer = init(
+                    "blended indices",
+                    bytemuck::cast_slice(&order),
+                    wgpu::BufferUsages::INDEX,
+                );
+                (buffer, order.len() as u32)
+            }),
             lights: init(
                 "lights",
                 bytemuck::cast_slice(lights),
@@ -137,9 +149,9 @@ impl SceneBuffers {
     }
 
     pub fn vertex_layout() -> wgpu::VertexBufferLayout<'static> {
-        const ATTRIBUTES: [wgpu::VertexAttribute; 6] = wgpu::vertex_attr_array![
+        const ATTRIBUTES: [wgpu::VertexAttribute; 7] = wgpu::vertex_attr_array![
             0 => Float32x3, 1 => Float32x3, 2 => Float32x3, 3 => Float32x2, 4 => Float32x2,
-            5 => Uint32
+            5 => Uint32, 6 => Float32x2
         ];
         wgpu::VertexBufferLayout {
             array_stride: std::mem::size_of::<Vertex>() as u64,
@@ -374,6 +386,9 @@ pub struct FrameResources {
     pub targets: Targets,
     pub clusters: Option<super::ClusterBuffers>,
     pub counters: Counters,
+    /// Scenes with blended materials, clustered variants: each pixel's nearest and farthest
+    /// blended depth (`clustering/transparent_depths.wesl`), two words a pixel.
+    pub transparent_depths: Option<wgpu::Buffer>,
 }
 
 impl FrameResources {
@@ -417,11 +432,23 @@ impl FrameResources {
             let range = super::ClusterRange::new(scene.camera.near as f32, scene.camera.far as f32);
             super::ClusterBuffers::new(gpu, &c, lights, capacity, range, proxies)
         });
+        // Every clustered variant's marking pass declares it (the active-cluster count's
+        // `mark_visible` shares the module).
+        let transparent_depths =
+            (scene.has_blend() && variant.pipeline.is_clustered()).then(|| {
+                gpu.device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some("transparent depths"),
+                    size: w as u64 * h as u64 * 8,
+                    usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+                    mapped_at_creation: false,
+                })
+            });
         Self {
             scene: SceneBuffers::upload(gpu, scene, depth.mapping),
             targets,
             clusters,
             counters: Counters::new(gpu, w as u64 * h as u64, variant.msaa.on()),
+            transparent_depths,
         }
     }
 
@@ -444,6 +471,10 @@ impl FrameResources {
         match name {
             "depth_texture" => Some(texture(&self.targets.depth)),
             "shading_depth" => self.targets.shading_depth.as_ref().map(texture),
+            "transparent_depths" => self
+                .transparent_depths
+                .as_ref()
+                .map(|b| b.as_entire_binding()),
             "pixel_evals" => Some(self.counters.evals.as_entire_binding()),
             "pixel_useful" => Some(self.counters.useful.as_entire_binding()),
             "pixel_clusters" => Some(self.counters.clusters.as_entire_binding()),

@@ -48,7 +48,10 @@ impl Renderer<'_> {
         if !s.on {
             return false;
         }
-        let builds_clusters = matches!(id, PassId::Clustering(_));
+        let builds_clusters = matches!(
+            id,
+            PassId::Clustering(_) | PassId::Raster(compose::RasterPass::TransparentDepths)
+        );
         if s.no_lights && builds_clusters {
             return true;
         }

@@ -12,11 +12,13 @@ use super::passes::{
 };
 use super::reflect::{PassLayout, Slot};
 use super::resources::{DepthSetup, SceneBuffers, multisampled_target};
+use crate::common::Vertex;
 use crate::compose::Composer;
-use crate::cpu::truth::RasterTruth;
+use crate::cpu::truth::{BlendedFragment, MAX_BLENDED_FRAGMENTS, RasterTruth};
 use crate::gpu::{Gpu, read_buffer, read_texture};
 use crate::scene::Scene;
 use crate::variant::Variant;
+use wgpu::util::DeviceExt;
 
 use super::resources::F32_BITS_FORMAT as TRUTH_FORMAT;
 
@@ -31,8 +33,10 @@ pub fn raster_truth(
     let (w, h) = (scene.params.width, scene.params.height);
     gpu.check_size(w, h)?;
     gpu.check_scene(scene)?;
-    let features =
-        crate::compose::features_with(variant, &[("base_color_texture", scene.textures.is_some())]);
+    let features = crate::compose::features_with(
+        variant,
+        &crate::compose::SceneFeatures::of(scene, true).flags(),
+    );
     let pass = composer.compose_root(
         "truth",
         "passes::truth",
@@ -49,106 +53,131 @@ pub fn raster_truth(
     } else {
         None
     };
+    let blended_pass = if scene.has_blend() {
+        Some(composer.compose_root(
+            "truth of blended materials",
+            "passes::truth_blended",
+            &features,
+            &crate::compose::constants_module(variant),
+        )?)
+    } else {
+        None
+    };
     let depth = DepthSetup::of(variant);
-    let textures = gpu.scoped("raster truth", || -> Result<_, RenderError> {
-        let buffers = SceneBuffers::upload(gpu, scene, depth.mapping);
-        let frame = |slot: &Slot| buffers.frame_binding(slot.name);
-        let layout = PassLayout::of(gpu, &pass)?;
-        let groups = layout.bind_groups(gpu, "truth", frame)?;
-        let vertex = [Some(SceneBuffers::vertex_layout())];
-        let depth_state = if prepass.is_some() {
-            depth.state(wgpu::CompareFunction::Equal, false)
-        } else {
-            depth.state(depth.compare(), true)
-        };
-        let pipeline = render_pipeline(
-            gpu,
-            &pass,
-            &layout.pipeline,
-            ("vs_main", Some("fs_main")),
-            &vertex,
-            &[
-                color_target(TRUTH_FORMAT),
-                color_target(TRUTH_FORMAT),
-                color_target(TRUTH_FORMAT),
-            ],
-            Some(depth_state),
-            variant.msaa.samples,
-        )?;
-        let prepass_pipeline = match &prepass {
-            Some(p) => {
-                let layout = PassLayout::of(gpu, p)?;
-                let groups = layout.bind_groups(gpu, "truth depth pre-pass", frame)?;
-                let pipeline = render_pipeline(
-                    gpu,
-                    p,
-                    &layout.pipeline,
-                    ("vs_main", None),
-                    &vertex,
-                    &[],
-                    Some(depth.state(depth.compare(), true)),
-                    variant.msaa.samples,
-                )?;
-                Some((pipeline, groups))
-            }
-            None => None,
-        };
-        let samples = variant.msaa.samples;
-        let textures: Vec<wgpu::Texture> = ["truth position", "truth normal", "truth albedo"]
-            .iter()
-            .map(|label| multisampled_target(gpu, label, (w, h), TRUTH_FORMAT, samples))
-            .collect();
-        let depth_texture = multisampled_target(gpu, "truth depth", (w, h), depth.format, samples);
-        let views: Vec<wgpu::TextureView> = textures
-            .iter()
-            .map(|t| t.create_view(&Default::default()))
-            .collect();
-        let depth_view = depth_texture.create_view(&Default::default());
-        let mut encoder = gpu
-            .device
-            .create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
-        let draws = prepass_pipeline
-            .iter()
-            .map(|(p, g)| (p, g, false))
-            .chain([(&pipeline, &groups, true)]);
-        for (i, (pipeline, groups, colors)) in draws.enumerate() {
-            let attachments: Vec<_> = if colors {
-                views.iter().map(clear_attachment).collect()
+    let (textures, blended, blended_offsets) =
+        gpu.scoped("raster truth", || -> Result<_, RenderError> {
+            let buffers = SceneBuffers::upload(gpu, scene, depth.mapping);
+            let frame = |slot: &Slot| buffers.frame_binding(slot.name);
+            let layout = PassLayout::of(gpu, &pass)?;
+            let groups = layout.bind_groups(gpu, "truth", frame)?;
+            let vertex = [Some(SceneBuffers::vertex_layout())];
+            let depth_state = if prepass.is_some() {
+                depth.state(wgpu::CompareFunction::Equal, false)
             } else {
-                Vec::new()
+                depth.state(depth.compare(), true)
             };
-            let mut rp = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("truth"),
-                color_attachments: &attachments,
-                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                    view: &depth_view,
-                    depth_ops: Some(wgpu::Operations {
-                        load: if i == 0 {
-                            wgpu::LoadOp::Clear(depth.clear())
-                        } else {
-                            wgpu::LoadOp::Load
-                        },
-                        store: wgpu::StoreOp::Store,
-                    }),
-                    stencil_ops: None,
-                }),
-                timestamp_writes: None,
-                occlusion_query_set: None,
-                multiview_mask: None,
-            });
-            rp.set_pipeline(pipeline);
-            for (g, group) in groups.iter().enumerate() {
-                if let Some(group) = group {
-                    rp.set_bind_group(g as u32, group, &[]);
+            let pipeline = render_pipeline(
+                gpu,
+                &pass,
+                &layout.pipeline,
+                ("vs_main", Some("fs_main")),
+                &vertex,
+                &[
+                    color_target(TRUTH_FORMAT),
+                    color_target(TRUTH_FORMAT),
+                    color_target(TRUTH_FORMAT),
+                ],
+                Some(depth_state),
+                variant.msaa.samples,
+            )?;
+            let prepass_pipeline = match &prepass {
+                Some(p) => {
+                    let layout = PassLayout::of(gpu, p)?;
+                    let groups = layout.bind_groups(gpu, "truth depth pre-pass", frame)?;
+                    let pipeline = render_pipeline(
+                        gpu,
+                        p,
+                        &layout.pipeline,
+                        // Masked materials discard in the pre-pass too.
+                        ("vs_main", scene.has_masks().then_some("fs_mask")),
+                        &vertex,
+                        &[],
+                        Some(depth.state(depth.compare(), true)),
+                        variant.msaa.samples,
+                    )?;
+                    Some((pipeline, groups))
                 }
+                None => None,
+            };
+            let samples = variant.msaa.samples;
+            let textures: Vec<wgpu::Texture> = ["truth position", "truth normal", "truth albedo"]
+                .iter()
+                .map(|label| multisampled_target(gpu, label, (w, h), TRUTH_FORMAT, samples))
+                .collect();
+            let depth_texture =
+                multisampled_target(gpu, "truth depth", (w, h), depth.format, samples);
+            let views: Vec<wgpu::TextureView> = textures
+                .iter()
+                .map(|t| t.create_view(&Default::default()))
+                .collect();
+            let depth_view = depth_texture.create_view(&Default::default());
+            let mut encoder = gpu
+                .device
+                .create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
+            let draws = prepass_pipeline
+                .iter()
+                .map(|(p, g)| (p, g, false))
+                .chain([(&pipeline, &groups, true)]);
+            for (i, (pipeline, groups, colors)) in draws.enumerate() {
+                let attachments: Vec<_> = if colors {
+                    views.iter().map(clear_attachment).collect()
+                } else {
+                    Vec::new()
+                };
+                let mut rp = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                    label: Some("truth"),
+                    color_attachments: &attachments,
+                    depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                        view: &depth_view,
+                        depth_ops: Some(wgpu::Operations {
+                            load: if i == 0 {
+                                wgpu::LoadOp::Clear(depth.clear())
+                            } else {
+                                wgpu::LoadOp::Load
+                            },
+                            store: wgpu::StoreOp::Store,
+                        }),
+                        stencil_ops: None,
+                    }),
+                    timestamp_writes: None,
+                    occlusion_query_set: None,
+                    multiview_mask: None,
+                });
+                rp.set_pipeline(pipeline);
+                for (g, group) in groups.iter().enumerate() {
+                    if let Some(group) = group {
+                        rp.set_bind_group(g as u32, group, &[]);
+                    }
+                }
+                rp.set_vertex_buffer(0, buffers.vertices.slice(..));
+                rp.set_index_buffer(buffers.indices.slice(..), wgpu::IndexFormat::Uint32);
+                rp.draw_indexed(0..buffers.index_count, 0, 0..1);
             }
-            rp.set_vertex_buffer(0, buffers.vertices.slice(..));
-            rp.set_index_buffer(buffers.indices.slice(..), wgpu::IndexFormat::Uint32);
-            rp.draw_indexed(0..buffers.index_count, 0, 0..1);
-        }
-        gpu.queue.submit([encoder.finish()]);
-        Ok(textures)
-    })??;
+            gpu.queue.submit([encoder.finish()]);
+            let (blended, offsets) = if let Some(pass) = &blended_pass {
+                let blend = BlendedDraw {
+                    pass,
+                    layout: &PassLayout::of(gpu, pass)?,
+                    buffers: &buffers,
+                    depth_view: &depth_view,
+                    depth: &depth,
+                };
+                record_blended(gpu, scene, &blend)?
+            } else {
+                (Vec::new(), Vec::new())
+            };
+            Ok((textures, blended, offsets))
+        })??;
     let mut planes = Vec::with_capacity(3);
     for t in &textures {
         let bytes = if variant.msaa.on() {
@@ -169,7 +198,155 @@ pub fn raster_truth(
         position,
         normal,
         albedo,
+        blended,
+        blended_offsets,
     })
+}
+
+/// What the blended draws of the truth share with its opaque draw.
+struct BlendedDraw<'a> {
+    pass: &'a crate::compose::ComposedPass,
+    layout: &'a PassLayout,
+    buffers: &'a SceneBuffers,
+    depth_view: &'a wgpu::TextureView,
+    depth: &'a DepthSetup,
+}
+
+/// Every blended fragment in front of the opaque surface, pixel by pixel in draw order, and
+/// where each pixel's start (`RasterTruth::blended`, `blended_offsets`).
+fn record_blended(
+    gpu: &Gpu,
+    scene: &Scene,
+    draw: &BlendedDraw<'_>,
+) -> Result<(Vec<BlendedFragment>, Vec<u32>), RenderError> {
+    let (w, h) = (scene.params.width, scene.params.height);
+    let pixels = w as u64 * h as u64;
+    // The blended triangles in draw order, unindexed: a vertex's index over 3 is its
+    // triangle's place in the draw.
+    let vertices: Vec<Vertex> = scene
+        .blend_order()
+        .iter()
+        .map(|&i| scene.vertices[i as usize])
+        .collect();
+    let storage =
+        wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC;
+    let buffer = |label: &str, size: u64| {
+        gpu.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some(label),
+            size: size.max(4),
+            usage: storage,
+            mapped_at_creation: false,
+        })
+    };
+    let vertex_buffer = gpu
+        .device
+        .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("truth blended vertices"),
+            contents: bytemuck::cast_slice(&vertices),
+            usage: wgpu::BufferUsages::VERTEX,
+        });
+    let counts = buffer("truth blended counts", pixels * 4);
+    let offsets = buffer("truth blended offsets", pixels * 4);
+    let fragment_size = std::mem::size_of::<BlendedFragment>() as u64;
+    let vertex = [Some(SceneBuffers::vertex_layout())];
+    let pipeline = |fs: &str| {
+        render_pipeline(
+            gpu,
+            draw.pass,
+            &draw.layout.pipeline,
+            ("vs_blended", Some(fs)),
+            &vertex,
+            &[],
+            Some(draw.depth.state(draw.depth.compare(), false)),
+            1,
+        )
+    };
+    let groups = |fragments: &wgpu::Buffer| {
+        draw.layout
+            .bind_groups(gpu, "truth blended", |slot: &Slot| match slot.name {
+                "fragment_counts" => Some(counts.as_entire_binding()),
+                "fragment_offsets" => Some(offsets.as_entire_binding()),
+                "fragments" => Some(fragments.as_entire_binding()),
+                "depth_texture" => Some(wgpu::BindingResource::TextureView(draw.depth_view)),
+                name => draw.buffers.frame_binding(name),
+            })
+    };
+    let run = |pipeline: &wgpu::RenderPipeline, groups: &[Option<wgpu::BindGroup>]| {
+        let mut encoder = gpu.device.create_command_encoder(&Default::default());
+        {
+            let depth = Some(wgpu::RenderPassDepthStencilAttachment {
+                view: draw.depth_view,
+                // Read-only: the shaders read it too.
+                depth_ops: None,
+                stencil_ops: None,
+            });
+            let mut rp = super::passes::begin_render(
+                &mut encoder,
+                "truth blended",
+                &[],
+                depth,
+                None,
+                groups,
+            );
+            rp.set_pipeline(pipeline);
+            rp.set_vertex_buffer(0, vertex_buffer.slice(..));
+            rp.draw(0..vertices.len() as u32, 0..1);
+        }
+        gpu.queue.submit([encoder.finish()]);
+    };
+    // Room for one fragment a pixel to count with; the writing draw gets what it needs.
+    let first = buffer("truth blended fragments", pixels * fragment_size);
+    run(&pipeline("fs_count")?, &groups(&first)?);
+    let per_pixel: Vec<u32> =
+        bytemuck::cast_slice(&read_buffer(gpu, &counts, 0, pixels * 4)?).to_vec();
+    if let Some((i, &n)) = per_pixel.iter().enumerate().max_by_key(|(_, n)| **n)
+        && n > MAX_BLENDED_FRAGMENTS
+    {
+        return Err(RenderError::Scene(format!(
+            "pixel ({}, {}) of scene `{}` has {n} blended fragments in front of its opaque surface; the reference records at most {MAX_BLENDED_FRAGMENTS} a pixel",
+            i as u64 % w as u64,
+            i as u64 / w as u64,
+            scene.name
+        )));
+    }
+    let mut starts = Vec::with_capacity(per_pixel.len() + 1);
+    let mut total = 0u32;
+    for &n in &per_pixel {
+        starts.push(total);
+        total += n;
+    }
+    starts.push(total);
+    let size = total as u64 * fragment_size;
+    if size > gpu.max_storage_bytes() {
+        return Err(RenderError::Scene(format!(
+            "scene `{}` has {total} blended fragments in front of its opaque surfaces: {size} bytes to record, more than adapter `{}` binds in one buffer ({})",
+            scene.name,
+            gpu.adapter.name,
+            gpu.max_storage_bytes()
+        )));
+    }
+    let fragments = if total as u64 <= pixels {
+        first
+    } else {
+        buffer("truth blended fragments", size)
+    };
+    gpu.queue.write_buffer(
+        &offsets,
+        0,
+        bytemuck::cast_slice(&starts[..per_pixel.len()]),
+    );
+    let mut clear = gpu.device.create_command_encoder(&Default::default());
+    clear.clear_buffer(&counts, 0, None);
+    gpu.queue.submit([clear.finish()]);
+    run(&pipeline("fs_record")?, &groups(&fragments)?);
+    let mut recorded: Vec<BlendedFragment> =
+        bytemuck::cast_slice(&read_buffer(gpu, &fragments, 0, size.max(4))?[..size as usize])
+            .to_vec();
+    // Each pixel's fragments in the order they are blended.
+    for pixel in starts.windows(2) {
+        recorded[pixel[0] as usize..pixel[1] as usize].sort_by_key(|f| f.order[0]);
+    }
+    Ok((recorded, starts))
 }
 
 /// Every sample of a multisampled truth target, pixel by pixel (`passes/truth_samples.wesl`).

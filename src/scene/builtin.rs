@@ -49,6 +49,15 @@ pub static SCENES: &[SceneInfo] = &[
         generate: spheres,
     },
     SceneInfo {
+        name: "glass",
+        description: "a courtyard seen through glass: alpha-blended panes at several depths (one just before the camera, two crossing, one beyond the back wall against the sky) over a masked fence and bushes (cut-outs), lit by point and spot lights; the camera pans at 1 unit/s",
+        defaults: SceneParams {
+            spots: 0.25,
+            ..defaults(256, (2.0, 5.0))
+        },
+        generate: glass,
+    },
+    SceneInfo {
         name: "empty",
         description: "a plane with no lights: ambient only",
         defaults: defaults(0, (1.0, 3.0)),
@@ -243,6 +252,7 @@ fn finish(
         params: p,
         vertices: mesh.vertices,
         indices: mesh.indices,
+        blended: mesh.blended,
         lights,
         camera: cams.0,
         prev_camera: cams.1,
@@ -447,6 +457,164 @@ fn spheres(p: SceneParams) -> Scene {
         p.time,
     );
     finish("spheres", p, m, lights, cams)
+}
+
+/// Alpha cutoff of the glass scene's masked materials (glTF's default).
+const GLASS_CUTOFF: f32 = 0.5;
+const LEAVES: [f32; 3] = [0.20, 0.45, 0.12];
+const PANE_TINTS: [[f32; 3]; 4] = [
+    [0.55, 0.75, 0.95],
+    [0.95, 0.60, 0.45],
+    [0.60, 0.90, 0.55],
+    [0.90, 0.85, 0.50],
+];
+
+/// A courtyard 20 x 12 with walls 4 high, open above. Opaque: a tiled floor, the back and
+/// left walls, plinths. Masked (cutoff 0.5): a fence whose vertex alphas alternate 1 and 0
+/// along it, so each quad keeps the half nearer its opaque side (slats and gaps), and bushes
+/// of crossed leaf cards, alpha 1 at two opposite corners and 0 at the others. Blended, added
+/// last (their vertices after every opaque one, as `scenes --export` writes them): a pane
+/// just before the camera, panes across the courtyard, two crossing each other, and a tall
+/// pane beyond the back wall that shows above it against the sky.
+fn glass(p: SceneParams) -> Scene {
+    let mut rng = Pcg64Mcg::seed_from_u64(p.seed);
+    let mut m = MeshBuilder::default();
+    let (hx, hz, wall) = (10.0, 6.0, 4.0);
+    m.set_material(0.8, 0.0);
+    for i in 0..10 {
+        for k in 0..6 {
+            let (x0, z0) = (-hx + 2.0 * i as f64, -hz + 2.0 * k as f64);
+            let albedo = if (i + k) % 2 == 0 {
+                PALE_STONE
+            } else {
+                DARK_TILE
+            };
+            m.axis_rect(1, 0.0, [z0, x0], [z0 + 2.0, x0 + 2.0], true, albedo);
+        }
+    }
+    m.axis_rect(2, -hz, [-hx, 0.0], [hx, wall], true, SANDSTONE);
+    m.axis_rect(0, -hx, [0.0, -hz], [wall, hz], true, SANDSTONE);
+    m.set_material(0.5, 0.0);
+    for i in 0..3 {
+        let x = -6.0 + 6.0 * i as f64;
+        m.cuboid(
+            DVec3::new(x - 0.5, -0.1, -3.5),
+            DVec3::new(x + 0.5, 1.0, -2.5),
+            PALE_STONE,
+        );
+    }
+
+    // The fence: 24 quads from x = -8 to 0 at z = 1, 1.2 high.
+    m.set_material(0.7, 0.0);
+    m.set_alpha(
+        1.0,
+        crate::common::AlphaMode::Mask {
+            cutoff: GLASS_CUTOFF,
+        },
+    );
+    let slats = 24;
+    for i in 0..slats {
+        let x0 = -8.0 + 8.0 * i as f64 / slats as f64;
+        let x1 = -8.0 + 8.0 * (i + 1) as f64 / slats as f64;
+        let (a0, a1) = if i % 2 == 0 { (1.0, 0.0) } else { (0.0, 1.0) };
+        m.quad_with_alpha(
+            [
+                DVec3::new(x0, 0.0, 1.0),
+                DVec3::new(x1, 0.0, 1.0),
+                DVec3::new(x1, 1.2, 1.0),
+                DVec3::new(x0, 1.2, 1.0),
+            ],
+            DVec3::Z,
+            WOOD,
+            [a0, a1, a1, a0],
+        );
+    }
+    // Bushes: five leaf cards around a vertical axis each.
+    m.set_material(0.6, 0.0);
+    for b in 0..4 {
+        let centre = DVec3::new(
+            -7.0 + 4.5 * b as f64 + rng.random_range(-0.5..0.5),
+            0.0,
+            -1.0 + rng.random_range(-1.0..1.0),
+        );
+        let size: f64 = rng.random_range(0.8..1.3);
+        for c in 0..5 {
+            let angle = std::f64::consts::PI * c as f64 / 5.0 + rng.random_range(0.0..0.3);
+            let along = DVec3::new(angle.cos(), 0.0, angle.sin()) * size;
+            let up = DVec3::new(0.0, 2.0 * size, 0.0);
+            let normal = along.cross(up).normalize();
+            m.quad_with_alpha(
+                [
+                    centre - along,
+                    centre + along,
+                    centre + along + up,
+                    centre - along + up,
+                ],
+                normal,
+                LEAVES,
+                [1.0, 0.0, 1.0, 0.0],
+            );
+        }
+    }
+
+    // Panes, blended: (centre, half width, half height, angle about y, alpha).
+    m.set_material(0.1, 0.0);
+    let panes: [(DVec3, f64, f64, f64, f32); 6] = [
+        // Just before the camera: nearer than any sensible near slice's end.
+        (DVec3::new(1.6, 2.1, 7.4), 0.6, 0.8, 0.3, 0.3),
+        (DVec3::new(-3.0, 1.5, 3.0), 2.0, 1.5, 0.0, 0.45),
+        (DVec3::new(4.0, 1.2, 0.5), 1.5, 1.2, 0.6, 0.6),
+        // Two crossing each other.
+        (DVec3::new(0.5, 1.5, -1.0), 1.8, 1.5, 0.7, 0.5),
+        (DVec3::new(0.5, 1.5, -1.0), 1.8, 1.5, -0.7, 0.35),
+        // Beyond the back wall and above it, against the sky.
+        (DVec3::new(2.0, 4.5, -9.0), 5.0, 4.5, 0.0, 0.4),
+    ];
+    for (i, &(centre, half_width, half_height, angle, alpha)) in panes.iter().enumerate() {
+        m.set_alpha(alpha, crate::common::AlphaMode::Blend);
+        let along = DVec3::new(angle.cos(), 0.0, -angle.sin()) * half_width;
+        let up = DVec3::new(0.0, half_height, 0.0);
+        let normal = along.cross(up).normalize();
+        m.quad(
+            [
+                centre - along - up,
+                centre + along - up,
+                centre + along + up,
+                centre - along + up,
+            ],
+            normal,
+            PANE_TINTS[i % PANE_TINTS.len()],
+        );
+    }
+
+    let lights = seeded_lights_in(
+        &mut rng,
+        &p,
+        DVec3::new(-hx + 0.5, 0.3, -hz - 4.0),
+        DVec3::new(hx - 0.5, 5.0, hz),
+        60.0,
+    );
+    let cams = camera_pair(
+        &m,
+        DVec3::new(0.0, 2.2, 9.0),
+        DVec3::new(-0.5, 1.4, -2.0),
+        DVec3::new(1.0, 0.0, 0.0),
+        p.time,
+    );
+    finish("glass", p, m, lights, cams)
+}
+
+/// Random lights in `lo..hi` with the scene's spot fraction pointing down.
+fn seeded_lights_in(
+    rng: &mut Pcg64Mcg,
+    p: &SceneParams,
+    lo: DVec3,
+    hi: DVec3,
+    power: f32,
+) -> Vec<Light> {
+    let mut lights = random_lights(rng, p, lo, hi, power);
+    make_spots(&mut lights, p, DVec3::NEG_Y, 0.6, (20.0, 50.0));
+    lights
 }
 
 fn plane() -> MeshBuilder {

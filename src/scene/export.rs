@@ -188,7 +188,7 @@ struct Writer {
     views: Vec<Value>,
     accessors: Vec<Value>,
     materials: Vec<Value>,
-    material_keys: Vec<[u32; 2]>,
+    material_keys: Vec<MaterialKey>,
 }
 
 impl Writer {
@@ -241,36 +241,53 @@ impl Writer {
         self.accessors.len() - 1
     }
 
-    fn material(&mut self, [roughness, metallic]: [f32; 2]) -> usize {
-        let key = [roughness.to_bits(), metallic.to_bits()];
+    fn material(&mut self, key: MaterialKey) -> usize {
         if let Some(i) = self.material_keys.iter().position(|k| *k == key) {
             return i;
         }
-        self.material_keys.push(key);
-        self.materials.push(json!({
+        let [roughness, metallic] = key.material;
+        let mut material = json!({
             "pbrMetallicRoughness": {
                 "baseColorFactor": [1.0, 1.0, 1.0, 1.0],
                 "roughnessFactor": roughness,
                 "metallicFactor": metallic,
             },
-        }));
+        });
+        if key.blend {
+            material["alphaMode"] = json!("BLEND");
+        } else if key.cutoff > 0.0 {
+            material["alphaMode"] = json!("MASK");
+            material["alphaCutoff"] = json!(key.cutoff);
+        }
+        self.material_keys.push(key);
+        self.materials.push(material);
         self.materials.len() - 1
     }
 
     /// A primitive per run of triangles whose first corners share a material, each with
-    /// the vertex range its triangles use.
+    /// the vertex range its triangles use: the opaque and masked triangles, then the
+    /// blended ones (a scene whose blended vertices follow its opaque ones loads back with
+    /// the same vertex order).
     fn mesh(&mut self, scene: &Scene) -> Vec<Value> {
         let v = &scene.vertices;
-        let tris: Vec<&[u32]> = scene.indices.chunks_exact(3).collect();
+        let key = |t: &[u32], blend: bool| MaterialKey {
+            material: v[t[0] as usize].material,
+            cutoff: v[t[0] as usize].alpha[1],
+            blend,
+        };
+        let tris: Vec<(&[u32], MaterialKey)> =
+            (scene.indices.chunks_exact(3).map(|t| (t, key(t, false))))
+                .chain(scene.blended.chunks_exact(3).map(|t| (t, key(t, true))))
+                .collect();
         let mut primitives = Vec::new();
         let mut start = 0;
         while start < tris.len() {
-            let material = v[tris[start][0] as usize].material;
+            let material = tris[start].1;
             let mut end = start + 1;
-            while end < tris.len() && v[tris[end][0] as usize].material == material {
+            while end < tris.len() && tris[end].1 == material {
                 end += 1;
             }
-            let run = &tris[start..end];
+            let run: Vec<&[u32]> = tris[start..end].iter().map(|(t, _)| *t).collect();
             let (lo, hi) = run
                 .iter()
                 .flat_map(|t| t.iter())
@@ -278,11 +295,21 @@ impl Writer {
             let verts = &v[lo as usize..=hi as usize];
             let positions: Vec<f32> = verts.iter().flat_map(|v| v.position).collect();
             let normals: Vec<f32> = verts.iter().flat_map(|v| v.normal).collect();
-            let colors: Vec<f32> = verts.iter().flat_map(|v| v.albedo).collect();
+            // Alpha in COLOR_0 where a vertex has one below 1.
+            let with_alpha = verts.iter().any(|v| v.alpha[0] != 1.0);
+            let colors: Vec<f32> = if with_alpha {
+                verts
+                    .iter()
+                    .flat_map(|v| [v.albedo[0], v.albedo[1], v.albedo[2], v.alpha[0]])
+                    .collect()
+            } else {
+                verts.iter().flat_map(|v| v.albedo).collect()
+            };
             let indices: Vec<u32> = run.iter().flat_map(|t| t.iter().map(|i| i - lo)).collect();
             let position = self.accessor_f32(&positions, "VEC3", true, Some(ARRAY_BUFFER));
             let normal = self.accessor_f32(&normals, "VEC3", false, Some(ARRAY_BUFFER));
-            let color = self.accessor_f32(&colors, "VEC3", false, Some(ARRAY_BUFFER));
+            let color_type = if with_alpha { "VEC4" } else { "VEC3" };
+            let color = self.accessor_f32(&colors, color_type, false, Some(ARRAY_BUFFER));
             let view = self.view(bytemuck::cast_slice(&indices), Some(ELEMENT_ARRAY_BUFFER));
             self.accessors.push(json!({
                 "bufferView": view,
@@ -301,6 +328,14 @@ impl Writer {
         }
         primitives
     }
+}
+
+/// What makes a glTF material: (roughness, metallic), the alpha cutoff, blending.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct MaterialKey {
+    material: [f32; 2],
+    cutoff: f32,
+    blend: bool,
 }
 
 /// glTF colours lie in [0, 1]: the colour over the smallest power of two at least its

@@ -60,7 +60,10 @@ const MAX_VERTICES: usize = 1 << 27;
 pub struct FileScene {
     pub file: SceneFile,
     pub vertices: Vec<Vertex>,
+    /// Triangles of opaque and masked materials.
     pub indices: Vec<u32>,
+    /// Triangles of blended materials.
+    pub blended: Vec<u32>,
     pub textures: Option<Arc<TextureArray>>,
     /// The file's point and spot lights, in node order.
     pub lights: Vec<Light>,
@@ -310,6 +313,7 @@ fn read_file(path: &str) -> Result<FileScene, String> {
     let images = BaseColorImages::collect(&gltf);
     let mut vertices = Vec::new();
     let mut indices = Vec::new();
+    let mut blended = Vec::new();
     for (mesh, world) in &meshes {
         for primitive in mesh.primitives() {
             reading(format!(
@@ -323,13 +327,13 @@ fn read_file(path: &str) -> Result<FileScene, String> {
                 &buffers,
                 &images,
                 &mut vertices,
-                &mut indices,
+                [&mut indices, &mut blended],
                 &mut notes,
             )
             .map_err(|e| format!("mesh {} primitive {}: {e}", mesh.index(), primitive.index()))?;
         }
     }
-    if indices.is_empty() {
+    if indices.is_empty() && blended.is_empty() {
         return Err("no triangles to draw: the default scene's nodes hold no mesh with triangles (points and lines are not drawn)".into());
     }
     let textures = images.decode(&gltf, base, &buffers, &mut hash)?;
@@ -349,6 +353,7 @@ fn read_file(path: &str) -> Result<FileScene, String> {
         },
         vertices,
         indices,
+        blended,
         textures: textures.map(Arc::new),
         lights,
         camera,
@@ -1102,14 +1107,15 @@ impl BaseColorImages {
     }
 }
 
-/// Append one primitive's triangles, transformed to world space.
+/// Append one primitive's triangles, transformed to world space, to the opaque triangles
+/// (`triangle_lists[0]`, also masked ones) or the blended ones (`[1]`).
 fn read_primitive(
     primitive: &gltf::Primitive,
     world: &DAffine3,
     buffers: &[Vec<u8>],
     images: &BaseColorImages,
     vertices: &mut Vec<Vertex>,
-    indices: &mut Vec<u32>,
+    triangle_lists: [&mut Vec<u32>; 2],
     notes: &mut Vec<String>,
 ) -> Result<(), String> {
     use gltf::mesh::Mode;
@@ -1201,7 +1207,7 @@ fn read_primitive(
         }
         None => None,
     };
-    let colors: Option<Vec<[f32; 3]>> = reader.read_colors(0).map(|c| c.into_rgb_f32().collect());
+    let colors: Option<Vec<[f32; 4]>> = reader.read_colors(0).map(|c| c.into_rgba_f32().collect());
     let uvs: Option<Vec<[f32; 2]>> = reader.read_tex_coords(0).map(|t| t.into_f32().collect());
     for (name, len) in [
         ("NORMAL", normals.as_ref().map(Vec::len)),
@@ -1222,10 +1228,14 @@ fn read_primitive(
     for (name, semantic, values) in [
         ("POSITION", S::Positions, Some(&points)),
         ("NORMAL", S::Normals, normals.as_ref()),
-        ("COLOR_0", S::Colors(0), colors.as_ref()),
+        ("COLOR_0", S::Colors(0), None),
         ("TEXCOORD_0", S::TexCoords(0), uv3.as_ref()),
     ] {
-        if let Some(at) = values.and_then(|v| first_non_finite(v)) {
+        let first_bad = match semantic {
+            S::Colors(_) => colors.as_ref().and_then(|c| first_non_finite(c)),
+            _ => values.and_then(|v| first_non_finite(v)),
+        };
+        if let Some(at) = first_bad {
             let accessor = primitive.get(&semantic).map_or(0, |a| a.index());
             return Err(format!(
                 "{name} (accessor {accessor}) holds a value that is not a finite number (NaN or infinity) at vertex {at}"
@@ -1256,9 +1266,18 @@ fn read_primitive(
     if material.occlusion_texture().is_some() {
         note_once(notes, "occlusion textures are not sampled".into());
     }
-    if material.alpha_mode() != gltf::material::AlphaMode::Opaque {
-        note_once(notes, "alpha modes MASK and BLEND are drawn opaque".into());
-    }
+    // glTF's default cutoff is 0.5; a cutoff of 0 keeps every fragment, as opaque does.
+    let (cutoff, blend) = match material.alpha_mode() {
+        gltf::material::AlphaMode::Opaque => (0.0, false),
+        gltf::material::AlphaMode::Mask => (material.alpha_cutoff().unwrap_or(0.5).max(0.0), false),
+        gltf::material::AlphaMode::Blend => (0.0, true),
+    };
+    let [opaque_triangles, blended_triangles] = triangle_lists;
+    let indices = if blend {
+        blended_triangles
+    } else {
+        opaque_triangles
+    };
     if let Some(info) = pbr.base_color_texture()
         && info.tex_coord() != 0
     {
@@ -1275,7 +1294,7 @@ fn read_primitive(
     let normal_matrix: DMat3 = world.matrix3.inverse().transpose();
     let mirrored = world.matrix3.determinant() < 0.0;
     let vertex = |i: usize, face_normal: Option<[f32; 3]>| -> Vertex {
-        let albedo = colors.as_ref().map_or([1.0; 3], |c| c[i]);
+        let color = colors.as_ref().map_or([1.0; 4], |c| c[i]);
         let normal = face_normal
             .or_else(|| normals.as_ref().map(|n| n[i]))
             .unwrap_or([0.0, 0.0, 1.0]);
@@ -1306,10 +1325,11 @@ fn read_primitive(
         Vertex {
             position,
             normal,
-            albedo: [0, 1, 2].map(|c| factor[c] * albedo[c]),
+            albedo: [0, 1, 2].map(|c| factor[c] * color[c]),
             material: [roughness, metallic],
             uv: uvs.as_ref().map_or([0.0; 2], |u| u[i]),
             texture,
+            alpha: [factor[3] * color[3], cutoff],
         }
     };
     let base = vertices.len() as u32;
@@ -1501,6 +1521,7 @@ pub fn instantiate(file: &FileScene, params: SceneParams) -> Scene {
         params,
         vertices: file.vertices.clone(),
         indices: file.indices.clone(),
+        blended: file.blended.clone(),
         lights,
         camera,
         prev_camera,

@@ -3,14 +3,34 @@
 use glam::{DVec3, Vec3};
 
 use super::Vertex;
+use crate::common::AlphaMode;
 
-/// Collects triangles into one indexed mesh.
-#[derive(Default)]
+/// Collects triangles into one indexed mesh: opaque and masked ones in `indices`, blended
+/// ones in `blended`.
 pub struct MeshBuilder {
     pub vertices: Vec<Vertex>,
     pub indices: Vec<u32>,
+    /// Triangles of blended materials (`AlphaMode::Blend`), drawn after the opaque frame.
+    pub blended: Vec<u32>,
     /// (perceptual roughness, metallic) of the primitives added from now on.
     pub material: [f32; 2],
+    /// `Vertex::alpha` of the primitives added from now on.
+    alpha: [f32; 2],
+    /// Whether the primitives added from now on are blended.
+    blend: bool,
+}
+
+impl Default for MeshBuilder {
+    fn default() -> Self {
+        MeshBuilder {
+            vertices: Vec::new(),
+            indices: Vec::new(),
+            blended: Vec::new(),
+            material: [0.0; 2],
+            alpha: [1.0, 0.0],
+            blend: false,
+        }
+    }
 }
 
 impl MeshBuilder {
@@ -22,6 +42,7 @@ impl MeshBuilder {
             material: self.material,
             uv: [0.0; 2],
             texture: crate::common::NO_TEXTURE,
+            alpha: self.alpha,
         }
     }
 
@@ -29,6 +50,25 @@ impl MeshBuilder {
     /// 1/255, so G-buffer layouts that keep them in 8 bits keep them exactly.
     pub fn set_material(&mut self, roughness: f32, metallic: f32) {
         self.material = [roughness, metallic].map(|x| (x.clamp(0.0, 1.0) * 255.0).round() / 255.0);
+    }
+
+    /// Set the base colour alpha and alpha mode of what is added next.
+    pub fn set_alpha(&mut self, alpha: f32, mode: AlphaMode) {
+        let cutoff = match mode {
+            AlphaMode::Mask { cutoff } => cutoff,
+            AlphaMode::Opaque | AlphaMode::Blend => 0.0,
+        };
+        self.alpha = [alpha, cutoff];
+        self.blend = mode == AlphaMode::Blend;
+    }
+
+    /// Where the triangles added now go: the opaque list or the blended one.
+    fn triangles(&mut self) -> &mut Vec<u32> {
+        if self.blend {
+            &mut self.blended
+        } else {
+            &mut self.indices
+        }
     }
 }
 
@@ -39,7 +79,26 @@ impl MeshBuilder {
         for c in corners {
             self.vertices.push(self.vertex(c, normal, albedo));
         }
-        self.indices
+        self.triangles()
+            .extend([base, base + 1, base + 2, base, base + 2, base + 3]);
+    }
+
+    /// A flat quad whose corners have their own base colour alpha (the material's cutoff and
+    /// mode as set): masked cut-outs where it crosses the cutoff.
+    pub fn quad_with_alpha(
+        &mut self,
+        corners: [DVec3; 4],
+        normal: DVec3,
+        albedo: [f32; 3],
+        alphas: [f32; 4],
+    ) {
+        let base = self.vertices.len() as u32;
+        for (c, a) in corners.into_iter().zip(alphas) {
+            let mut v = self.vertex(c, normal, albedo);
+            v.alpha[0] = a;
+            self.vertices.push(v);
+        }
+        self.triangles()
             .extend([base, base + 1, base + 2, base, base + 2, base + 3]);
     }
 
@@ -126,7 +185,7 @@ impl MeshBuilder {
         }
         for i in 0..segments {
             let (a, b) = (start + 2 * i, start + 2 * i + 2);
-            self.indices.extend([a, b, b + 1, a, b + 1, a + 1]);
+            self.triangles().extend([a, b, b + 1, a, b + 1, a + 1]);
         }
         for (y, normal) in [(height, DVec3::Y), (0.0, DVec3::NEG_Y)] {
             let center = self.vertices.len() as u32;
@@ -142,9 +201,9 @@ impl MeshBuilder {
             for i in 0..segments {
                 let (a, b) = (center + 1 + i, center + 2 + i);
                 if normal.y > 0.0 {
-                    self.indices.extend([center, a, b]);
+                    self.triangles().extend([center, a, b]);
                 } else {
-                    self.indices.extend([center, b, a]);
+                    self.triangles().extend([center, b, a]);
                 }
             }
         }
@@ -178,7 +237,7 @@ impl MeshBuilder {
             for j in 0..slices {
                 let a = start + i * row + j;
                 let b = a + row;
-                self.indices.extend([a, b, b + 1, a, b + 1, a + 1]);
+                self.triangles().extend([a, b, b + 1, a, b + 1, a + 1]);
             }
         }
     }

@@ -168,7 +168,11 @@ pub struct Scene {
     pub name: String,
     pub params: SceneParams,
     pub vertices: Vec<Vertex>,
+    /// Triangles of opaque and masked materials.
     pub indices: Vec<u32>,
+    /// Triangles of blended materials, in the scene's order (`blend_order` sorts them for a
+    /// frame).
+    pub blended: Vec<u32>,
     /// Lights at `params.time`.
     pub lights: Vec<Light>,
     pub camera: Camera,
@@ -247,6 +251,51 @@ impl Scene {
             }
         }
         Ok(())
+    }
+
+    /// Whether some opaque triangle's material is masked (an alpha cutoff above 0): the
+    /// raster passes then discard below it.
+    pub fn has_masks(&self) -> bool {
+        self.indices.iter().any(|&i| {
+            self.vertices
+                .get(i as usize)
+                .is_some_and(|v| v.alpha[1] > 0.0)
+        })
+    }
+
+    /// Whether the scene has blended triangles: a frame then draws them over its opaque
+    /// picture in a transparent pass.
+    pub fn has_blend(&self) -> bool {
+        !self.blended.is_empty()
+    }
+
+    /// The blended triangles in the order every frame draws them: back to front, by the
+    /// view depth of each triangle's centroid (the mean of its corners, in f64) under the
+    /// frame's camera, the farthest first; triangles at the same depth in the scene's
+    /// order. A triangle is blended whole, so where two triangles cross, the one drawn
+    /// later is over the other on both sides of the crossing (the reference blends in the
+    /// same order, so that is what both agree on).
+    pub fn blend_order(&self) -> Vec<u32> {
+        let view = self.camera.view();
+        let depth = |t: &[u32]| {
+            let centroid = t
+                .iter()
+                .map(|&i| DVec3::from(self.vertices[i as usize].position.map(f64::from)))
+                .sum::<DVec3>()
+                / 3.0;
+            -view.transform_point3(centroid).z
+        };
+        let mut triangles: Vec<(f64, &[u32])> = self
+            .blended
+            .chunks_exact(3)
+            .map(|t| (depth(t), t))
+            .collect();
+        // A stable sort keeps equal depths in the scene's order.
+        triangles.sort_by(|a, b| b.0.total_cmp(&a.0));
+        triangles
+            .into_iter()
+            .flat_map(|(_, t)| t.iter().copied())
+            .collect()
     }
 
     pub fn far_plane_for(vertices: &[Vertex], eye: DVec3) -> f64 {

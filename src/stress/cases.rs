@@ -247,6 +247,7 @@ fn scene(
         },
         vertices: mesh.vertices,
         indices: mesh.indices,
+        blended: mesh.blended,
         lights,
         camera: cam,
         prev_camera: cam,
@@ -657,6 +658,7 @@ pub fn all() -> Vec<Case> {
             material: [0.5, 0.0],
             uv: [0.0; 2],
             texture: crate::common::NO_TEXTURE,
+            alpha: [1.0, 0.0],
         };
         m.vertices.extend([
             zero([0.0, 0.5, 2.0]),

@@ -145,6 +145,7 @@ pub fn planes_scene(columns: u32, rows: u32) -> (Scene, Vec<f64>) {
         },
         vertices: mesh.vertices,
         indices: mesh.indices,
+        blended: mesh.blended,
         lights: Vec::new(),
         camera,
         prev_camera: camera,
