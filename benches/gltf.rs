@@ -70,6 +70,7 @@ fn field_of_spheres(per_side: u32) -> Scene {
         },
         vertices: m.vertices,
         indices: m.indices,
+        blended: m.blended,
         lights: Vec::new(),
         camera,
         prev_camera: camera,

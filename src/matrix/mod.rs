@@ -13,8 +13,8 @@ mod validate;
 pub use baseline::{RunComparison, compare_runs};
 pub use columns::{COLUMNS, Cell, Column, Measured, Shown, count};
 pub use plan::{
-    CellSpec, Group, MSAA_GROUP, ParamsRecord, PlannedCell, Sweep, VariantEntry, default_groups,
-    expand, find_variants, parse_shard, parse_sweep, shard,
+    CellSpec, Group, MSAA_GROUP, ParamsRecord, PlannedCell, Sweep, TRANSPARENCY_GROUP,
+    VariantEntry, default_groups, expand, find_variants, parse_shard, parse_sweep, shard,
 };
 pub use report::{table, write_report};
 

@@ -192,12 +192,34 @@ pub const MSAA_GROUP: [&str; 7] = [
     "clustered_deferred_two_level",
 ];
 
-/// The default matrix: every variant on every built-in scene, a light-count sweep of naive
-/// forward, Forward+ and clustered deferred on the atrium, and those with 1 and 4 samples
-/// (`MSAA_GROUP`).
+/// The default matrix's transparency group (and `study transparency`): every pipeline and
+/// culling method on the glass scene.
+pub const TRANSPARENCY_GROUP: [&str; 14] = [
+    "naive_forward",
+    "deferred_scissor",
+    "forward_plus",
+    "clustered_deferred_16x16x24",
+    "forward_plus_tiled",
+    "forward_plus_olsson",
+    "clustered_deferred_active",
+    "forward_plus_olsson_2_5d",
+    "clustered_deferred_tiled_2_5d",
+    "forward_plus_two_level",
+    "forward_plus_zbinning",
+    "forward_plus_rasterised",
+    "forward_plus_bvh",
+    "forward_plus_cpu_assignment",
+];
+
+/// The default matrix: every variant on every built-in scene but the glass one, a
+/// light-count sweep of naive forward, Forward+ and clustered deferred on the atrium, those
+/// with 1 and 4 samples (`MSAA_GROUP`), and every pipeline and culling method on the glass
+/// scene (`TRANSPARENCY_GROUP`, at a quarter of its pixels).
 pub fn default_groups() -> Result<Vec<Group>, String> {
+    let glass = crate::study::transparency::SCENE;
     let scenes = crate::scene::SCENES
         .iter()
+        .filter(|s| s.name != glass)
         .map(|s| s.name.to_string())
         .collect();
     Ok(vec![
@@ -226,6 +248,14 @@ pub fn default_groups() -> Result<Vec<Group>, String> {
             scenes: vec!["atrium".into()],
             sweeps: vec![Sweep::Lights(vec![1024]), Sweep::Msaa(vec![1, 4])],
             size: Some((640, 360)),
+        },
+        // What deferred cannot do: blended panes, shaded forward in every pipeline.
+        Group {
+            name: "transparency".into(),
+            variants: find_variants(&TRANSPARENCY_GROUP.map(String::from))?,
+            scenes: vec![glass.into()],
+            sweeps: vec![],
+            size: Some((320, 180)),
         },
     ])
 }

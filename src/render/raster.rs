@@ -53,7 +53,11 @@ pub fn pipelines(
             vec![build(Some("fs_main"), &[], d.state(d.compare(), false))?]
         }
         RasterPass::Transparent => {
-            let fs = if instrumented { "fs_stats" } else { "fs_blend" };
+            let fs = if instrumented {
+                "fs_blend_stats"
+            } else {
+                "fs_blend"
+            };
             let target = wgpu::ColorTargetState {
                 blend: (!instrumented).then_some(OVER),
                 ..color_target(gpu.hdr_format).expect("a target")

@@ -785,7 +785,164 @@ pub fn all() -> Vec<Case> {
         with_slicing(ZSlicing::OlssonCubic, "olsson"),
     ));
     spot_cases(&mut cases);
+    transparency_cases(&mut cases);
     cases
+}
+
+/// A square of half-size `half` facing `cam` at `distance` along its view axis, moved by
+/// `offset` (in units of `half`) right and up; blended with `alpha`, or masked with its
+/// corners' alphas `corners` (counter-clockwise from the bottom left).
+fn facing_square(
+    m: &mut MeshBuilder,
+    cam: &Camera,
+    distance: f64,
+    half: f64,
+    offset: (f64, f64),
+    albedo: [f32; 3],
+    corners: [f32; 4],
+) {
+    let forward = (cam.target - cam.eye).normalize();
+    let right = forward.cross(DVec3::Y).normalize() * half;
+    let up = right.cross(forward).normalize() * half;
+    let c = cam.eye + forward * distance + right * offset.0 + up * offset.1;
+    m.quad_with_alpha(
+        [
+            c - right - up,
+            c + right - up,
+            c + right + up,
+            c - right + up,
+        ],
+        -forward,
+        albedo,
+        corners,
+    );
+}
+
+/// Masked and blended materials on the room: a pane on the near plane, 64 panes over the
+/// same pixels, alpha 0 and 1, a light that reaches only a pane against the background (no
+/// opaque sample in its clusters), masks at their cutoff; every pipeline and culling method.
+fn transparency_cases(cases: &mut Vec<Case>) {
+    use crate::common::AlphaMode;
+    let room_with = |name: &str, build: &dyn Fn(&mut MeshBuilder, &Camera), lights: Vec<Light>| {
+        let mut m = room();
+        let cam = default_camera(&m);
+        build(&mut m, &cam);
+        scene(name, SIZE, m, lights, cam)
+    };
+    let blended = |m: &mut MeshBuilder, alpha: f32| m.set_alpha(alpha, AlphaMode::Blend);
+    cases.push(case(
+        "pane_on_near_plane",
+        "blended panes at the near plane's distance (one centred, one off to the side)",
+        room_with(
+            "pane_on_near_plane",
+            &|m, cam| {
+                blended(m, 0.5);
+                facing_square(m, cam, cam.near, 0.02, (0.0, 0.0), BLUE, [0.5; 4]);
+                facing_square(m, cam, cam.near, 0.02, (1.5, 0.5), RED, [0.5; 4]);
+            },
+            lattice(27, 3.0),
+        ),
+        pipelines(),
+    ));
+    cases.push(case(
+        "panes_64_overlapping",
+        "64 blended panes (alpha 0.1) one behind the other over the same pixels",
+        room_with(
+            "panes_64_overlapping",
+            &|m, cam| {
+                blended(m, 0.1);
+                for i in 0..64 {
+                    let tint = [0.3 + 0.01 * i as f32, 0.5, 0.9 - 0.01 * i as f32];
+                    facing_square(
+                        m,
+                        cam,
+                        1.0 + 0.06 * i as f64,
+                        0.4,
+                        (0.0, 0.0),
+                        tint,
+                        [0.1; 4],
+                    );
+                }
+            },
+            lattice(27, 3.0),
+        ),
+        pipelines(),
+    ));
+    cases.push(case(
+        "alpha_0_and_1",
+        "blended panes of alpha 0 (no trace) and 1 (opaque, over a pane of 0.5)",
+        room_with(
+            "alpha_0_and_1",
+            &|m, cam| {
+                blended(m, 0.0);
+                facing_square(m, cam, 3.0, 0.8, (-0.8, 0.0), RED, [0.0; 4]);
+                blended(m, 0.5);
+                facing_square(m, cam, 4.0, 0.8, (0.8, 0.0), BLUE, [0.5; 4]);
+                blended(m, 1.0);
+                facing_square(m, cam, 3.0, 0.8, (1.2, 0.0), STONE, [1.0; 4]);
+            },
+            lattice(27, 3.0),
+        ),
+        pipelines(),
+    ));
+    {
+        // A pane high in the view, with only background behind it, and a light a hair in
+        // front of it that no opaque surface is near.
+        let pane = DVec3::new(0.0, 4.5, -4.0);
+        let mut lights = lattice(27, 3.0);
+        let toward_eye = (DVec3::new(0.0, 3.0, 7.0) - pane).normalize();
+        lights.push(light(pane + toward_eye * 0.3, 0.8, 2.0));
+        cases.push(case(
+            "light_only_on_a_pane",
+            "a light that reaches a blended pane against the background and no opaque sample",
+            room_with(
+                "light_only_on_a_pane",
+                &|m, cam| {
+                    blended(m, 0.6);
+                    let distance = (pane - cam.eye).length();
+                    let forward = (cam.target - cam.eye).normalize();
+                    // The square faces the camera; placed on the line to `pane`.
+                    let along = (pane - cam.eye).normalize();
+                    let right = forward.cross(DVec3::Y).normalize();
+                    let up = right.cross(forward).normalize();
+                    let offset = (
+                        along.dot(right) / along.dot(forward),
+                        along.dot(up) / along.dot(forward),
+                    );
+                    let depth = distance * along.dot(forward);
+                    let half = 1.0;
+                    facing_square(
+                        m,
+                        cam,
+                        depth,
+                        half,
+                        (offset.0 * depth / half, offset.1 * depth / half),
+                        STONE,
+                        [0.6; 4],
+                    );
+                },
+                lights,
+            ),
+            pipelines(),
+        ));
+    }
+    cases.push(case(
+        "mask_at_cutoff",
+        "masked squares: alpha equal to the cutoff everywhere, a gradient across it, cutoff 1 with alpha 1 and just below",
+        room_with(
+            "mask_at_cutoff",
+            &|m, cam| {
+                m.set_alpha(1.0, AlphaMode::Mask { cutoff: 0.5 });
+                facing_square(m, cam, 4.0, 0.6, (-1.5, 0.0), RED, [0.5; 4]);
+                facing_square(m, cam, 4.0, 0.6, (0.0, 0.0), BLUE, [0.25, 0.75, 0.75, 0.25]);
+                m.set_alpha(1.0, AlphaMode::Mask { cutoff: 1.0 });
+                facing_square(m, cam, 4.0, 0.6, (1.5, 0.0), STONE, [1.0; 4]);
+                facing_square(m, cam, 4.0, 0.6, (1.5, 1.5), STONE, [0.99999; 4]);
+            },
+            lattice(27, 3.0),
+        ),
+        pipelines(),
+    ));
 }
 
 /// A spot at `p` along `axis` (world space).

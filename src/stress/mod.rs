@@ -363,6 +363,44 @@ pub fn missing_at_samples(
             }
         }
     }
+    // Blended fragments look their cluster up by their own depth: the twin's slice at it, in
+    // the tile of their pixel, over the range the frame clustered.
+    if !truth.blended.is_empty() {
+        let range = r
+            .cluster_range()
+            .map_err(|e| e.to_string())?
+            .ok_or("no cluster range")?;
+        let mut grid = Grid::of(v, scene);
+        grid.range = (range.near as f64, range.far as f64);
+        let slices = grid.slices();
+        let view = scene.camera.view();
+        let h = scene.params.height as usize;
+        let tile = |pixel: usize, size: usize, tiles: u32| {
+            (((pixel as f64 + 0.5) * tiles as f64 / size as f64).floor() as u32).min(tiles - 1)
+        };
+        for i in 0..truth.position.len() {
+            for f in truth.blended_at(i) {
+                let p = f.surface().position;
+                let k = slices.slice(-view.transform_point3(p).z);
+                let c = grid.index(tile(i % w, w, grid.x), tile(i / w, h, grid.y), k);
+                let list = &listed[c];
+                for (l, light) in scene.lights.iter().enumerate() {
+                    if clearly_reaches(light, p) && list.binary_search(&(l as u32)).is_err() {
+                        missing += 1;
+                        first.get_or_insert_with(|| {
+                            format!(
+                                "pixel ({}, {}): light {l} reaches a blended fragment at view depth {:.4} but is not in cluster {c}'s list of {}",
+                                i % w,
+                                i / w,
+                                -view.transform_point3(p).z,
+                                list.len()
+                            )
+                        });
+                    }
+                }
+            }
+        }
+    }
     Ok((missing, first))
 }
 

@@ -9,6 +9,7 @@ pub mod depth;
 pub mod msaa;
 pub mod slicing;
 pub mod table;
+pub mod transparency;
 
 use std::path::{Path, PathBuf};
 
@@ -92,6 +93,10 @@ pub enum StudyName {
     /// every sample count the adapter multisamples, 1024 lights (or `--lights`): time,
     /// memory, edge pixels, and where deferred and forward cross over.
     Msaa,
+    /// Every pipeline and culling method on the glass scene with its blended panes and
+    /// without: the transparent pass, the blended depths pass, and what the panes cost the
+    /// opaque frame through shared list bounds.
+    Transparency,
 }
 
 impl StudyName {
@@ -103,6 +108,7 @@ impl StudyName {
             StudyName::Cones => "cones",
             StudyName::Culling => "culling",
             StudyName::Msaa => "msaa",
+            StudyName::Transparency => "transparency",
         }
     }
 }
@@ -169,7 +175,7 @@ pub struct StudyOutput {
     /// False when the study found a disagreement it exists to rule out (codecs: GPU and
     /// CPU differ at the printed precision; slicing: a run failed; cones: a run failed or
     /// missed a light; culling: a run failed or its useful evaluations differ from the other
-    /// methods' on the same frame; msaa: a run failed or was over 1 LSB).
+    /// methods' on the same frame; msaa, transparency: a run failed or was over 1 LSB).
     pub ok: bool,
 }
 
@@ -284,6 +290,12 @@ pub fn run(
             let ok = msaa::all_exact(&rows);
             let table = msaa::table(&rows, &gpu.multisample_counts());
             output(name, table, &rows, None, ok)
+        }
+        StudyName::Transparency => {
+            let rows =
+                transparency::run(gpu, composer, options.size, options.lights, options.frames)?;
+            let ok = transparency::all_exact(&rows);
+            output(name, transparency::table(&rows), &rows, None, ok)
         }
     }
 }

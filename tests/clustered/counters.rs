@@ -265,6 +265,7 @@ fn hand_built_scene() -> Scene {
         },
         vertices: mesh.vertices,
         indices: mesh.indices,
+        blended: mesh.blended,
         lights,
         camera,
         prev_camera: camera,

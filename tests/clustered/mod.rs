@@ -10,6 +10,7 @@ mod loop_budget;
 mod msaa;
 mod one_level;
 mod rasterised;
+mod transparency;
 mod two_level;
 mod zbinning;
 
