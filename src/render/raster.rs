@@ -48,9 +48,23 @@ pub fn pipelines(
             let fs = masked.then_some("fs_mask");
             vec![build(fs, &[], d.state(d.compare(), true))?]
         }
-        // Both test against the opaque depth and leave it as it is.
+        // It tests against the opaque depth itself (it reads it, so it cannot be attached)
+        // and writes nothing to the target it draws with.
         RasterPass::TransparentDepths => {
-            vec![build(Some("fs_main"), &[], d.state(d.compare(), false))?]
+            let target = wgpu::ColorTargetState {
+                write_mask: wgpu::ColorWrites::empty(),
+                ..color_target(gpu.hdr_format).expect("a target")
+            };
+            vec![render_pipeline(
+                gpu,
+                composed,
+                layout,
+                ("vs_main", Some("fs_main")),
+                &vertex,
+                &[Some(target)],
+                None,
+                variant.msaa.samples,
+            )?]
         }
         RasterPass::Transparent => {
             let fs = if instrumented {
@@ -155,13 +169,7 @@ pub fn encode(
             if let Some(b) = transparent_depths {
                 encoder.clear_buffer(b, 0, None);
             }
-            // Read-only: the shader reads it too.
-            let read_only = wgpu::RenderPassDepthStencilAttachment {
-                view: &targets.depth.view,
-                depth_ops: None,
-                stencil_ops: None,
-            };
-            (Vec::new(), Some(read_only))
+            (vec![load(&targets.hdr.view)], None)
         }
         RasterPass::Transparent => (vec![load(&targets.hdr.view)], depth(false)),
     };

@@ -170,7 +170,7 @@ pub fn raster_truth(
                     layout: &PassLayout::of(gpu, pass)?,
                     buffers: &buffers,
                     depth_view: &depth_view,
-                    depth: &depth,
+                    target: &views[0],
                 };
                 record_blended(gpu, scene, &blend)?
             } else {
@@ -209,7 +209,10 @@ struct BlendedDraw<'a> {
     layout: &'a PassLayout,
     buffers: &'a SceneBuffers,
     depth_view: &'a wgpu::TextureView,
-    depth: &'a DepthSetup,
+    /// A colour target to draw with, written nothing (a render pass needs an attachment,
+    /// and the depth cannot be one: the shaders read it, which OpenGL's wgpu refuses even
+    /// read-only).
+    target: &'a wgpu::TextureView,
 }
 
 /// Every blended fragment in front of the opaque surface, pixel by pixel in draw order, and
@@ -256,8 +259,11 @@ fn record_blended(
             &draw.layout.pipeline,
             ("vs_blended", Some(fs)),
             &vertex,
-            &[],
-            Some(draw.depth.state(draw.depth.compare(), false)),
+            &[Some(wgpu::ColorTargetState {
+                write_mask: wgpu::ColorWrites::empty(),
+                ..color_target(TRUTH_FORMAT).expect("a target")
+            })],
+            None,
             1,
         )
     };
@@ -274,17 +280,20 @@ fn record_blended(
     let run = |pipeline: &wgpu::RenderPipeline, groups: &[Option<wgpu::BindGroup>]| {
         let mut encoder = gpu.device.create_command_encoder(&Default::default());
         {
-            let depth = Some(wgpu::RenderPassDepthStencilAttachment {
-                view: draw.depth_view,
-                // Read-only: the shaders read it too.
-                depth_ops: None,
-                stencil_ops: None,
+            let target = Some(wgpu::RenderPassColorAttachment {
+                view: draw.target,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Load,
+                    store: wgpu::StoreOp::Store,
+                },
             });
             let mut rp = super::passes::begin_render(
                 &mut encoder,
                 "truth blended",
-                &[],
-                depth,
+                &[target],
+                None,
                 None,
                 groups,
             );
