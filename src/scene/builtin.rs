@@ -587,13 +587,14 @@ fn glass(p: SceneParams) -> Scene {
         );
     }
 
-    let lights = seeded_lights_in(
+    let mut lights = random_lights(
         &mut rng,
         &p,
         DVec3::new(-hx + 0.5, 0.3, -hz - 4.0),
         DVec3::new(hx - 0.5, 5.0, hz),
         60.0,
     );
+    make_spots(&mut lights, &p, DVec3::NEG_Y, 0.6, (20.0, 50.0));
     let cams = camera_pair(
         &m,
         DVec3::new(0.0, 2.2, 9.0),
@@ -602,19 +603,6 @@ fn glass(p: SceneParams) -> Scene {
         p.time,
     );
     finish("glass", p, m, lights, cams)
-}
-
-/// Random lights in `lo..hi` with the scene's spot fraction pointing down.
-fn seeded_lights_in(
-    rng: &mut Pcg64Mcg,
-    p: &SceneParams,
-    lo: DVec3,
-    hi: DVec3,
-    power: f32,
-) -> Vec<Light> {
-    let mut lights = random_lights(rng, p, lo, hi, power);
-    make_spots(&mut lights, p, DVec3::NEG_Y, 0.6, (20.0, 50.0));
-    lights
 }
 
 fn plane() -> MeshBuilder {

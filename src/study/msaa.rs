@@ -46,8 +46,9 @@ pub struct MsaaRow {
     pub error: Option<String>,
 }
 
-fn variants() -> Result<Vec<LoadedVariant>, StudyError> {
-    crate::matrix::MSAA_GROUP
+/// The shipped variants `names` (`variants/NAME.ron`).
+pub(super) fn shipped(names: &[&str]) -> Result<Vec<LoadedVariant>, StudyError> {
+    names
         .iter()
         .map(|name| {
             let path = std::path::PathBuf::from(format!("variants/{name}.ron"));
@@ -67,7 +68,7 @@ pub fn run(
     frames: u32,
 ) -> Result<Vec<MsaaRow>, StudyError> {
     let counts = gpu.multisample_counts();
-    let variants = variants()?;
+    let variants = shipped(&crate::matrix::MSAA_GROUP)?;
     let mut rows = Vec::new();
     for &name in scenes {
         let defaults =

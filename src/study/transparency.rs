@@ -41,16 +41,6 @@ pub struct TransparencyRow {
     pub error: Option<String>,
 }
 
-fn variants() -> Result<Vec<LoadedVariant>, StudyError> {
-    crate::matrix::TRANSPARENCY_GROUP
-        .iter()
-        .map(|name| {
-            let path = std::path::PathBuf::from(format!("variants/{name}.ron"));
-            crate::variant::load(&path).map_err(|e| StudyError::Usage(e.to_string()))
-        })
-        .collect()
-}
-
 /// Every variant of the group on the scene (at `size`, with `lights` or its default), with
 /// its panes and without.
 pub fn run(
@@ -74,7 +64,7 @@ pub fn run(
         ..with_panes.clone()
     };
     let mut rows = Vec::new();
-    for v in &variants()? {
+    for v in &super::msaa::shipped(&crate::matrix::TRANSPARENCY_GROUP)? {
         for (panes, scene) in [(true, &with_panes), (false, &without)] {
             rows.push(measure(gpu, composer, v, scene, panes, frames));
         }
