@@ -21,6 +21,7 @@ pub mod reference;
 pub mod render;
 pub mod run;
 pub mod scene;
+pub mod sequence;
 pub mod stress;
 pub mod study;
 pub mod variant;

@@ -68,6 +68,11 @@ enum Command {
     /// Render one variant on one scene, measure it against the CPU f64 reference, and write
     /// the image and its error heat map.
     Render(RenderArgs),
+    /// Render a sequence of frames: the camera on its path (or still), a fraction of the
+    /// lights moving; every frame timed per pass, every k-th checked against its reference,
+    /// its change against the reference's, and the same frame rendered from scratch. Writes
+    /// the animation, a plot of time per pass, the per-frame table and the report.
+    Sequence(SequenceArgs),
     /// Run the variant matrix: variants x scenes x sweeps, each cell timed and measured
     /// against the reference; writes results.json, results.csv, images and index.html.
     /// With no arguments: every variant in variants/ on every scene, plus a light-count
@@ -220,12 +225,27 @@ struct MatrixArgs {
     /// An earlier results.json (or its folder): show each cell's change against it.
     #[arg(long)]
     baseline: Option<PathBuf>,
+    /// Run every cell as a sequence of N frames (1 to 3600) instead of one frame rendered
+    /// again: a fraction of the lights moving (`--moving`, or a `moving=` sweep), the
+    /// camera on its path or still; each cell's times are of the frames after the first.
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=clusterlab::sequence::MAX_FRAMES as i64))]
+    sequence: Option<u32>,
+    /// With --sequence: fraction of the lights that move, in 0..=1.
+    #[arg(long, default_value_t = 1.0, value_parser = parse_fraction, requires = "sequence")]
+    moving: f32,
+    /// With --sequence: keep the camera where it is at the first frame.
+    #[arg(long, requires = "sequence")]
+    still_camera: bool,
+    /// With --sequence: check every K-th frame (and the first and last), K >= 1.
+    #[arg(long, default_value_t = 10, value_parser = clap::value_parser!(u32).range(1..), requires = "sequence")]
+    check_every: u32,
     #[command(flatten)]
     gpu: GpuArgs,
 }
 
+/// A variant and the scene it renders, with the scene's parameters (`render`, `sequence`).
 #[derive(clap::Args)]
-struct RenderArgs {
+struct CellArgs {
     /// A variant file, or the name of one in variants/.
     #[arg(long)]
     variant: String,
@@ -244,12 +264,39 @@ struct RenderArgs {
     /// Light radius range MIN,MAX in world units (default: the scene's).
     #[arg(long, value_parser = parse_range)]
     radius: Option<(f32, f32)>,
-    /// Time of the frame in seconds, 0..=3600 (lights and camera move with it).
+    /// Time of the (first) frame in seconds, 0..=3600 (lights and camera move with it).
     #[arg(long, value_parser = parse_time)]
     time: Option<f64>,
     /// Fraction of the lights that are spots, in 0..=1 (default: the scene's).
     #[arg(long, value_parser = parse_fraction)]
     spots: Option<f32>,
+}
+
+impl CellArgs {
+    /// The variant, loaded.
+    fn variant(&self) -> Result<variant::LoadedVariant, String> {
+        variant::load(&variant::resolve(&self.variant)).map_err(|e| e.to_string())
+    }
+
+    /// The scene's defaults with what was given.
+    fn params(&self) -> Result<clusterlab::scene::SceneParams, String> {
+        let mut params = clusterlab::scene::defaults(&self.scene).map_err(|e| e.to_string())?;
+        if let Some((w, h)) = self.size {
+            (params.width, params.height) = (w, h);
+        }
+        params.lights = self.lights.unwrap_or(params.lights);
+        params.seed = self.seed.unwrap_or(params.seed);
+        params.radius_range = self.radius.unwrap_or(params.radius_range);
+        params.time = self.time.unwrap_or(params.time);
+        params.spots = self.spots.unwrap_or(params.spots);
+        Ok(params)
+    }
+}
+
+#[derive(clap::Args)]
+struct RenderArgs {
+    #[command(flatten)]
+    cell: CellArgs,
     /// Frames to render (at least 1); times are the median per pass.
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..))]
     frames: u32,
@@ -269,6 +316,33 @@ struct RenderArgs {
     #[command(flatten)]
     gpu: GpuArgs,
     /// Print one JSON object instead of a summary.
+    #[arg(long)]
+    json: bool,
+}
+
+#[derive(clap::Args)]
+struct SequenceArgs {
+    #[command(flatten)]
+    cell: CellArgs,
+    /// Frames, 1 to 3600, one frame step (1/30 s) apart.
+    #[arg(long, default_value_t = 30, value_parser = clap::value_parser!(u32).range(1..=clusterlab::sequence::MAX_FRAMES as i64))]
+    frames: u32,
+    /// Fraction of the lights that move, in 0..=1 (the rest stand where they were at the
+    /// first frame).
+    #[arg(long, default_value_t = 1.0, value_parser = parse_fraction)]
+    moving: f32,
+    /// Keep the camera where it is at the first frame.
+    #[arg(long)]
+    still_camera: bool,
+    /// Check every K-th frame (and the first and last) against its reference, K >= 1.
+    #[arg(long, default_value_t = 10, value_parser = clap::value_parser!(u32).range(1..))]
+    check_every: u32,
+    /// Folder for the animation, plot, table, report and the last frame's image.
+    #[arg(long, default_value = "out")]
+    out: PathBuf,
+    #[command(flatten)]
+    gpu: GpuArgs,
+    /// Print the report as JSON instead of the table.
     #[arg(long)]
     json: bool,
 }
@@ -426,6 +500,7 @@ fn main() -> ExitCode {
         }
         Command::Adapters { json, backend } => adapters(json, backend.as_deref()),
         Command::Render(args) => render(&args),
+        Command::Sequence(args) => sequence(&args),
         Command::Matrix(args) => matrix(&args),
         Command::Merge {
             dirs,
@@ -633,7 +708,7 @@ fn adapters(json: bool, backend: Option<&str>) -> Result<bool, String> {
 }
 
 fn render(args: &RenderArgs) -> Result<bool, String> {
-    let mut loaded = variant::load(&variant::resolve(&args.variant)).map_err(|e| e.to_string())?;
+    let mut loaded = args.cell.variant()?;
     if let Some(view) = args.debug_view {
         loaded.variant.debug_view = view;
         let problems = variant::check(&loaded.variant);
@@ -642,22 +717,15 @@ fn render(args: &RenderArgs) -> Result<bool, String> {
         }
         loaded.name = format!("{}+{}", loaded.name, view.name());
     }
-    let mut params = clusterlab::scene::defaults(&args.scene).map_err(|e| e.to_string())?;
-    if let Some((w, h)) = args.size {
-        (params.width, params.height) = (w, h);
-    }
-    params.lights = args.lights.unwrap_or(params.lights);
-    params.seed = args.seed.unwrap_or(params.seed);
-    params.radius_range = args.radius.unwrap_or(params.radius_range);
-    params.time = args.time.unwrap_or(params.time);
-    params.spots = args.spots.unwrap_or(params.spots);
+    let params = args.cell.params()?;
+    let scene = &args.cell.scene;
     let gpu = args.gpu.open()?;
     gpu.begin_cell();
     let cell = clusterlab::run::run_cell(
         &gpu,
         &Composer::default(),
         &loaded,
-        &args.scene,
+        scene,
         params,
         clusterlab::run::CellOptions {
             frames: Frames::exact(args.warmup, args.frames),
@@ -667,7 +735,7 @@ fn render(args: &RenderArgs) -> Result<bool, String> {
             debug_view: None,
         },
     )
-    .map_err(|e| format!("variant `{}` on scene `{}`: {e}", loaded.name, args.scene))?;
+    .map_err(|e| format!("variant `{}` on scene `{scene}`: {e}", loaded.name))?;
     let r = &cell.report;
     if args.json {
         println!(
@@ -707,9 +775,76 @@ fn render(args: &RenderArgs) -> Result<bool, String> {
     }
     if let Some(why) = &r.failure {
         eprintln!(
-            "FAILED: variant `{}` on scene `{}`: {why}",
-            loaded.name, args.scene
+            "FAILED: variant `{}` on scene `{scene}`: {why}",
+            loaded.name
         );
+        return Ok(false);
+    }
+    Ok(true)
+}
+
+fn sequence(args: &SequenceArgs) -> Result<bool, String> {
+    let loaded = args.cell.variant()?;
+    let mut params = args.cell.params()?;
+    params.motion = clusterlab::scene::Motion {
+        lights: args.moving,
+        camera: !args.still_camera,
+        still_at: params.time,
+    };
+    let spec = clusterlab::sequence::SequenceSpec {
+        frames: args.frames,
+        check_every: args.check_every,
+    };
+    let gpu = args.gpu.open()?;
+    gpu.begin_cell();
+    let scene = &args.cell.scene;
+    let frames = clusterlab::sequence::scene_frames(scene, params);
+    let what = format!("variant `{}` on scene `{scene}`", loaded.name);
+    let run = clusterlab::sequence::run(
+        &gpu,
+        &Composer::default(),
+        &loaded,
+        spec,
+        &frames,
+        &Default::default(),
+    )
+    .map_err(|e| format!("{what}: {e}"))?;
+    let stem = clusterlab::run::safe_file_name(&format!("{}@{}", loaded.name, run.report.scene));
+    let written = clusterlab::sequence::output::write(&args.out, &stem, &run)
+        .map_err(|e| format!("{what}: {e}"))?;
+    let r = &run.report;
+    if args.json {
+        println!(
+            "{}",
+            serde_json::to_string_pretty(r).map_err(|e| e.to_string())?
+        );
+    } else {
+        println!(
+            "{} on {} ({}x{}, {} lights, {:.0}% moving, camera {}) with {} ({}, {}); lists: {}; timing: {}",
+            r.variant,
+            r.scene,
+            r.size[0],
+            r.size[1],
+            r.lights,
+            r.summary.moving * 100.0,
+            if r.summary.camera_moves {
+                "moving"
+            } else {
+                "still"
+            },
+            r.adapter.name,
+            r.adapter.backend,
+            r.adapter.driver,
+            r.update.as_deref().unwrap_or("-"),
+            r.timing_source
+        );
+        print!("{}", clusterlab::sequence::output::table(r));
+        for path in &written {
+            println!("  wrote {}", path.display());
+        }
+    }
+    if let Some(why) = &r.failure {
+        eprintln!("FAILED: {what}: {why}");
         return Ok(false);
     }
     Ok(true)
@@ -738,13 +873,24 @@ fn matrix(args: &MatrixArgs) -> Result<bool, String> {
             scenes,
             sweeps: args.sweep.clone(),
             size: None,
+            sequence: None,
         }]
     } else {
         matrix::default_groups()?
     };
-    if let Some(size) = args.size {
-        for g in &mut groups {
+    for g in &mut groups {
+        if let Some(size) = args.size {
             g.size = Some(size);
+        }
+        if let Some(frames) = args.sequence {
+            g.sequence = Some(matrix::GroupSequence {
+                spec: clusterlab::sequence::SequenceSpec {
+                    frames,
+                    check_every: args.check_every,
+                },
+                moving: args.moving,
+                still_camera: args.still_camera,
+            });
         }
     }
     let baseline = args

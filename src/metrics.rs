@@ -98,3 +98,45 @@ pub fn heat_map(frame: &FrameOutput, reference: &ReferenceFrame) -> Vec<u8> {
     let map = nv_flip::FlipImageFloat::with_data(frame.width, frame.height, &values);
     map.apply_color_lut(&nv_flip::magma_lut()).to_vec()
 }
+
+/// How far a frame-to-frame change is from the reference's change between the same two
+/// frames, in displayed 8-bit code values: popping and flicker that the still frames'
+/// errors do not show. An exact variant, within 1 LSB of each reference, is within 2 here.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct TemporalError {
+    /// Largest per-channel difference of the two changes.
+    pub max_abs_8bit: u32,
+    /// Root mean square per-channel difference of the two changes.
+    pub rmse_8bit: f64,
+    /// Pixels whose change differs from the reference's by more than 2 LSB in some channel.
+    pub pixels_over_2lsb: u64,
+}
+
+/// The change from `before` to `frame` against the reference's, `reference_before` to
+/// `reference` (all the same size).
+pub fn temporal(
+    before: &FrameOutput,
+    frame: &FrameOutput,
+    reference_before: &ReferenceFrame,
+    reference: &ReferenceFrame,
+) -> TemporalError {
+    let n = frame.ldr.len().min(before.ldr.len());
+    let (mut max, mut sq, mut over) = (0u32, 0f64, 0u64);
+    for i in 0..n {
+        let mut pixel_max = 0;
+        for c in 0..3 {
+            let gpu = frame.ldr[i][c] as i32 - before.ldr[i][c] as i32;
+            let truth = reference.ldr[i][c] as i32 - reference_before.ldr[i][c] as i32;
+            let d = (gpu - truth).unsigned_abs();
+            pixel_max = pixel_max.max(d);
+            sq += (d * d) as f64;
+        }
+        max = max.max(pixel_max);
+        over += u64::from(pixel_max > 2);
+    }
+    TemporalError {
+        max_abs_8bit: max,
+        rmse_8bit: (sq / (3 * n.max(1)) as f64).sqrt(),
+        pixels_over_2lsb: over,
+    }
+}

@@ -2,6 +2,7 @@
 //! into a string, one palette, one legend style, and a numbered key for scatter plots whose
 //! points are too many to label in place.
 
+use plotters::coord::ranged1d::Ranged;
 use plotters::coord::{CoordTranslate, Shift};
 use plotters::prelude::*;
 
@@ -79,6 +80,30 @@ pub fn legend<'a, CT: CoordTranslate>(
         .label_font((FONT, 12))
         .draw()
         .ok()
+}
+
+/// Series `label` in `color`: a line through `points`, a dot at each, and its legend entry.
+pub fn line_with_points<'a, X, Y>(
+    chart: &mut ChartContext<'a, SVGBackend<'a>, Cartesian2d<X, Y>>,
+    points: Vec<(f64, f64)>,
+    color: RGBColor,
+    label: &str,
+) -> Option<()>
+where
+    X: Ranged<ValueType = f64>,
+    Y: Ranged<ValueType = f64>,
+{
+    let dots: Vec<Circle<(f64, f64), i32>> = points
+        .iter()
+        .map(|&p| Circle::new(p, 3, color.filled()))
+        .collect();
+    chart
+        .draw_series(LineSeries::new(points, color.stroke_width(2)))
+        .ok()?
+        .label(label)
+        .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 16, y)], color.stroke_width(2)));
+    chart.draw_series(dots).ok()?;
+    Some(())
 }
 
 /// A key beside a scatter plot whose points carry numbers instead of names: one line per

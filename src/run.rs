@@ -370,7 +370,7 @@ pub fn safe_file_name(text: &str) -> String {
         .collect()
 }
 
-fn round3(x: f64) -> f64 {
+pub fn round3(x: f64) -> f64 {
     (x * 1000.0).round() / 1000.0
 }
 

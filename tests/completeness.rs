@@ -264,3 +264,35 @@ fn every_culling_has_a_shipped_variant_a_study_row_and_a_stress_run() {
     }
     assert!(missing.is_empty(), "{}", missing.join("\n"));
 }
+
+/// Every list strategy has a shipped variant (which the default matrix's sequence group
+/// runs), a row in `study temporal` and stress runs on the motion cases.
+#[test]
+fn every_list_strategy_has_a_shipped_variant_a_study_row_and_a_stress_run() {
+    use clusterlab::variant::ListUpdate;
+    let shipped = shipped();
+    let update_of = |v: &variant::Variant| v.pipeline.is_clustered().then(|| v.clusters().update);
+    let study: Vec<Option<ListUpdate>> = clusterlab::study::temporal::VARIANTS
+        .iter()
+        .map(|(name, _)| update_of(&common::load(name).variant))
+        .collect();
+    let cases = stress::cases();
+    let mut missing = Vec::new();
+    for update in ListUpdate::iter() {
+        if !shipped
+            .iter()
+            .any(|v| update_of(&v.variant) == Some(update))
+        {
+            missing.push(format!("{update:?}: no shipped variant"));
+        }
+        if !study.contains(&Some(update)) {
+            missing.push(format!("{update:?}: no row in `study temporal`"));
+        }
+        if !cases.iter().any(|c| {
+            !c.later.is_empty() && c.variants.iter().any(|(_, v)| update_of(v) == Some(update))
+        }) {
+            missing.push(format!("{update:?}: no stress run on a motion case"));
+        }
+    }
+    assert!(missing.is_empty(), "{}", missing.join("\n"));
+}

@@ -218,7 +218,7 @@ fn every_pass_composes_for_scenes_with_textures() {
                 let samples = composed.wgsl.contains("textureSample(");
                 assert_eq!(
                     samples,
-                    ["forward", "gbuffer"].contains(&pass.name()),
+                    ["forward", "gbuffer", "still_shading"].contains(&pass.name()),
                     "{} {}",
                     v.name,
                     pass.name()

@@ -32,6 +32,7 @@ fn a_cell_that_breaks_the_device_fails_alone_and_later_cells_get_a_new_one() {
         scenes: vec!["one_light".into()],
         sweeps: vec![Sweep::Lights(vec![1, 3])],
         size: Some((48, 27)),
+        sequence: None,
     }];
     let cells = matrix::expand(&groups).expect("cells");
     assert_eq!(cells.len(), 4);

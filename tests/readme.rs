@@ -5,8 +5,8 @@ use std::path::Path;
 
 use clusterlab::common::{NormalCodec, SpotTest, ZSlicing};
 use clusterlab::variant::{
-    self, Assignment, BloomKernel, Culling, DebugView, GBufferLayout, LightLists, ShadingModel,
-    ToonMode, Variant,
+    self, Assignment, BloomKernel, Culling, DebugView, GBufferLayout, LightLists, ListUpdate,
+    ShadingModel, ToonMode, Variant,
 };
 
 fn slicing(s: ZSlicing) -> &'static str {
@@ -45,6 +45,9 @@ fn culling(v: &Variant) -> String {
     }
     if let LightLists::Capped { max_per_cluster } = c.lists {
         label += &format!(" +cap {max_per_cluster}");
+    }
+    if c.update != ListUpdate::Rebuild {
+        label += &format!(" +{}", c.update.label());
     }
     label
 }

@@ -483,3 +483,43 @@ fn the_msaa_study_runs_every_pipeline_at_every_sample_count_exactly() {
     );
     assert!(notes.contains("GPU Pro 4"), "{notes}");
 }
+
+/// The temporal study runs every strategy at every moving fraction with the camera still
+/// and moving, exactly, and its figures are what its sequences did: no frame after the first
+/// runs a pass where nothing moves and the camera is still, and every other one does.
+#[test]
+fn the_temporal_study_runs_every_strategy_at_every_fraction_exactly() {
+    use clusterlab::study::temporal;
+    let gpu = common::gpu();
+    let rows = temporal::run(&gpu, &Composer::default(), (64, 36), &[64], 1).expect("study");
+    assert_eq!(
+        rows.len(),
+        temporal::VARIANTS.len() * temporal::MOVING.len() * 2
+    );
+    assert!(temporal::all_exact(&rows), "{rows:#?}");
+    // Whether any of the 64 lights moves at a fraction (1% of 64 may be none).
+    let movers = |moving: f32| {
+        let mut p = clusterlab::scene::defaults(temporal::SCENE).unwrap();
+        (p.width, p.height, p.lights) = (64, 36, 64);
+        p.motion.lights = moving;
+        let scene = clusterlab::scene::generate(temporal::SCENE, p).unwrap();
+        !scene.moving_lights.is_empty()
+    };
+    assert!(!movers(0.0) && movers(0.5));
+    for r in &rows {
+        let idle = !movers(r.moving) && !r.camera_moves;
+        assert_eq!(r.frames_reused, u32::from(idle), "{r:#?}");
+        assert_eq!(r.frame_ms == 0.0, idle, "{r:#?}");
+        // A rebuilding variant is its own measure.
+        let rebuilds = temporal::VARIANTS
+            .iter()
+            .any(|(v, b)| v == b && *v == r.variant);
+        if rebuilds && !idle {
+            assert_eq!(r.vs_rebuild, Some(1.0), "{}", r.variant);
+        }
+    }
+    let table = temporal::table(&rows);
+    assert_eq!(table.rows.len(), rows.len());
+    assert!(table.notes.iter().any(|n| n.contains("Moreau")));
+    assert!(temporal::plot(&rows).is_some());
+}

@@ -98,6 +98,7 @@ pub fn feature_flags(v: &Variant) -> Vec<(&'static str, bool)> {
     let deferred = p.is_deferred();
     let toon = v.post.toon.as_ref();
     let slicing = clusters.slicing;
+    let static_dynamic = p.is_clustered() && clusters.update == ListUpdate::StaticDynamic;
     let mut flags = vec![
         (
             "blinn_phong",
@@ -133,6 +134,13 @@ pub fn feature_flags(v: &Variant) -> Vec<(&'static str, bool)> {
             matches!(clusters.lists, LightLists::Capped { .. }),
         ),
         ("active_clusters", clusters.active_clusters),
+        // StaticDynamic: the still and moving lights' lists, the still lists leaving the
+        // moving lights out (off in the moving lists' pass, `passes::pass_flags`), and the
+        // still image where the variant keeps one (written only by its own passes).
+        ("static_dynamic", static_dynamic),
+        ("still_lists", static_dynamic),
+        ("still_cache", super::passes::keeps_still_image(v)),
+        ("still_pass", false),
         ("sample_bounds", clusters.sample_bounds),
         ("depth_mask", clusters.culling.marks_depth_cells()),
         ("gbuffer_wide", deferred && layout == GBufferLayout::Wide),

@@ -16,8 +16,8 @@ pub use features::{
     constants_module, feature_flags, features_with, frame_features,
 };
 pub use passes::{
-    ClusterPass, FramePlan, Pass, PassId, PassKind, PostPass, RasterPass, ScreenPass, passes,
-    passes_for, plan, reads_visible_depths,
+    ClusterPass, FramePlan, Pass, PassId, PassKind, PostPass, RasterPass, ScreenPass,
+    keeps_still_image, pass_flags, passes, passes_for, plan, reads_visible_depths,
 };
 pub use resolver::ShaderResolver;
 
@@ -159,7 +159,12 @@ impl Composer {
         pass: &Pass,
         overrides: &[(&str, bool)],
     ) -> Result<ComposedPass, ShaderError> {
-        let features = features_with(variant, overrides);
+        let mut features = features_with(variant, overrides);
+        for &(flag, on) in passes::pass_flags(pass.id) {
+            if let Some(f) = features.iter_mut().find(|(name, _)| *name == flag) {
+                f.1 = on;
+            }
+        }
         self.compose_root(
             pass.name(),
             pass.root,

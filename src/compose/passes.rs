@@ -25,6 +25,9 @@ pub enum RasterPass {
     /// Scenes with blended materials: the blended triangles shaded forward (with the
     /// clusters, in clustered pipelines) and drawn over the opaque frame, back to front.
     Transparent,
+    /// StaticDynamic forward after a pre-pass: each pixel's still lights and ambient, into
+    /// the still image the forward pass adds the moving lights to.
+    StillShading,
 }
 
 /// Passes that draw over the screen without the scene's geometry.
@@ -32,6 +35,9 @@ pub enum RasterPass {
 #[strum(serialize_all = "snake_case")]
 pub enum ScreenPass {
     Resolve,
+    /// StaticDynamic deferred: each pixel's still lights and ambient, into the still image
+    /// the resolve adds the moving lights to.
+    StillResolve,
     /// The forward passes' multisampled colour resolved to one sample a pixel.
     SampleResolve,
     ScissorLights,
@@ -47,6 +53,10 @@ pub enum ClusterPass {
     MarkActive,
     ClusterBounds,
     LightAssign,
+    /// StaticDynamic: the moving lights' lists (one-level assignment over them alone).
+    MovingAssign,
+    /// Patch: the previous frame's lists, with the lights that moved since moved in them.
+    ListPatch,
 }
 
 /// Compute passes of the post-processing chain.
@@ -187,6 +197,28 @@ pub fn reads_visible_depths(v: &Variant) -> bool {
         && (clusters.active_clusters || matches!(clusters.slicing, ZSlicing::DynamicRange { .. }))
 }
 
+/// Whether `v` shades its still lights into an image that its frames reuse (StaticDynamic,
+/// where a frame shades each pixel once: one sample, and a pre-pass in forward).
+pub fn keeps_still_image(v: &Variant) -> bool {
+    v.pipeline.is_clustered()
+        && v.clusters().update == ListUpdate::StaticDynamic
+        && !v.msaa.on()
+        && (v.pipeline.is_deferred() || v.depth_prepass)
+}
+
+/// The flags pass `id` sets over its variant's: StaticDynamic's moving lists take every
+/// light they are given (`still_lists` leaves the moving ones out of the still lists), and
+/// the still image's passes write it (`still_pass`) rather than read it.
+pub fn pass_flags(id: PassId) -> &'static [(&'static str, bool)] {
+    match id {
+        PassId::Clustering(ClusterPass::MovingAssign) => &[("still_lists", false)],
+        PassId::Raster(RasterPass::StillShading) | PassId::Screen(ScreenPass::StillResolve) => {
+            &[("still_pass", true)]
+        }
+        _ => &[],
+    }
+}
+
 /// The passes of a variant's frame, in the order they run, on a scene with blended materials
 /// (`blend`) or without.
 pub fn passes_for(v: &Variant, blend: bool) -> Vec<Pass> {
@@ -228,6 +260,23 @@ pub fn passes_for(v: &Variant, blend: bool) -> Vec<Pass> {
                 out.push(clustering(ClusterPass::LightAssign, assign));
             }
         }
+        match clusters.update {
+            ListUpdate::StaticDynamic => out.push(clustering(
+                ClusterPass::MovingAssign,
+                "passes::assign_moving",
+            )),
+            ListUpdate::Patch => {
+                out.push(clustering(ClusterPass::ListPatch, "passes::patch_lists"))
+            }
+            ListUpdate::Rebuild | ListUpdate::Refit => {}
+        }
+    }
+    if keeps_still_image(v) {
+        out.push(if v.pipeline.is_deferred() {
+            screen(ScreenPass::StillResolve, "passes::resolve")
+        } else {
+            raster(RasterPass::StillShading, "passes::forward")
+        });
     }
     out.push(match v.pipeline {
         Pipeline::NaiveForward | Pipeline::ClusteredForward => {

@@ -502,6 +502,36 @@ impl ClusterLists {
         let first = self.offsets[c] as usize;
         &self.indices[first..first + self.counts[c] as usize]
     }
+
+    /// These lists and `other`'s (of the same grid) as one, each cluster's lights of both in
+    /// ascending order (StaticDynamic's still and moving lists). A list reaching past what
+    /// was read back (an overflowing frame) adds nothing.
+    pub fn merged(&self, other: &ClusterLists) -> ClusterLists {
+        let part = |lists: &'_ ClusterLists, c: usize| -> Vec<u32> {
+            let first = lists.offsets[c] as usize;
+            let end = first + lists.counts[c] as usize;
+            lists.indices.get(first..end).unwrap_or_default().to_vec()
+        };
+        let mut out = ClusterLists {
+            dropped: self.dropped + other.dropped,
+            ..Default::default()
+        };
+        for c in 0..self.counts.len() {
+            let mut list = part(self, c);
+            list.extend(part(other, c));
+            list.sort_unstable();
+            out.push(list);
+        }
+        out
+    }
+
+    /// Add the next cluster's list.
+    pub fn push(&mut self, list: Vec<u32>) {
+        self.offsets.push(self.indices.len() as u32);
+        self.counts.push(list.len() as u32);
+        self.max_per_cluster = self.max_per_cluster.max(list.len() as u32);
+        self.indices.extend(list);
+    }
 }
 
 /// Assign lights to clusters: each list holds, in ascending index order, the lights that

@@ -131,10 +131,7 @@ impl ZBins {
                 for x in 0..tx {
                     let mut list = self.walk(x, y, k);
                     list.sort_unstable();
-                    out.offsets.push(out.indices.len() as u32);
-                    out.counts.push(list.len() as u32);
-                    out.max_per_cluster = out.max_per_cluster.max(list.len() as u32);
-                    out.indices.extend(list);
+                    out.push(list);
                 }
             }
         }

@@ -77,7 +77,8 @@ enum Owner {
 }
 
 /// What `dir` is, judged by its contents: a result folder holds the marker or results.json,
-/// and nothing but what a run writes (the report files, images/*.png, plots/*.svg).
+/// and nothing but what a run writes (the report files, images/*.png and a sequence's
+/// images/*.gif, plots/*.svg).
 fn owner(dir: &Path) -> Result<Owner, String> {
     let unreadable =
         |e: std::io::Error| format!("{}: cannot read folder: {}", shown(dir), describe(&e));
@@ -99,12 +100,16 @@ fn owner(dir: &Path) -> Result<Owner, String> {
                 results |= name == "results.json";
             }
             "images" | "plots" if kind.is_dir() => {
-                let ext = if name == "images" { ".png" } else { ".svg" };
+                let exts: &[&str] = if name == "images" {
+                    &[".png", ".gif"]
+                } else {
+                    &[".svg"]
+                };
                 for inner in std::fs::read_dir(entry.path()).map_err(unreadable)? {
                     let inner = inner.map_err(unreadable)?;
                     let inner_name = inner.file_name().to_string_lossy().into_owned();
                     if !inner.file_type().map_err(unreadable)?.is_file()
-                        || !inner_name.ends_with(ext)
+                        || !exts.iter().any(|e| inner_name.ends_with(e))
                     {
                         return foreign(format!(
                             "it holds `{name}/{inner_name}`, which no run writes"

@@ -35,6 +35,9 @@ figcaption { font-size: 13px; color: #555; max-width: 880px; }
 .card img { width: 320px; display: block; margin-bottom: 4px; image-rendering: pixelated; }
 .card .row { display: flex; gap: 4px; }
 .card .row img { width: 158px; }
+.seq { width: 640px; }
+.seq img.anim { width: 320px; }
+.seq img.plot { width: 630px; border: 1px solid #ddd; }
 .failure { color: #900; white-space: pre-wrap; font-family: monospace; font-size: 12px; }
 ";
 
@@ -70,6 +73,7 @@ pub fn page(results: &Results, plots: &[Plot]) -> String {
         let _ = write!(h, "</div>");
     }
     summary(&mut h, results);
+    sequences(&mut h, results);
     images(&mut h, results);
     provenance(&mut h, results);
     let _ = writeln!(h, "</body></html>");
@@ -268,6 +272,90 @@ fn images(h: &mut String, results: &Results) {
                 e.map_or("–".into(), |e| e
                     .psnr_db
                     .map_or("∞".into(), |p| format!("{p:.1} dB"))),
+            );
+        }
+        let _ = write!(h, "</div>");
+    }
+}
+
+/// The sequence cells: per group, how each variant's frames went (the first, the later
+/// ones against the same variant rebuilding its lists, what was reused, the checks), then
+/// each one's animation and time per pass over its frames.
+fn sequences(h: &mut String, results: &Results) {
+    let groups: Vec<(String, Vec<&CellRecord>)> = grouped(results)
+        .into_iter()
+        .filter(|(_, cells)| cells.iter().any(|c| c.sequence_summary.is_some()))
+        .collect();
+    if groups.is_empty() {
+        return;
+    }
+    let _ = write!(
+        h,
+        "<h2>Sequences</h2><p>Each cell is a sequence of frames a frame step apart, drawn by one \
+         renderer that reuses what did not change. Frame times are medians of the frames \
+         after the first; <i>vs rebuild</i> is that over the same variant's when it rebuilds \
+         its lists; <i>reused</i> counts frames that ran no pass. Checked frames are compared \
+         with their reference (max LSB), their change from the frame before with the \
+         reference's (change LSB), and with the same frame rendered from scratch \
+         (<i>exact</i>: within 1 LSB and equal bit for bit).</p>"
+    );
+    let ms = |c: &CellRecord| c.total_ms().unwrap_or(f64::NAN);
+    for (group, cells) in groups {
+        let _ = write!(
+            h,
+            "<h3>{}</h3><table><tr><th class=\"name\">variant</th><th>first frame ms</th>\
+             <th>frame ms</th><th>[min, max]</th><th>vs rebuild</th><th>reused</th>\
+             <th>checked</th><th>max LSB</th><th>change LSB</th><th>exact</th>\
+             <th>patch rebuilds</th></tr>",
+            esc(&group)
+        );
+        for c in &cells {
+            let Some(s) = &c.sequence_summary else {
+                continue;
+            };
+            let rebuild = c
+                .spec
+                .rebuild_cell
+                .as_ref()
+                .and_then(|id| results.cells.iter().find(|o| &o.spec.id == id))
+                .map_or("-".into(), |o| format!("{:.2}", ms(c) / ms(o)));
+            let class = if c.failure.is_some() {
+                " class=\"failed\""
+            } else {
+                ""
+            };
+            let _ = write!(
+                h,
+                "<tr{class}><td class=\"name\">{}</td><td>{:.2}</td><td>{:.2}</td>\
+                 <td>[{:.2}, {:.2}]</td><td>{rebuild}</td><td>{}</td><td>{}</td><td>{}</td>\
+                 <td>{}</td><td>{}</td><td>{}</td></tr>",
+                esc(&label(c)),
+                s.first_ms,
+                s.frame_ms,
+                s.frame_ms_spread[0],
+                s.frame_ms_spread[1],
+                s.frames_reused,
+                s.checked_frames,
+                s.max_abs_8bit,
+                s.max_temporal_8bit,
+                if s.exact { "yes" } else { "no" },
+                s.patch_rebuilds
+            );
+        }
+        let _ = write!(h, "</table><div class=\"cards\">");
+        for c in &cells {
+            let i = &c.images;
+            let img = |p: &Option<String>, class: &str, alt: &str| {
+                p.as_ref().map_or(String::new(), |p| {
+                    format!("<img class=\"{class}\" src=\"{}\" alt=\"{alt}\">", esc(p))
+                })
+            };
+            let _ = write!(
+                h,
+                "<div class=\"card seq\">{}{}<br><b>{}</b></div>",
+                img(&i.animation, "anim", "animation"),
+                img(&i.frames_plot, "plot", "time per pass over the frames"),
+                esc(&label(c))
             );
         }
         let _ = write!(h, "</div>");

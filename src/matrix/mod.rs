@@ -13,8 +13,9 @@ mod validate;
 pub use baseline::{RunComparison, compare_runs};
 pub use columns::{COLUMNS, Cell, Column, Measured, Shown, count};
 pub use plan::{
-    CellSpec, Group, MSAA_GROUP, ParamsRecord, PlannedCell, Sweep, TRANSPARENCY_GROUP,
-    VariantEntry, default_groups, expand, find_variants, parse_shard, parse_sweep, shard,
+    CellSpec, Group, GroupSequence, MSAA_GROUP, ParamsRecord, PlannedCell, SEQUENCE_REBUILDS,
+    Sweep, TRANSPARENCY_GROUP, VariantEntry, default_groups, expand, find_variants, parse_shard,
+    parse_sweep, shard,
 };
 pub use report::{table, write_report};
 
@@ -34,6 +35,7 @@ use crate::reference::ReferenceCache;
 use crate::render::FrameStats;
 use crate::run::{CellCost, CellOptions, run_cell, write_images, write_png};
 use crate::scene::SCENES;
+use crate::sequence::SequenceSummary;
 use crate::variant::DebugView;
 
 /// Everything a matrix run wrote about one cell.
@@ -74,6 +76,10 @@ pub struct CellRecord {
     /// Where the cell's wall-clock time went (absent for a failed cell).
     #[serde(default)]
     pub cost_ms: Option<CellCost>,
+    /// A sequence cell's figures (its times are of the frames after the first, its error
+    /// the worst checked frame's, its counters and images the last frame's).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sequence_summary: Option<SequenceSummary>,
 }
 
 #[derive(Clone, Debug, Default, Serialize, Deserialize)]
@@ -82,6 +88,12 @@ pub struct Images {
     pub heat: Option<String>,
     /// Lights per cluster (clustered variants, cells without sweeps).
     pub debug: Option<String>,
+    /// A sequence's animation (`images/NAME.gif`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub animation: Option<String>,
+    /// A sequence's time per pass over its frames (`plots/NAME.frames.svg`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub frames_plot: Option<String>,
 }
 
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -122,6 +134,7 @@ impl CellRecord {
             warmup_frames: 0,
             frame_without_lights: false,
             cost_ms: None,
+            sequence_summary: None,
         }
     }
 }
@@ -431,6 +444,17 @@ fn run_one(
         Ok(v) => v,
         Err(why) => return CellRecord::failed(spec, why.clone()),
     };
+    if let Some(spec) = spec.sequence {
+        return run_sequence(
+            gpu,
+            composer,
+            loaded,
+            spec,
+            cell.spec.clone(),
+            options,
+            references,
+        );
+    }
     let v = &loaded.variant;
     // The lights-per-cluster view shows where a clustered variant spends its time.
     let debug_view =
@@ -499,6 +523,109 @@ fn run_one(
         warmup_frames: r.frame_count.warmup,
         frame_without_lights: r.frame_count.frame_without_lights,
         cost_ms: Some(r.cost_ms),
+        sequence_summary: None,
+    }
+}
+
+/// A sequence cell: its frames, checks and outputs (the animation in `images/`, the plot of
+/// its frames in `plots/`).
+fn run_sequence(
+    gpu: &Gpu,
+    composer: &Composer,
+    loaded: &crate::variant::LoadedVariant,
+    sequence: crate::sequence::SequenceSpec,
+    spec: CellSpec,
+    options: &MatrixOptions,
+    references: &ReferenceCache,
+) -> CellRecord {
+    let scene = spec.scene.clone();
+    let frames = crate::sequence::scene_frames(&scene, spec.params.into());
+    let run = match crate::sequence::run(gpu, composer, loaded, sequence, &frames, references) {
+        Ok(run) => run,
+        Err(e) => return CellRecord::failed(spec, e.to_string()),
+    };
+    let images_started = std::time::Instant::now();
+    let stem = spec.file_stem();
+    let out = |folder: &str, name: String| options.out.join(folder).join(name);
+    let mut files = Images::default();
+    let written = (|| -> Result<(), String> {
+        let paths = write_images(
+            &options.out.join("images"),
+            &stem,
+            &run.last,
+            &run.last_reference,
+        )
+        .map_err(|e| e.to_string())?;
+        let relative = |p: &Path| {
+            p.strip_prefix(&options.out)
+                .unwrap_or(p)
+                .to_string_lossy()
+                .into_owned()
+        };
+        files.image = paths.first().map(|p| relative(p));
+        files.heat = paths.get(1).map(|p| relative(p));
+        let gif = crate::sequence::output::gif(&run.animation, run.report.frame_step_s)?;
+        crate::files::write_file(&out("images", format!("{stem}.gif")), &gif)?;
+        files.animation = Some(format!("images/{stem}.gif"));
+        let plot_name = format!("{stem}.frames.svg");
+        if let Some(p) = crate::sequence::output::frame_plot(&run.report, &plot_name) {
+            crate::files::write::create_folder(&options.out.join("plots"))?;
+            crate::files::write_file(&out("plots", plot_name.clone()), p.svg.as_bytes())?;
+            files.frames_plot = Some(format!("plots/{plot_name}"));
+        }
+        Ok(())
+    })();
+    if let Err(why) = written {
+        return CellRecord::failed(spec, why);
+    }
+    let r = run.report;
+    let m = &r.summary;
+    let mut gpu_ms = m.pass_ms.clone();
+    gpu_ms.insert("total".into(), m.frame_ms.into());
+    let mut gpu_ms_spread = Map::new();
+    gpu_ms_spread.insert("total".into(), m.frame_ms_spread.to_vec().into());
+    // The worst checked frame's error stands for the sequence.
+    let error = r
+        .frames
+        .iter()
+        .filter_map(|f| f.check.as_ref())
+        .map(|c| c.error.clone())
+        .max_by(|a, b| {
+            (a.max_abs_8bit, a.rmse_8bit)
+                .partial_cmp(&(b.max_abs_8bit, b.rmse_8bit))
+                .unwrap_or(std::cmp::Ordering::Equal)
+        });
+    let frames = r.frames.len() as u32;
+    CellRecord {
+        spec,
+        failure: r.failure,
+        gpu_ms,
+        gpu_ms_spread,
+        timing_source: Some(r.timing_source.to_string()),
+        frames,
+        wall_ms: None,
+        reference_ms: None,
+        error,
+        stats: r.stats,
+        images: files,
+        speedup_vs_naive: None,
+        pareto: false,
+        vs_baseline: None,
+        skipped_passes: r
+            .frames
+            .last()
+            .map(|f| f.skipped.clone())
+            .unwrap_or_default(),
+        warmup_frames: 0,
+        frame_without_lights: true,
+        cost_ms: Some(CellCost {
+            setup: 0.0,
+            frames: run.frames_ms,
+            counters: 0.0,
+            reference: run.checks_ms,
+            images: images_started.elapsed().as_secs_f64() * 1e3,
+        }),
+        sequence_summary: Some(r.summary),
     }
 }
 
@@ -598,10 +725,12 @@ pub fn merge(
         cells: Vec::new(),
     };
     crate::files::write::create_folder(&out.join("images"))?;
+    crate::files::write::create_folder(&out.join("plots"))?;
     for (dir, r) in loaded {
         merged.provenance.extend(r.provenance);
         for cell in r.cells {
-            for file in [&cell.images.image, &cell.images.heat, &cell.images.debug]
+            let i = &cell.images;
+            for file in [&i.image, &i.heat, &i.debug, &i.animation, &i.frames_plot]
                 .into_iter()
                 .flatten()
             {
@@ -615,8 +744,9 @@ pub fn merge(
     Ok(merged)
 }
 
-/// Copy image `file` (`images/NAME.png`, checked when its results were read) of result
-/// folder `dir` into `out`: a regular file inside `dir`, never a link out of it.
+/// Copy image `file` (`images/NAME.png`, a sequence's `images/NAME.gif` or
+/// `plots/NAME.svg`, checked when its results were read) of result folder `dir` into `out`:
+/// a regular file inside `dir`, never a link out of it.
 fn copy_image(dir: &Path, file: &str, out: &Path) -> Result<(), String> {
     let from = dir.join(file);
     match std::fs::symlink_metadata(&from) {

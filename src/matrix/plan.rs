@@ -7,7 +7,8 @@ use std::path::{Path, PathBuf};
 use serde::{Deserialize, Serialize};
 
 use crate::scene::SceneParams;
-use crate::variant::{self, LoadedVariant, Pipeline, Variant};
+use crate::sequence::SequenceSpec;
+use crate::variant::{self, ListUpdate, LoadedVariant, Pipeline, Variant};
 
 /// One swept parameter and its values.
 #[derive(Clone, Debug, PartialEq)]
@@ -23,10 +24,13 @@ pub enum Sweep {
     Spots(Vec<f32>),
     /// MSAA sample counts (`msaa.samples`).
     Msaa(Vec<u32>),
+    /// Fractions of the lights that move with time, each in 0..=1 (sequences).
+    Moving(Vec<f32>),
 }
 
 /// Parse `lights=64,256`, `radius=1,2..4` (a single value r means r..r),
-/// `grid=16x9x24,32x18x48`, `skipping=on,off`, `spots=0,0.5,1` or `msaa=1,4`.
+/// `grid=16x9x24,32x18x48`, `skipping=on,off`, `spots=0,0.5,1`, `msaa=1,4` or
+/// `moving=0.1,1`.
 pub fn parse_sweep(s: &str) -> Result<Sweep, String> {
     let (name, values) = s
         .split_once('=')
@@ -103,16 +107,19 @@ pub fn parse_sweep(s: &str) -> Result<Sweep, String> {
             })
             .collect::<Result<_, _>>()
             .map(Sweep::Skipping),
-        "spots" => items
+        "spots" | "moving" => items
             .iter()
             .map(|v| {
                 v.parse::<f32>()
                     .ok()
                     .filter(|f| (0.0..=1.0).contains(f))
-                    .ok_or_else(|| bad(v, "a spot fraction in 0..=1"))
+                    .ok_or_else(|| bad(v, "a fraction in 0..=1"))
             })
             .collect::<Result<_, _>>()
-            .map(Sweep::Spots),
+            .map(|f| match name.trim() {
+                "spots" => Sweep::Spots(f),
+                _ => Sweep::Moving(f),
+            }),
         "msaa" => items
             .iter()
             .map(|v| {
@@ -129,7 +136,7 @@ pub fn parse_sweep(s: &str) -> Result<Sweep, String> {
             .collect::<Result<_, _>>()
             .map(Sweep::Msaa),
         other => Err(format!(
-            "`{other}` cannot be swept; sweep lights, radius, grid, skipping, spots or msaa"
+            "`{other}` cannot be swept; sweep lights, radius, grid, skipping, spots, msaa or moving"
         )),
     }
 }
@@ -178,6 +185,18 @@ pub struct Group {
     pub sweeps: Vec<Sweep>,
     /// Image size for every cell (default: each scene's).
     pub size: Option<(u32, u32)>,
+    /// Each cell a sequence of frames rather than one frame rendered again.
+    pub sequence: Option<GroupSequence>,
+}
+
+/// How a group's cells run as sequences: how many frames, which are checked, and what
+/// moves (a `moving` sweep sets the fraction per cell).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GroupSequence {
+    pub spec: SequenceSpec,
+    /// Fraction of the lights that move.
+    pub moving: f32,
+    pub still_camera: bool,
 }
 
 /// The pipelines of the default matrix's MSAA group: naive forward, Forward+ and clustered
@@ -222,13 +241,17 @@ pub fn default_groups() -> Result<Vec<Group>, String> {
         .filter(|s| s.name != glass)
         .map(|s| s.name.to_string())
         .collect();
+    let variants = find_variants(&["variants".into()])?;
     Ok(vec![
+        // Strategies for moving lights are for the sequence group: a frame rendered again
+        // has no change to follow.
         Group {
             name: "variants".into(),
-            variants: find_variants(&["variants".into()])?,
+            variants: variants.iter().filter(|e| !updates(e)).cloned().collect(),
             scenes,
             sweeps: vec![],
             size: None,
+            sequence: None,
         },
         Group {
             name: "lights".into(),
@@ -240,6 +263,7 @@ pub fn default_groups() -> Result<Vec<Group>, String> {
             scenes: vec!["atrium".into()],
             sweeps: vec![Sweep::Lights(vec![64, 256, 1024, 5000, 16384])],
             size: Some((256, 144)),
+            sequence: None,
         },
         // Where Forward+ and deferred trade places (Billeter et al. 2013, at 4x MSAA).
         Group {
@@ -248,6 +272,7 @@ pub fn default_groups() -> Result<Vec<Group>, String> {
             scenes: vec!["atrium".into()],
             sweeps: vec![Sweep::Lights(vec![1024]), Sweep::Msaa(vec![1, 4])],
             size: Some((640, 360)),
+            sequence: None,
         },
         // What deferred cannot do: blended panes, shaded forward in every pipeline.
         Group {
@@ -256,8 +281,50 @@ pub fn default_groups() -> Result<Vec<Group>, String> {
             scenes: vec![glass.into()],
             sweeps: vec![],
             size: Some((320, 180)),
+            sequence: None,
+        },
+        // Lights that move: every list strategy, frame after frame.
+        Group {
+            name: "sequence".into(),
+            variants: sequence_variants(&variants)?,
+            scenes: vec!["atrium".into()],
+            sweeps: vec![Sweep::Lights(vec![1024]), Sweep::Moving(vec![0.1, 1.0])],
+            size: Some((640, 360)),
+            sequence: Some(GroupSequence {
+                spec: SequenceSpec {
+                    frames: 30,
+                    check_every: 10,
+                },
+                moving: 1.0,
+                still_camera: true,
+            }),
         },
     ])
+}
+
+/// The rebuilding variants whose lists the sequence group's strategies start from.
+pub const SEQUENCE_REBUILDS: [&str; 3] = [
+    "forward_plus",
+    "clustered_deferred_16x16x24",
+    "forward_plus_bvh",
+];
+
+/// The default matrix's sequence group: `SEQUENCE_REBUILDS` and every variant of
+/// `variants` with another list strategy (`clusters.update`), which only sequences tell
+/// apart.
+fn sequence_variants(variants: &[VariantEntry]) -> Result<Vec<VariantEntry>, String> {
+    let mut out = find_variants(&SEQUENCE_REBUILDS.map(String::from))?;
+    out.extend(variants.iter().filter(|e| updates(e)).cloned());
+    Ok(out)
+}
+
+/// Whether a variant follows moving lights otherwise than by rebuilding its lists.
+fn updates(e: &VariantEntry) -> bool {
+    e.loaded.as_ref().is_ok_and(|v| updates_lists(&v.variant))
+}
+
+fn updates_lists(v: &Variant) -> bool {
+    v.pipeline.is_clustered() && v.clusters().update != ListUpdate::Rebuild
 }
 
 /// Scene parameters as results record them.
@@ -272,6 +339,24 @@ pub struct ParamsRecord {
     /// Fraction of spot lights (absent in results written before spots: 0).
     #[serde(default)]
     pub spots: f32,
+    /// Fraction of the lights that move with time (absent in results written before
+    /// sequences: all of them).
+    #[serde(default = "every_light")]
+    pub moving: f32,
+    /// Whether the camera moves with time (absent: it does).
+    #[serde(default = "moves")]
+    pub camera_moves: bool,
+    /// The time still lights and a still camera keep.
+    #[serde(default)]
+    pub still_at: f64,
+}
+
+fn every_light() -> f32 {
+    1.0
+}
+
+fn moves() -> bool {
+    true
 }
 
 impl From<SceneParams> for ParamsRecord {
@@ -284,6 +369,9 @@ impl From<SceneParams> for ParamsRecord {
             seed: p.seed,
             time: p.time,
             spots: p.spots,
+            moving: p.motion.lights,
+            camera_moves: p.motion.camera,
+            still_at: p.motion.still_at,
         }
     }
 }
@@ -298,6 +386,11 @@ impl From<ParamsRecord> for SceneParams {
             seed: p.seed,
             time: p.time,
             spots: p.spots,
+            motion: crate::scene::Motion {
+                lights: p.moving,
+                camera: p.camera_moves,
+                still_at: p.still_at,
+            },
         }
     }
 }
@@ -328,14 +421,31 @@ pub struct CellSpec {
     pub debug_view: bool,
     /// Whether the variant has post effects.
     pub post: bool,
+    /// A sequence of frames (absent: one frame, rendered again for timing).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sequence: Option<SequenceSpec>,
+    /// A sequence cell whose variant follows moving lights otherwise than by rebuilding:
+    /// the cell of its group whose variant is the same but rebuilds (what its frames are
+    /// compared with), where the matrix has one.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rebuild_cell: Option<String>,
 }
 
 impl CellSpec {
     /// The parameters a cell's speed-up and Pareto front are compared within.
     pub fn group(&self) -> String {
         let p = &self.params;
+        let motion = match &self.sequence {
+            Some(s) => format!(
+                " {} frames, {} moving, camera {}",
+                s.frames,
+                p.moving,
+                if p.camera_moves { "moving" } else { "still" }
+            ),
+            None => String::new(),
+        };
         format!(
-            "{}{} {}x{} {} lights r{}..{} seed {} t{} spots {}",
+            "{}{} {}x{} {} lights r{}..{} seed {} t{} spots {}{motion}",
             self.scene,
             self.scene_sha256
                 .as_deref()
@@ -383,10 +493,21 @@ pub fn expand(groups: &[Group]) -> Result<Vec<PlannedCell>, String> {
             if let Some((w, h)) = group.size {
                 (base.width, base.height) = (w, h);
             }
+            if let Some(s) = &group.sequence {
+                base.motion = crate::scene::Motion {
+                    lights: s.moving,
+                    camera: !s.still_camera,
+                    still_at: base.time,
+                };
+            }
             for entry in &group.variants {
                 for point in sweep_points(&group.sweeps) {
                     let mut cell = make_cell(&group.name, entry, scene, base, &point);
                     cell.spec.scene_sha256 = file.as_ref().map(|f| f.sha256.clone());
+                    if let Some(s) = &group.sequence {
+                        cell.spec.sequence = Some(s.spec);
+                        cell.spec.id = sequence_id(&cell.spec.id, s);
+                    }
                     if !cells.iter().any(|c| c.spec.id == cell.spec.id) {
                         cells.push(cell);
                     }
@@ -394,9 +515,20 @@ pub fn expand(groups: &[Group]) -> Result<Vec<PlannedCell>, String> {
             }
         }
     }
+    find_rebuilds(&mut cells);
     add_baselines(&mut cells);
     check_distinct_cells(&cells)?;
     Ok(cells)
+}
+
+/// A sequence cell's id: its frames and camera after the sweep's values, `@scene[...]`.
+fn sequence_id(id: &str, s: &GroupSequence) -> String {
+    let camera = if s.still_camera { "still" } else { "moving" };
+    let what = format!("frames={},camera={camera}", s.spec.frames);
+    match id.strip_suffix(']') {
+        Some(head) => format!("{head},{what}]"),
+        None => format!("{id}[{what}]"),
+    }
 }
 
 /// Two cells never share an id or an image file name (two file scenes whose paths differ
@@ -456,6 +588,7 @@ struct Point {
     skipping: Option<bool>,
     spots: Option<f32>,
     msaa: Option<u32>,
+    moving: Option<f32>,
 }
 
 fn sweep_points(sweeps: &[Sweep]) -> Vec<Point> {
@@ -488,6 +621,10 @@ fn sweep_points(sweeps: &[Sweep]) -> Vec<Point> {
                     msaa: Some(n),
                     ..p.clone()
                 })),
+                Sweep::Moving(v) => next.extend(v.iter().map(|&f| Point {
+                    moving: Some(f),
+                    ..p.clone()
+                })),
             }
         }
         points = next;
@@ -515,6 +652,10 @@ fn make_cell(
     if let Some(f) = point.spots {
         params.spots = f;
         sweep.insert("spots".to_string(), f.to_string());
+    }
+    if let Some(f) = point.moving {
+        params.motion.lights = f;
+        sweep.insert("moving".to_string(), f.to_string());
     }
     let mut loaded = entry.loaded.clone();
     let mut grid = None;
@@ -576,8 +717,38 @@ fn make_cell(
             pipeline: variant_info.map(|v| format!("{:?}", v.pipeline)),
             debug_view: variant_info.is_some_and(|v| v.debug_view != variant::DebugView::Off),
             post: variant_info.is_some_and(|v| v.post.any()),
+            sequence: None,
+            rebuild_cell: None,
         },
         variant: loaded,
+    }
+}
+
+/// Name each sequence cell's rebuilding twin (`CellSpec::rebuild_cell`): the cell of the
+/// same group whose variant differs only in rebuilding its lists (and its description).
+fn find_rebuilds(cells: &mut [PlannedCell]) {
+    let rebuilding = |v: &Variant| {
+        let mut v = v.clone();
+        v.description.clear();
+        if let Some(c) = v.clusters.as_mut() {
+            c.update = ListUpdate::Rebuild;
+        }
+        v
+    };
+    for i in 0..cells.len() {
+        let c = &cells[i];
+        let Ok(v) = &c.variant else { continue };
+        if c.spec.sequence.is_none() || !updates_lists(&v.variant) {
+            continue;
+        }
+        let want = rebuilding(&v.variant);
+        let twin = cells.iter().find(|o| {
+            o.spec.group() == c.spec.group()
+                && o.variant
+                    .as_ref()
+                    .is_ok_and(|ov| !updates_lists(&ov.variant) && rebuilding(&ov.variant) == want)
+        });
+        cells[i].spec.rebuild_cell = twin.map(|o| o.spec.id.clone());
     }
 }
 
@@ -613,7 +784,9 @@ fn add_baselines(cells: &mut Vec<PlannedCell>) {
         }
     });
     let mut missing: Vec<CellSpec> = Vec::new();
-    for c in cells.iter() {
+    // A sequence compares its strategies with each other: naive forward would take most of
+    // its time for a figure no sequence needs.
+    for c in cells.iter().filter(|c| c.spec.sequence.is_none()) {
         let group = c.spec.group();
         let has = cells
             .iter()
@@ -656,6 +829,8 @@ fn add_baselines(cells: &mut Vec<PlannedCell>) {
                 pipeline: Some("NaiveForward".into()),
                 debug_view: false,
                 post: false,
+                sequence: None,
+                rebuild_cell: None,
             },
             variant: loaded.clone(),
         });
@@ -707,6 +882,7 @@ mod tests {
             scenes: vec!["one_light".into()],
             sweeps,
             size: Some((32, 18)),
+            sequence: None,
         }
     }
 
@@ -733,13 +909,13 @@ mod tests {
             ("grid=0x1x1", "whole numbers >= 1"),
             (
                 "fov=60",
-                "sweep lights, radius, grid, skipping, spots or msaa",
+                "sweep lights, radius, grid, skipping, spots, msaa or moving",
             ),
             ("msaa=3", "is not a sample count of [1, 2, 4, 8]"),
             ("skipping=maybe", "is not on or off"),
             (
                 "spots=1.5",
-                "`1.5` in `spots=1.5` is not a spot fraction in 0..=1",
+                "`1.5` in `spots=1.5` is not a fraction in 0..=1",
             ),
         ] {
             let e = parse_sweep(bad).unwrap_err();

@@ -155,6 +155,41 @@ fn check_cell(c: &CellRecord) -> Result<(), String> {
             image_path(path).map_err(|why| format!("`{field}` is `{path}`: {why}"))?;
         }
     }
+    if let Some(s) = &c.sequence_summary {
+        time("sequence_summary.first_ms", Some(s.first_ms))?;
+        time("sequence_summary.frame_ms", Some(s.frame_ms))?;
+        for (i, &ms) in s.totals_ms.iter().enumerate() {
+            time(&format!("sequence_summary.totals_ms[{i}]"), Some(ms))?;
+        }
+        if s.frames == 0 || s.totals_ms.len() != s.frames as usize {
+            return Err(format!(
+                "`sequence_summary` has {} frames and {} frame times: a sequence has one time per frame, and a frame at least",
+                s.frames,
+                s.totals_ms.len()
+            ));
+        }
+    }
+    for (field, path, what, folder, ext) in [
+        (
+            "images.animation",
+            &c.images.animation,
+            "a sequence's animation",
+            "images",
+            ".gif",
+        ),
+        (
+            "images.frames_plot",
+            &c.images.frames_plot,
+            "a sequence's plot",
+            "plots",
+            ".svg",
+        ),
+    ] {
+        if let Some(path) = path {
+            result_file_path(path, what, folder, ext)
+                .map_err(|why| format!("`{field}` is `{path}`: {why}"))?;
+        }
+    }
     Ok(())
 }
 
@@ -177,13 +212,21 @@ fn time(field: &str, v: Option<f64>) -> Result<f64, String> {
 /// An image path as a run writes it: `images/NAME.png`, nothing else (no `..`, no absolute
 /// path, no folder other than `images`).
 pub fn image_path(path: &str) -> Result<(), String> {
+    result_file_path(path, "an image", "images", ".png")
+}
+
+/// The path of `what`, as a run writes it: `FOLDER/NAME.EXT` (`ext` with its dot), nothing
+/// else.
+fn result_file_path(path: &str, what: &str, folder: &str, ext: &str) -> Result<(), String> {
     let parts: Vec<Component> = Path::new(path).components().collect();
     let plain = matches!(parts.as_slice(), [Component::Normal(dir), Component::Normal(name)]
-        if *dir == "images" && name.to_str().is_some_and(|n| n.ends_with(".png") && !n.contains('\\')));
+        if *dir == folder && name.to_str().is_some_and(|n| n.ends_with(ext) && !n.contains('\\')));
     if plain && !path.contains("//") && !path.ends_with('/') {
         Ok(())
     } else {
-        Err("an image of a result folder is `images/NAME.png`, inside that folder".into())
+        Err(format!(
+            "{what} of a result folder is `{folder}/NAME{ext}`, inside that folder"
+        ))
     }
 }
 

@@ -84,6 +84,15 @@ impl Renderer<'_> {
         let shaded = &self.post.output(&self.res.targets.hdr).view;
         layout.bind_groups(self.gpu, id.name(), |slot| match id {
             PassId::Screen(p) => screen::binding(p, slot, &self.res, shaded),
+            // The moving lists' pass builds its lists in the moving lists' buffers (and
+            // reads the boxes and marks of the clusters' own).
+            PassId::Clustering(compose::ClusterPass::MovingAssign) => self
+                .res
+                .moving
+                .as_ref()
+                .and_then(|m| m.buffer(slot.name))
+                .map(|b| b.as_entire_binding())
+                .or_else(|| self.res.scene_binding(slot)),
             _ => self.res.scene_binding(slot),
         })
     }

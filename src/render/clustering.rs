@@ -4,7 +4,7 @@
 //! workgroup size in the pass's naga module.
 
 use super::clusters::ClusterBuffers;
-use super::culling::{self, BinningPipelines};
+use super::culling::{self, BinningPipelines, ListWork};
 use super::passes::{ComputePipelines, set_compute_groups};
 use crate::compose::ClusterPass;
 use crate::gpu::TimestampSlot;
@@ -14,9 +14,15 @@ pub struct Extent {
     pub width: u32,
     pub height: u32,
     pub lights: u32,
+    /// The lights of the moving set (`MovingSet`): StaticDynamic's moving lights, or the
+    /// lights Patch moves this frame.
+    pub moving: u32,
+    /// The light BVH is refitted over its last order (`clusters.update: Refit`).
+    pub refit: bool,
 }
 
-/// Encode one clustering pass: clear what it accumulates into, then its dispatches.
+/// Encode one clustering pass: clear what it accumulates into, then its dispatches. `c` is
+/// the lists the pass builds: the clusters' own, or StaticDynamic's moving lists.
 #[allow(clippy::too_many_arguments)]
 pub fn encode(
     pass: ClusterPass,
@@ -30,17 +36,20 @@ pub fn encode(
 ) {
     let pixels = [extent.width, extent.height, 1];
     let dispatches: Vec<(&str, [u32; 3])> = match pass {
-        ClusterPass::LightAssign => {
-            return culling::encode(
-                c.method,
-                p,
-                binning,
-                groups,
-                encoder,
-                slot,
-                c,
-                extent.lights,
-            );
+        ClusterPass::LightAssign | ClusterPass::MovingAssign | ClusterPass::ListPatch => {
+            let work = match pass {
+                ClusterPass::MovingAssign => ListWork::Moving {
+                    moving: extent.moving,
+                },
+                ClusterPass::ListPatch => ListWork::Patch {
+                    moved: extent.moving,
+                },
+                _ => ListWork::Assign {
+                    lights: extent.lights,
+                    refit: extent.refit,
+                },
+            };
+            return culling::encode(work, p, binning, groups, encoder, slot, c);
         }
         ClusterPass::MarkActive => {
             encoder.clear_buffer(&c.active, 0, None);

@@ -9,7 +9,7 @@ use crate::cpu::zbin::ZBins;
 use crate::gpu::{Gpu, GpuError, read_buffer};
 use crate::render::culling::ProxyLayout;
 use crate::variant::CullingMethod;
-use crate::variant::{Clusters, Culling};
+use crate::variant::{Clusters, Culling, ListUpdate};
 
 /// Mirrors `ClusterRange` in `shaders/clustering/clusters.wesl`.
 #[repr(C)]
@@ -74,8 +74,13 @@ pub struct ClusterBuffers {
     pub culling: Culling,
     /// How light assignment builds the lists.
     pub method: CullingMethod,
+    /// How the lists follow moving lights in a sequence.
+    pub update: ListUpdate,
     /// Rasterised binning: its buffers' layouts as its root declares them.
     proxies: Option<ProxyLayout>,
+    /// StaticDynamic's moving lists: the buffers they share with the clusters' own lists
+    /// (range, marks, view-space lights), which their bytes leave out.
+    shares: bool,
 }
 
 /// Rasterised binning's draw: the layouts of its buffers, the copies of those the draw
@@ -165,7 +170,12 @@ impl ProxyDrawing {
 /// The buffers a variant's passes bind beside the ones every method does, by their WGSL
 /// names, with their sizes in bytes: the lists' (methods that build lists), 2.5D culling's
 /// masks, and the method's own (`CullingMethod::own_buffers`).
-fn named_sizes(method: CullingMethod, culling: Culling, s: &Sizing) -> Vec<(&'static str, u64)> {
+fn named_sizes(
+    method: CullingMethod,
+    culling: Culling,
+    update: ListUpdate,
+    s: &Sizing,
+) -> Vec<(&'static str, u64)> {
     let n = (s.grid.0 * s.grid.1 * s.grid.2) as u64;
     let mut sizes = Vec::new();
     if method.builds_lists() {
@@ -185,9 +195,24 @@ fn named_sizes(method: CullingMethod, culling: Culling, s: &Sizing) -> Vec<(&'st
     if culling.marks_depth_cells() {
         sizes.push(("depth_masks", n * 4));
     }
+    if update == ListUpdate::Patch {
+        // Per cluster, what the patch did to its list (`passes/patch_lists.wesl`).
+        sizes.push(("patch_clusters", n * 4));
+    }
     sizes.extend(method.own_buffers(s));
     sizes
 }
+
+/// The buffers of one-level lists (StaticDynamic's moving lists), by name: counts,
+/// offsets, the prefix sum's blocks, indices, fill cursors, long-list jobs.
+const LIST_BUFFERS: [&str; 6] = [
+    "light_counts",
+    "light_offsets",
+    "block_sums",
+    "light_indices",
+    "fill_cursors",
+    "sort_jobs",
+];
 
 fn storage(gpu: &Gpu, label: &str, size: u64) -> wgpu::Buffer {
     gpu.device.create_buffer(&wgpu::BufferDescriptor {
@@ -238,7 +263,7 @@ impl ClusterBuffers {
             proxies,
             max_storage: gpu.max_storage_bytes(),
         };
-        let named: Vec<_> = named_sizes(method, c.culling, &sizing)
+        let named: Vec<_> = named_sizes(method, c.culling, c.update, &sizing)
             .into_iter()
             .map(|(name, bytes)| make_named(gpu, name, bytes))
             .collect();
@@ -280,8 +305,61 @@ impl ClusterBuffers {
             grid,
             lights,
             culling: c.culling,
+            update: c.update,
             method,
             proxies,
+            shares: false,
+        }
+    }
+
+    /// StaticDynamic's moving lists beside these clusters: one-level lists of their own
+    /// (as large as these lists' index buffer to start with), sharing the range, marks and
+    /// view-space lights.
+    pub fn moving_lists(&self, gpu: &Gpu) -> Self {
+        let sizing = Sizing {
+            grid: self.grid,
+            lights: self.lights,
+            entries: self.index_capacity,
+            proxies: None,
+            max_storage: gpu.max_storage_bytes(),
+        };
+        let named = named_sizes(
+            CullingMethod::OneLevel,
+            Culling::Boxes,
+            ListUpdate::Rebuild,
+            &sizing,
+        )
+        .into_iter()
+        .filter(|(name, _)| LIST_BUFFERS.contains(name))
+        .map(|(name, bytes)| make_named(gpu, name, bytes))
+        .collect();
+        Self {
+            clusters: self.clusters,
+            range: self.range.clone(),
+            active: self.active.clone(),
+            stats: storage(
+                gpu,
+                "moving_stats",
+                std::mem::size_of::<ClusterStats>() as u64,
+            ),
+            light_view: self.light_view.clone(),
+            light_ranges: self.light_ranges.clone(),
+            named,
+            sort_dispatch: gpu.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("moving long-list sort dispatch"),
+                size: DISPATCH_ARGS_BYTES,
+                usage: wgpu::BufferUsages::INDIRECT | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            }),
+            index_capacity: self.index_capacity,
+            drawing: None,
+            grid: self.grid,
+            lights: self.lights,
+            culling: Culling::Boxes,
+            update: ListUpdate::Rebuild,
+            method: CullingMethod::OneLevel,
+            proxies: None,
+            shares: true,
         }
     }
 
@@ -291,19 +369,20 @@ impl ClusterBuffers {
             .drawing
             .iter()
             .flat_map(|d| [&d.instances, &d.draw_args, &d.scatter_dispatch]);
-        [
+        let shared = [
             &self.range,
             &self.active,
-            &self.stats,
             &self.light_view,
             &self.light_ranges,
-            &self.sort_dispatch,
-        ]
-        .into_iter()
-        .chain(self.named.iter().map(|(_, b)| b))
-        .chain(drawing)
-        .map(|b| b.size())
-        .sum()
+        ];
+        let shared = shared.into_iter().filter(|_| !self.shares);
+        [&self.stats, &self.sort_dispatch]
+            .into_iter()
+            .chain(shared)
+            .chain(self.named.iter().map(|(_, b)| b))
+            .chain(drawing)
+            .map(|b| b.size())
+            .sum()
     }
 
     /// Make the index buffer hold `capacity` entries, and every other buffer sized by the
@@ -316,7 +395,7 @@ impl ClusterBuffers {
             proxies: self.proxies,
             max_storage: gpu.max_storage_bytes(),
         };
-        for (name, bytes) in named_sizes(self.method, self.culling, &sizing) {
+        for (name, bytes) in named_sizes(self.method, self.culling, self.update, &sizing) {
             if let Some(slot) = self.named.iter_mut().find(|(n, _)| *n == name)
                 && slot.1.size() != bytes.max(16)
             {
@@ -445,8 +524,15 @@ impl ClusterBuffers {
         let n = self.clusters as u64 * 4;
         let counts = self.read_named(gpu, "light_counts", Some(n))?;
         let offsets = self.read_named(gpu, "light_offsets", Some(n))?;
-        let total: u64 = counts.iter().map(|&c| c as u64).sum();
-        let used = (total * 4).min(self.named("light_indices").size());
+        // Lists lie anywhere in the index buffer (two-level places them as it goes, Patch
+        // moves the ones it changes): up to the end of the last.
+        let end = counts
+            .iter()
+            .zip(&offsets)
+            .map(|(&c, &o)| (o as u64 + c as u64) * 4)
+            .max()
+            .unwrap_or(0);
+        let used = end.min(self.named("light_indices").size());
         let indices = self.read_named(gpu, "light_indices", Some(used))?;
         let stats = self.read_stats(gpu)?;
         Ok(ClusterLists {

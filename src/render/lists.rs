@@ -53,7 +53,11 @@ impl CpuAssignment {
 /// Whether a frame's light lists fit: they did, or the index buffer must grow to this many
 /// entries and the frame run again.
 pub enum Fit {
-    Fits,
+    /// They fit, and hold this many entries (where the last list ends, for lists placed
+    /// as they go).
+    Fits {
+        entries: u32,
+    },
     GrowTo(u32),
 }
 
@@ -66,7 +70,7 @@ pub fn fit(gpu: &Gpu, c: &ClusterBuffers) -> Result<Fit, RenderError> {
     check_proxies(gpu, c, &s)?;
     if s.overflow == 0 {
         check_walks(gpu, c, &s)?;
-        return Ok(Fit::Fits);
+        return Ok(Fit::Fits { entries: s.total });
     }
     Ok(Fit::GrowTo(capacity_for(gpu, s.total as u64)?))
 }

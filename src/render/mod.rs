@@ -21,6 +21,7 @@ mod raster;
 mod readback;
 mod reflect;
 mod resources;
+mod reuse;
 mod screen;
 mod skips;
 mod stats;
@@ -29,6 +30,7 @@ mod truth;
 pub use clusters::{ClusterBuffers, ClusterRange, ClusterStats, GpuDepthMask};
 pub use passes::{PassRunner, shader_module};
 pub use resources::{DepthSetup, F32_BITS_FORMAT, LDR_FORMAT, SceneBuffers, ViewUniform};
+pub use reuse::FrameChange;
 pub use stats::{FrameStats, PixelCounters};
 pub use truth::raster_truth;
 
@@ -42,6 +44,7 @@ use built::{BuiltPass, Pipelines};
 use lists::{CpuAssignment, Fit};
 use post::PostChain;
 use resources::FrameResources;
+use reuse::{Held, Lists, Redo};
 use skips::Skips;
 
 /// Why a frame could not be rendered.
@@ -116,10 +119,23 @@ pub struct Renderer<'g> {
     frame_features: Vec<(&'static str, bool)>,
     /// The clustered stand-in naive forward counts on, once made (see `prepare_counting`).
     naive_stand_in: Option<Box<Renderer<'g>>>,
+    /// What the next frame redoes (`advance` decides it for a sequence's next frame).
+    redo: Redo,
+    /// What the GPU holds of the last frame, for `advance` to compare with.
+    held: Held,
+    /// Patch frames that ran out of room in the index buffer and were rebuilt instead.
+    patch_rebuilds: u32,
 }
 
 /// How a frame reports the spot cone it left out of its light loops.
 pub const SPOT_CONE: &str = "spot_cone";
+
+/// The pass that builds the light lists.
+const ASSIGN: PassId = PassId::Clustering(compose::ClusterPass::LightAssign);
+
+/// Patch keeps room in the index buffer for this many times a rebuild's entries: lists it
+/// changes take new room, and a frame that finds none is rebuilt.
+const PATCH_ROOM: u64 = 3;
 
 /// What running a frame returned.
 struct FrameRun {
@@ -216,7 +232,15 @@ impl<'g> Renderer<'g> {
             fresh_pipelines: 0,
             frame_features: frame.clone(),
             naive_stand_in: None,
+            redo: Redo::ALL,
+            held: Held::of(scene),
+            patch_rebuilds: 0,
         };
+        if variant.pipeline.is_clustered()
+            && variant.clusters().update == crate::variant::ListUpdate::StaticDynamic
+        {
+            renderer.res.moving_set.set(gpu, &scene.moving_lights);
+        }
         gpu.scoped("creating pipelines", || -> Result<(), RenderError> {
             for (pass, timed, _) in &composed {
                 if let Some(b) = renderer.build(*pass, timed, false)? {
@@ -251,7 +275,14 @@ impl<'g> Renderer<'g> {
             width: self.width,
             height: self.height,
             lights: self.res.scene.light_count,
+            moving: self.res.moving_set.lights.len() as u32,
+            refit: self.redo.lists == Lists::Refit,
         }
+    }
+
+    /// Patch frames so far that found no room in the index buffer and rebuilt every list.
+    pub fn patch_rebuilds(&self) -> u32 {
+        self.patch_rebuilds
     }
 
     /// Whether the next frame is the first to draw with pipelines created for this
@@ -270,7 +301,10 @@ impl<'g> Renderer<'g> {
     pub fn draw_without_lights(&mut self) -> Result<f64, RenderError> {
         let lights = self.res.scene.light_count;
         self.set_light_count(0);
+        // Every pass a sequence's frames may run: a patch of no light, too.
+        self.redo = Redo::EVERY;
         let run = self.run_frame(false);
+        self.redo = Redo::ALL;
         self.set_light_count(lights);
         self.drew_without_lights = true;
         self.last_frame_countable = false;
@@ -305,6 +339,8 @@ impl<'g> Renderer<'g> {
                     source: DepthRangeSource::PreviousFrame,
                 });
         self.last_frame_countable = !late_range || self.frames_done >= 2;
+        // A frame rendered again without `advance` redoes everything.
+        self.redo = Redo::ALL;
         if self.post.blur_skipped(self.gpu)? {
             skipped.push(PassId::Post(compose::PostPass::BloomBlur).name().into());
         }
@@ -325,20 +361,55 @@ impl<'g> Renderer<'g> {
 
     /// Run the frame until its light lists fit: the index buffer grows to the exact total a
     /// frame reports, so one re-run fits; lists that still do not fit are an error, never a
-    /// picture with lights missing.
+    /// picture with lights missing. A Patch frame that finds no room is run again as a
+    /// rebuild (which compacts the lists), and Patch's index buffer keeps room for
+    /// `PATCH_ROOM` times a rebuild's entries; StaticDynamic's moving lists grow as the
+    /// lists do.
     fn run_fitted(&mut self, instrumented: bool) -> Result<FrameRun, RenderError> {
-        for _ in 0..3 {
+        for _ in 0..4 {
             let frame = self.run_frame(instrumented)?;
             let Some(c) = &self.res.clusters else {
                 return Ok(frame);
             };
+            let built = !self.skips_pass(ASSIGN, instrumented);
             match lists::fit(self.gpu, c)? {
-                Fit::Fits => return Ok(frame),
-                Fit::GrowTo(capacity) => self.grow_lists(capacity)?,
+                Fit::GrowTo(_) if self.redo.lists == Lists::Patch && !instrumented => {
+                    self.redo.lists = Lists::Build;
+                    self.patch_rebuilds += 1;
+                    continue;
+                }
+                Fit::GrowTo(capacity) => {
+                    self.grow_lists(capacity)?;
+                    continue;
+                }
+                Fit::Fits { entries }
+                    if built
+                        && self.update() == Some(crate::variant::ListUpdate::Patch)
+                        && (c.index_capacity as u64) < PATCH_ROOM * entries as u64 =>
+                {
+                    let room = lists::capacity_for(self.gpu, PATCH_ROOM * entries as u64)?;
+                    if room > c.index_capacity {
+                        self.grow_lists(room)?;
+                        continue;
+                    }
+                }
+                Fit::Fits { .. } => {}
             }
+            let moving = PassId::Clustering(compose::ClusterPass::MovingAssign);
+            if let Some(m) = &self.res.moving
+                && !self.skips_pass(moving, instrumented)
+                && let Fit::GrowTo(capacity) = lists::fit(self.gpu, m)?
+            {
+                let m = self.res.moving.as_mut().expect("moving lists");
+                m.grow_indices(self.gpu, capacity);
+                self.reallocations += 1;
+                self.remake_groups()?;
+                continue;
+            }
+            return Ok(frame);
         }
         Err(RenderError::Gpu(GpuError::Captured(
-            "the light lists still overflowed their buffer after growing it twice".into(),
+            "the light lists still overflowed their buffer after growing it three times".into(),
         )))
     }
 
@@ -373,12 +444,16 @@ impl<'g> Renderer<'g> {
         // Counters start at zero in every run of a frame that adds to them (a re-run must
         // not add up twice); the cluster stats stay as the last assignment left them when
         // this frame assigns nothing.
-        let assign = PassId::Clustering(compose::ClusterPass::LightAssign);
-        let assigns = !self.skips_pass(assign, instrumented);
+        let assigns = !self.skips_pass(ASSIGN, instrumented);
+        let moving = PassId::Clustering(compose::ClusterPass::MovingAssign);
+        let assigns_moving = !self.skips_pass(moving, instrumented);
         gpu.scoped("clearing counters", || {
             let mut e = gpu.device.create_command_encoder(&Default::default());
             if let Some(c) = self.res.clusters.as_ref().filter(|_| assigns) {
                 e.clear_buffer(&c.stats, 0, None);
+            }
+            if let Some(m) = self.res.moving.as_ref().filter(|_| assigns_moving) {
+                e.clear_buffer(&m.stats, 0, None);
             }
             if instrumented {
                 self.res.counters.clear(&mut e);
@@ -392,7 +467,7 @@ impl<'g> Renderer<'g> {
             skipped.push(SPOT_CONE.into());
         }
         if self.cpu_assignment.is_some() && cpu_ms.is_none() {
-            skipped.push(assign.name().into());
+            skipped.push(ASSIGN.name().into());
         }
         for p in &self.plan.passes {
             if self.skips_pass(p.id, instrumented) && !skipped.iter().any(|s| s == p.name()) {
@@ -456,7 +531,11 @@ impl<'g> Renderer<'g> {
                 screen::encode(p, pl, groups, encoder, slot, res)
             }
             (PassId::Clustering(p), Pipelines::Compute(pl)) => {
-                if let Some(c) = &res.clusters {
+                let lists = match p {
+                    compose::ClusterPass::MovingAssign => res.moving.as_ref(),
+                    _ => res.clusters.as_ref(),
+                };
+                if let Some(c) = lists {
                     clustering::encode(p, pl, None, groups, encoder, slot, c, &self.extent());
                 }
             }

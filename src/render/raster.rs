@@ -91,6 +91,13 @@ pub fn pipelines(
                 d.state(d.compare(), true),
             )?]
         }
+        // After the pre-pass (StaticDynamic keeps a still image only with one), the nearest
+        // fragment's still lights, once, as f32 bits.
+        RasterPass::StillShading => {
+            let depth = d.state(wgpu::CompareFunction::Equal, false);
+            let target = color_target(super::resources::F32_BITS_FORMAT);
+            vec![build(Some("fs_still"), &[target], depth)?]
+        }
         RasterPass::Forward => {
             // After a pre-pass, shade exactly the nearest fragment, once.
             let depth = if variant.depth_prepass {
@@ -165,6 +172,10 @@ pub fn encode(
             vec![clear_attachment(&forward_target.view)],
             depth(!variant.depth_prepass),
         ),
+        RasterPass::StillShading => match &targets.still {
+            Some(t) => (vec![clear_attachment(&t.view)], depth(false)),
+            None => return,
+        },
         RasterPass::TransparentDepths => {
             if let Some(b) = transparent_depths {
                 encoder.clear_buffer(b, 0, None);

@@ -29,6 +29,8 @@ impl Renderer<'_> {
             )));
         };
         let composed = composer.compose_with(&v, &pass, &self.frame_features)?;
+        // It draws over the output: a sequence's next frame draws its own.
+        self.held.disturbed.set(true);
         gpu.scoped("drawing a debug view", || -> Result<(), RenderError> {
             let layout = PassLayout::of(gpu, &composed)?;
             let pipelines = screen::pipelines(
@@ -60,12 +62,18 @@ impl Renderer<'_> {
         Ok(read_hdr(self.gpu, &self.res.targets.hdr.texture)?)
     }
 
-    /// The light lists as the GPU holds them after the last frame (clustered variants).
+    /// The light lists as the GPU holds them after the last frame (clustered variants);
+    /// StaticDynamic's still and moving lists as one, each cluster's merged in ascending
+    /// order.
     pub fn cluster_lists(&self) -> Result<Option<ClusterLists>, RenderError> {
-        match &self.res.clusters {
-            Some(c) => Ok(Some(c.read_lists(self.gpu)?)),
-            None => Ok(None),
-        }
+        let Some(c) = &self.res.clusters else {
+            return Ok(None);
+        };
+        let lists = c.read_lists(self.gpu)?;
+        Ok(Some(match &self.res.moving {
+            Some(m) => lists.merged(&m.read_lists(self.gpu)?),
+            None => lists,
+        }))
     }
 
     /// The cluster boxes after the last frame (clustered variants): [min, max] per cluster.

@@ -9,7 +9,7 @@ use super::reflect::Slot;
 use crate::cpu::depth::DepthMapping;
 use crate::gpu::Gpu;
 use crate::scene::{Light, Scene, Vertex};
-use crate::variant::{DepthFormat, Pipeline, Variant};
+use crate::variant::{DepthFormat, ListUpdate, Pipeline, Variant};
 
 /// Mirrors `View` in `shaders/common/view.wesl` (432 bytes).
 #[repr(C)]
@@ -336,6 +336,9 @@ pub struct Targets {
     pub shading_depth: Option<Target>,
     pub ldr: Target,
     pub gbuffer: Vec<(&'static str, Target)>,
+    /// StaticDynamic's still image (`compose::keeps_still_image`): each pixel's still
+    /// lights and ambient, as f32 bits.
+    pub still: Option<Target>,
 }
 
 /// Per-pixel counters of instrumented frames (group 3 of the shading passes, in
@@ -380,11 +383,60 @@ impl Counters {
     }
 }
 
+/// The lights a sequence's list strategy treats apart, as `clustering/moving.wesl` reads
+/// them: their number and indices, and a bit per light.
+pub struct MovingSet {
+    pub ids: wgpu::Buffer,
+    pub mask: wgpu::Buffer,
+    /// The lights the buffers hold, ascending.
+    pub lights: Vec<u32>,
+}
+
+impl MovingSet {
+    /// Room for `lights` lights, holding none.
+    fn new(gpu: &Gpu, lights: usize) -> Self {
+        let buffer = |label, bytes: u64| {
+            gpu.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size: bytes.max(16),
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            })
+        };
+        Self {
+            ids: buffer("moving lights", 4 + 4 * lights as u64),
+            mask: buffer("moving mask", 4 * lights.div_ceil(32) as u64),
+            lights: Vec::new(),
+        }
+    }
+
+    /// Hold `lights` (ascending indices below the scene's light count).
+    pub fn set(&mut self, gpu: &Gpu, lights: &[u32]) {
+        let mut ids = Vec::with_capacity(lights.len() + 1);
+        ids.push(lights.len() as u32);
+        ids.extend_from_slice(lights);
+        gpu.queue
+            .write_buffer(&self.ids, 0, bytemuck::cast_slice(&ids));
+        let mut mask = vec![0u32; (self.mask.size() / 4) as usize];
+        for &i in lights {
+            mask[i as usize / 32] |= 1 << (i % 32);
+        }
+        gpu.queue
+            .write_buffer(&self.mask, 0, bytemuck::cast_slice(&mask));
+        self.lights = lights.to_vec();
+    }
+}
+
 /// Everything the scene passes bind.
 pub struct FrameResources {
     pub scene: SceneBuffers,
     pub targets: Targets,
     pub clusters: Option<super::ClusterBuffers>,
+    /// StaticDynamic: the moving lights' lists (their own counts, offsets and indices; the
+    /// rest shared with `clusters`).
+    pub moving: Option<super::ClusterBuffers>,
+    /// The lights a list strategy treats apart (`clustering/moving.wesl`).
+    pub moving_set: MovingSet,
     pub counters: Counters,
     /// Scenes with blended materials, clustered variants: each pixel's nearest and farthest
     /// blended depth (`clustering/transparent_depths.wesl`), two words a pixel.
@@ -418,6 +470,8 @@ impl FrameResources {
             } else {
                 Vec::new()
             },
+            still: crate::compose::keeps_still_image(variant)
+                .then(|| Target::new(gpu, "still image", w, h, F32_BITS_FORMAT)),
         };
         let clusters = variant.pipeline.is_clustered().then(|| {
             let c = variant.clusters();
@@ -432,6 +486,19 @@ impl FrameResources {
             let range = super::ClusterRange::new(scene.camera.near as f32, scene.camera.far as f32);
             super::ClusterBuffers::new(gpu, &c, lights, capacity, range, proxies)
         });
+        let update = variant
+            .pipeline
+            .is_clustered()
+            .then(|| variant.clusters().update);
+        let moving = clusters
+            .as_ref()
+            .filter(|_| update == Some(ListUpdate::StaticDynamic))
+            .map(|c| c.moving_lists(gpu));
+        // Room in the moving set for every light where a strategy reads one.
+        let moving_room = match update {
+            Some(ListUpdate::StaticDynamic | ListUpdate::Patch) => scene.lights.len(),
+            _ => 0,
+        };
         // Every clustered variant's marking pass declares it (the active-cluster count's
         // `mark_visible` shares the module).
         let transparent_depths =
@@ -447,6 +514,8 @@ impl FrameResources {
             scene: SceneBuffers::upload(gpu, scene, depth.mapping),
             targets,
             clusters,
+            moving,
+            moving_set: MovingSet::new(gpu, moving_room),
             counters: Counters::new(gpu, w as u64 * h as u64, variant.msaa.on()),
             transparent_depths,
         }
@@ -464,6 +533,21 @@ impl FrameResources {
         let name = slot.name;
         if let Some(frame) = self.scene.frame_binding(name) {
             return Some(frame);
+        }
+        match name {
+            "moving_lights" => return Some(self.moving_set.ids.as_entire_binding()),
+            "moving_mask" => return Some(self.moving_set.mask.as_entire_binding()),
+            "still_image" => return self.targets.still.as_ref().map(texture),
+            _ => {}
+        }
+        // The moving lists as shading reads them.
+        if let Some(list) = name.strip_prefix("moving_") {
+            let buffer = format!("light_{list}");
+            return self
+                .moving
+                .as_ref()
+                .and_then(|m| m.buffer(&buffer))
+                .map(|b| b.as_entire_binding());
         }
         if let Some(buffer) = self.clusters.as_ref().and_then(|c| c.buffer(name)) {
             return Some(buffer.as_entire_binding());

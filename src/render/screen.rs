@@ -38,6 +38,10 @@ pub fn pipelines(
         ScreenPass::Resolve | ScreenPass::SampleResolve => {
             vec![build("vs_main", "fs_main", color_target(gpu.hdr_format))?]
         }
+        ScreenPass::StillResolve => {
+            let target = color_target(super::resources::F32_BITS_FORMAT);
+            vec![build("vs_main", "fs_still", target)?]
+        }
         // The ambient term over every pixel, then each light added in its rectangle.
         ScreenPass::ScissorLights => {
             let additive = Some(wgpu::ColorTargetState {
@@ -98,6 +102,10 @@ pub fn encode(
     let target = match pass {
         ScreenPass::ScissorLights => &t.hdr_samples.as_ref().unwrap_or(&t.hdr).view,
         ScreenPass::Resolve | ScreenPass::SampleResolve => &t.hdr.view,
+        ScreenPass::StillResolve => match &t.still {
+            Some(still) => &still.view,
+            None => return,
+        },
         ScreenPass::DebugView | ScreenPass::Tonemap => &t.ldr.view,
     };
     let colors = [clear_attachment(target)];

@@ -26,7 +26,7 @@ impl Skips {
         let on = variant.skip_unneeded;
         Self {
             no_lights: on && scene.lights.is_empty(),
-            static_scene: on && scene.camera == scene.prev_camera && !scene.lights_move,
+            static_scene: on && scene.camera == scene.prev_camera && !scene.lights_move(),
             no_spots: on && !scene.lights.iter().any(|l| l.is_spot()),
             on,
         }
@@ -44,14 +44,30 @@ impl Renderer<'_> {
         if instrumented && (id.after_shading() || (self.last_frame_countable && !id.is_shading())) {
             return true;
         }
+        // An instrumented frame walks both of StaticDynamic's lists itself, and builds what
+        // it builds from scratch (a patch needs the lists before it).
+        let still_image = matches!(
+            id,
+            PassId::Raster(compose::RasterPass::StillShading)
+                | PassId::Screen(compose::ScreenPass::StillResolve)
+        );
+        if instrumented
+            && (still_image || id == PassId::Clustering(compose::ClusterPass::ListPatch))
+        {
+            return true;
+        }
+        if !instrumented && self.reuses(id) {
+            return true;
+        }
         let s = &self.skips;
         if !s.on {
             return false;
         }
-        let builds_clusters = matches!(
-            id,
-            PassId::Clustering(_) | PassId::Raster(compose::RasterPass::TransparentDepths)
-        );
+        let builds_clusters = still_image
+            || matches!(
+                id,
+                PassId::Clustering(_) | PassId::Raster(compose::RasterPass::TransparentDepths)
+            );
         if s.no_lights && builds_clusters {
             return true;
         }

@@ -122,6 +122,9 @@ impl<'g> Renderer<'g> {
     /// Run an instrumented frame and read its per-pixel counters.
     fn count_shading(&mut self) -> Result<PixelCounters, RenderError> {
         self.run_fitted(true)?;
+        // It shaded over the images and re-marks the clusters: a sequence's next frame
+        // redoes them.
+        self.held.disturbed.set(true);
         Ok(self.read_pixel_counters()?)
     }
 
@@ -184,7 +187,7 @@ impl<'g> Renderer<'g> {
             stats.dropped_lights = s.dropped as u64;
             stats.max_lights_per_cluster = s.max_per_cluster;
             stats.light_list_entries = s.total as u64;
-            stats.cluster_bytes = c.bytes();
+            stats.cluster_bytes = c.bytes() + self.res.moving.as_ref().map_or(0, |m| m.bytes());
             stats.z_range = Some([range.near, range.far]);
             stats.assigned_clusters = if self.variant.clusters().active_clusters {
                 s.active_clusters as u64
@@ -207,7 +210,21 @@ impl<'g> Renderer<'g> {
                 .collect();
             visible.sort_unstable();
             visible.dedup();
-            let counts = c.read_counts(gpu)?;
+            let mut counts = c.read_counts(gpu)?;
+            // Patch leaves old room behind in the index buffer, and StaticDynamic's lights
+            // are in two lists: the entries are the lists' lengths.
+            if let Some(m) = &self.res.moving {
+                for (n, moving) in counts.iter_mut().zip(m.read_counts(gpu)?) {
+                    *n += moving;
+                }
+            }
+            if matches!(
+                self.update(),
+                Some(crate::variant::ListUpdate::Patch | crate::variant::ListUpdate::StaticDynamic)
+            ) {
+                stats.light_list_entries = counts.iter().map(|&n| n as u64).sum();
+                stats.max_lights_per_cluster = counts.iter().copied().max().unwrap_or(0);
+            }
             if !c.method.builds_lists() {
                 // No lists on the GPU: each tile and bin's walk stands for one.
                 stats.light_list_entries = counts.iter().map(|&n| n as u64).sum();

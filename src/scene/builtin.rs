@@ -4,7 +4,7 @@ use glam::DVec3;
 use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg64Mcg;
 
-use super::{Camera, FRAME_DT, Light, MeshBuilder, Scene, SceneParams};
+use super::{Camera, FRAME_DT, Light, MeshBuilder, Motion, Scene, SceneParams};
 
 /// A built-in scene: its name, what it is for, and its default parameters.
 pub struct SceneInfo {
@@ -23,6 +23,7 @@ const fn defaults(lights: u32, radius_range: (f32, f32)) -> SceneParams {
         seed: 1,
         time: 1.0,
         spots: 0.0,
+        motion: Motion::ALL,
     }
 }
 
@@ -114,20 +115,28 @@ impl LightMotion {
     }
 }
 
-/// `count` lights spread uniformly over the box `lo..hi`, with saturated random colours.
-/// The total intensity stays the same whatever the count (each light gets
-/// `power / count`), so light-count sweeps keep a comparable exposure.
+/// Lights and which of them move (ascending indices).
+type SeededLights = (Vec<Light>, Vec<u32>);
+
+/// `count` lights spread uniformly over the box `lo..hi`, with saturated random colours, each
+/// drifting on its own path; a fraction `p.motion.lights` of them moves with time, the rest
+/// stay where they were at `p.motion.still_at`, decided by a stream of its own (seeded from
+/// the scene's seed), so the lights' positions and colours do not depend on the fraction.
+/// The total intensity stays the same whatever the count (each light gets `power / count`),
+/// so light-count sweeps keep a comparable exposure.
 fn random_lights(
     rng: &mut Pcg64Mcg,
     p: &SceneParams,
     lo: DVec3,
     hi: DVec3,
     power: f32,
-) -> Vec<Light> {
+) -> SeededLights {
     let n = p.lights;
     let (rmin, rmax) = p.radius_range;
-    (0..n)
-        .map(|_| {
+    let mut motion_rng = Pcg64Mcg::seed_from_u64(p.seed ^ 0x3071_0e5e_eded_0000);
+    let mut moving = Vec::new();
+    let lights = (0..n)
+        .map(|i| {
             let base = DVec3::new(
                 rng.random_range(lo.x..=hi.x),
                 rng.random_range(lo.y..=hi.y),
@@ -155,9 +164,15 @@ fn random_lights(
                 color: hue_to_rgb(hue),
                 intensity: power / n.max(1) as f32 * rng.random_range(0.5..1.5),
             };
-            motion.at(p.time)
+            // Every light draws, so light i moves at every fraction above its draw.
+            let moves = motion_rng.random_range(0.0..1.0) < p.motion.lights as f64;
+            if moves {
+                moving.push(i);
+            }
+            motion.at(p.motion.pose_time(moves, p.time))
         })
-        .collect()
+        .collect();
+    (lights, moving)
 }
 
 /// Turn a fraction `p.spots` of `lights` into spots aimed along `aim` (unit, tilted by up to
@@ -202,12 +217,13 @@ fn make_spots(
 }
 
 /// `p.lights` seeded lights in the box `lo..hi` with `power` in all, a fraction `p.spots` of
-/// them spots aimed down (as the atrium's): the lights of a file scene that has none.
-pub(super) fn seeded_lights(p: &SceneParams, lo: DVec3, hi: DVec3, power: f32) -> Vec<Light> {
+/// them spots aimed down (as the atrium's): the lights of a file scene that has none, and
+/// which of them move.
+pub(super) fn seeded_lights(p: &SceneParams, lo: DVec3, hi: DVec3, power: f32) -> SeededLights {
     let mut rng = Pcg64Mcg::seed_from_u64(p.seed);
-    let mut lights = random_lights(&mut rng, p, lo, hi, power);
+    let (mut lights, moving) = random_lights(&mut rng, p, lo, hi, power);
     make_spots(&mut lights, p, DVec3::NEG_Y, 0.8, (20.0, 60.0));
-    lights
+    (lights, moving)
 }
 
 /// A saturated colour of hue `h` in [0, 1), mixed a little towards white.
@@ -219,16 +235,20 @@ fn hue_to_rgb(h: f32) -> [f32; 3] {
     [channel(0.0), channel(2.0 / 3.0), channel(1.0 / 3.0)]
 }
 
+/// The camera of a frame at `p.time` and one frame earlier: at `eye` at the default time (1
+/// s), moving at `velocity` (scene units per second), so the previous frame's camera is
+/// `velocity * FRAME_DT` behind it; a still camera (`p.motion.camera` false) is where it was
+/// at `p.motion.still_at`, in both. Every number is single precision, as a glTF file holds
+/// it (`scenes --export`).
 fn camera_pair(
     mesh: &MeshBuilder,
     eye: DVec3,
     target: DVec3,
     velocity: DVec3,
-    t: f64,
+    p: &SceneParams,
 ) -> (Camera, Camera) {
-    // At the default time (1 s) the camera is at `eye`; it moves at `velocity` (scene units
-    // per second), so the previous frame's camera is `velocity * FRAME_DT` behind it. Every
-    // number is single precision, as a glTF file holds it (`scenes --export`).
+    let moves = p.motion.camera;
+    let t = p.motion.pose_time(moves, p.time);
     let rotation = Camera::look_rotation(eye, target, DVec3::Y).as_quat();
     let fov_y = 60f32.to_radians();
     let far = Scene::far_plane_for(&mesh.vertices, eye + velocity * (t - 1.0)) as f32;
@@ -237,14 +257,15 @@ fn camera_pair(
         let eye = (eye + velocity * (time - 1.0)).as_vec3();
         Camera::from_pose(eye, rotation, fov_y, 0.1, far)
     };
-    (at(t), at(t - FRAME_DT))
+    let earlier = if moves { t - FRAME_DT } else { t };
+    (at(t), at(earlier))
 }
 
 fn finish(
     name: &str,
     p: SceneParams,
     mesh: MeshBuilder,
-    lights: Vec<Light>,
+    (lights, moving_lights): SeededLights,
     cams: (Camera, Camera),
 ) -> Scene {
     Scene {
@@ -256,8 +277,7 @@ fn finish(
         lights,
         camera: cams.0,
         prev_camera: cams.1,
-        // Built-in lights orbit their base positions with time.
-        lights_move: true,
+        moving_lights,
         textures: None,
         file: None,
         notes: Vec::new(),
@@ -353,7 +373,7 @@ fn atrium(p: SceneParams) -> Scene {
         m.sphere(DVec3::new(x, r, z), r, 16, 32, *color);
     }
 
-    let mut lights = random_lights(
+    let (mut lights, moving) = random_lights(
         &mut rng,
         &p,
         DVec3::new(-hx + 0.5, 0.2, -hz + 0.2),
@@ -366,9 +386,9 @@ fn atrium(p: SceneParams) -> Scene {
         DVec3::new(-14.0, 1.8, 0.8),
         DVec3::new(5.5, 3.6, -0.4),
         DVec3::new(3.0, 0.0, 0.0),
-        p.time,
+        &p,
     );
-    finish("atrium", p, m, lights, cams)
+    finish("atrium", p, m, (lights, moving), cams)
 }
 
 /// A gallery 32 x 12, open above: a floor of two stones, a back wall, two rows of plinths
@@ -409,7 +429,7 @@ fn stage(p: SceneParams) -> Scene {
             m.sphere(DVec3::new(x, 1.15 + r, z), r, 16, 32, SPHERE_COLORS[i % 4]);
         }
     }
-    let mut lights = random_lights(
+    let (mut lights, moving) = random_lights(
         &mut rng,
         &p,
         DVec3::new(-hx + 1.0, 5.0, -hz + 0.5),
@@ -422,9 +442,9 @@ fn stage(p: SceneParams) -> Scene {
         DVec3::new(-15.5, 3.6, 5.0),
         DVec3::new(0.0, 0.6, -1.0),
         DVec3::new(2.0, 0.0, 0.0),
-        p.time,
+        &p,
     );
-    finish("stage", p, m, lights, cams)
+    finish("stage", p, m, (lights, moving), cams)
 }
 
 fn spheres(p: SceneParams) -> Scene {
@@ -441,7 +461,7 @@ fn spheres(p: SceneParams) -> Scene {
             m.sphere(center, r, 24, 48, SPHERE_COLORS[(i + k) % 4]);
         }
     }
-    let mut lights = random_lights(
+    let (mut lights, moving) = random_lights(
         &mut rng,
         &p,
         DVec3::new(-7.0, 0.2, -6.0),
@@ -454,9 +474,9 @@ fn spheres(p: SceneParams) -> Scene {
         DVec3::new(0.2, 6.0, 9.0),
         DVec3::new(0.2, 0.3, -0.5),
         DVec3::new(3.0, 0.0, 0.0),
-        p.time,
+        &p,
     );
-    finish("spheres", p, m, lights, cams)
+    finish("spheres", p, m, (lights, moving), cams)
 }
 
 /// Alpha cutoff of the glass scene's masked materials (glTF's default).
@@ -587,7 +607,7 @@ fn glass(p: SceneParams) -> Scene {
         );
     }
 
-    let mut lights = random_lights(
+    let (mut lights, moving) = random_lights(
         &mut rng,
         &p,
         DVec3::new(-hx + 0.5, 0.3, -hz - 4.0),
@@ -600,9 +620,9 @@ fn glass(p: SceneParams) -> Scene {
         DVec3::new(0.0, 2.2, 9.0),
         DVec3::new(-0.5, 1.4, -2.0),
         DVec3::new(1.0, 0.0, 0.0),
-        p.time,
+        &p,
     );
-    finish("glass", p, m, lights, cams)
+    finish("glass", p, m, (lights, moving), cams)
 }
 
 fn plane() -> MeshBuilder {
@@ -612,20 +632,20 @@ fn plane() -> MeshBuilder {
     m
 }
 
-fn plane_camera(m: &MeshBuilder, t: f64) -> (Camera, Camera) {
+fn plane_camera(m: &MeshBuilder, p: &SceneParams) -> (Camera, Camera) {
     camera_pair(
         m,
         DVec3::new(0.1, 3.0, 8.0),
         DVec3::new(0.1, 0.0, 0.0),
         DVec3::new(2.0, 0.0, 0.0),
-        t,
+        p,
     )
 }
 
 fn empty(p: SceneParams) -> Scene {
     let mut rng = Pcg64Mcg::seed_from_u64(p.seed);
     let m = plane();
-    let mut lights = random_lights(
+    let (mut lights, moving) = random_lights(
         &mut rng,
         &p,
         DVec3::new(-8.0, 0.2, -8.0),
@@ -633,14 +653,14 @@ fn empty(p: SceneParams) -> Scene {
         4.0,
     );
     make_spots(&mut lights, &p, DVec3::NEG_Y, 0.8, (20.0, 60.0));
-    let cams = plane_camera(&m, p.time);
-    finish("empty", p, m, lights, cams)
+    let cams = plane_camera(&m, &p);
+    finish("empty", p, m, (lights, moving), cams)
 }
 
 fn one_light(p: SceneParams) -> Scene {
     let mut rng = Pcg64Mcg::seed_from_u64(p.seed);
     let m = plane();
-    let mut lights = random_lights(
+    let (mut lights, moving) = random_lights(
         &mut rng,
         &p,
         DVec3::new(-3.0, 0.5, -3.0),
@@ -654,7 +674,9 @@ fn one_light(p: SceneParams) -> Scene {
         first.position = [0.0, 1.5, 0.0];
         first.color = [1.0, 0.95, 0.85].map(|c| c * intensity);
     }
+    // ... and stays there.
+    let moving: Vec<u32> = moving.into_iter().filter(|&i| i != 0).collect();
     make_spots(&mut lights, &p, DVec3::NEG_Y, 0.8, (20.0, 60.0));
-    let cams = plane_camera(&m, p.time);
-    finish("one_light", p, m, lights, cams)
+    let cams = plane_camera(&m, &p);
+    finish("one_light", p, m, (lights, moving), cams)
 }

@@ -1479,6 +1479,7 @@ pub fn defaults(file: &FileScene) -> SceneParams {
         seed: 1,
         time: 1.0,
         spots: 0.0,
+        motion: super::Motion::ALL,
     }
 }
 
@@ -1489,8 +1490,9 @@ pub fn instantiate(file: &FileScene, params: SceneParams) -> Scene {
     let (lo, hi) = file.bounds;
     let use_file_lights = (!file.lights.is_empty() || file.without_lights)
         && params.lights as usize == file.lights.len();
-    let lights = if use_file_lights {
-        file.lights.clone()
+    // A file's own lights stay where it put them.
+    let (lights, moving_lights) = if use_file_lights {
+        (file.lights.clone(), Vec::new())
     } else {
         // Seeded lights inside the bounds (5% in from each side), as the built-in scenes
         // place theirs, with the atrium's exposure.
@@ -1502,14 +1504,15 @@ pub fn instantiate(file: &FileScene, params: SceneParams) -> Scene {
     };
     let (camera, prev_camera) = match &file.camera {
         Some(track) => {
-            let eye_now = track.pose(params.time).0.as_dvec3();
+            // A still camera keeps its pose at the still time in both frames.
+            let moves = params.motion.camera;
+            let now = params.motion.pose_time(moves, params.time);
+            let earlier = if moves { now - FRAME_DT } else { now };
+            let eye_now = track.pose(now).0.as_dvec3();
             let far = track
                 .far
                 .unwrap_or_else(|| Scene::far_plane_for(&file.vertices, eye_now) as f32);
-            (
-                track.camera(params.time, far),
-                track.camera(params.time - FRAME_DT, far),
-            )
+            (track.camera(now, far), track.camera(earlier, far))
         }
         None => {
             let c = framing_camera(file);
@@ -1525,7 +1528,7 @@ pub fn instantiate(file: &FileScene, params: SceneParams) -> Scene {
         lights,
         camera,
         prev_camera,
-        lights_move: !use_file_lights,
+        moving_lights,
         textures: file.textures.clone(),
         file: Some(file.file.clone()),
         notes: file.notes.clone(),

@@ -153,6 +153,41 @@ pub struct SceneParams {
     /// Fraction of the lights that are spots, in [0, 1] (drawn per light from a stream of
     /// its own, so the lights' positions and colours do not depend on it).
     pub spots: f32,
+    /// What moves with time: the lights, some of them or none, and the camera.
+    pub motion: Motion,
+}
+
+/// What moves with time. A still light or camera stays where it was at `still_at` (a
+/// sequence's first frame), so a sequence can move some of its lights and not the rest.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Motion {
+    /// Fraction of the lights that move, in [0, 1] (drawn per light from a stream of its
+    /// own, so a light that moves at 0.1 also moves at 0.5, and positions and colours do not
+    /// depend on it).
+    pub lights: f32,
+    /// Whether the camera moves along its path.
+    pub camera: bool,
+    /// The time, in seconds, whose pose still lights and a still camera keep.
+    pub still_at: f64,
+}
+
+impl Motion {
+    /// Every light and the camera move (the built-in scenes' default).
+    pub const ALL: Motion = Motion {
+        lights: 1.0,
+        camera: true,
+        still_at: 0.0,
+    };
+
+    /// Whether everything moves (`still_at` then means nothing).
+    pub fn is_all(&self) -> bool {
+        self.lights >= 1.0 && self.camera
+    }
+
+    /// The time at which a part that moves (`moves`) is posed in a frame at `time`.
+    pub fn pose_time(&self, moves: bool, time: f64) -> f64 {
+        if moves { time } else { self.still_at }
+    }
 }
 
 /// Time between the previous frame and this one (motion vectors, previous-frame depth).
@@ -178,9 +213,9 @@ pub struct Scene {
     pub camera: Camera,
     /// The camera one frame earlier (`time - FRAME_DT`).
     pub prev_camera: Camera,
-    /// Whether the lights move from frame to frame (their lists must then be rebuilt every
-    /// frame); the geometry never moves.
-    pub lights_move: bool,
+    /// The lights that move with time, by index, ascending (their lists must be rebuilt from
+    /// frame to frame; the others stay where they are); the geometry never moves.
+    pub moving_lights: Vec<u32>,
     /// The base colour textures the vertices' `texture` layers index (file scenes).
     pub textures: Option<Arc<TextureArray>>,
     /// The file the scene was loaded from; `None` for a built-in scene.
@@ -200,6 +235,11 @@ pub struct SceneFile {
 }
 
 impl Scene {
+    /// Whether some light moves from frame to frame.
+    pub fn lights_move(&self) -> bool {
+        !self.moving_lights.is_empty()
+    }
+
     pub fn aspect(&self) -> f64 {
         self.params.width as f64 / self.params.height as f64
     }
@@ -393,10 +433,20 @@ fn check_params(params: &SceneParams) -> Result<(), SceneError> {
             "light radius range {lo}..{hi}: {p}"
         )));
     }
-    if !(params.time.is_finite() && (0.0..=MAX_TIME_S).contains(&params.time)) {
+    for (what, t) in [
+        ("time", params.time),
+        ("still time", params.motion.still_at),
+    ] {
+        if !(t.is_finite() && (0.0..=MAX_TIME_S).contains(&t)) {
+            return Err(SceneError::BadParam(format!(
+                "{what} {t}: it must be seconds in 0..={MAX_TIME_S}"
+            )));
+        }
+    }
+    if !(0.0..=1.0).contains(&params.motion.lights) {
         return Err(SceneError::BadParam(format!(
-            "time {}: it must be seconds in 0..={MAX_TIME_S}",
-            params.time
+            "moving fraction {}: it must be in 0..=1",
+            params.motion.lights
         )));
     }
     Ok(())

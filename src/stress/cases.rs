@@ -4,7 +4,7 @@
 use glam::DVec3;
 
 use crate::cpu::zslice::Slices;
-use crate::scene::{Camera, Light, MeshBuilder, Scene, SceneParams, Vertex};
+use crate::scene::{Camera, Light, MeshBuilder, Motion, Scene, SceneParams, Vertex};
 use strum::IntoEnumIterator;
 
 use crate::variant::*;
@@ -14,6 +14,9 @@ pub struct Case {
     pub name: String,
     pub what: String,
     pub scene: Scene,
+    /// Frames after the first (lights moving, the camera still): the case then runs as a
+    /// sequence, every frame checked (`sequence::run`).
+    pub later: Vec<Scene>,
     pub variants: Vec<(String, Variant)>,
 }
 
@@ -244,6 +247,7 @@ fn scene(
             time: 1.0,
             spots: lights.iter().filter(|l| l.is_spot()).count() as f32
                 / lights.len().max(1) as f32,
+            motion: Motion::ALL,
         },
         vertices: mesh.vertices,
         indices: mesh.indices,
@@ -251,7 +255,7 @@ fn scene(
         lights,
         camera: cam,
         prev_camera: cam,
-        lights_move: false,
+        moving_lights: Vec::new(),
         textures: None,
         file: None,
         notes: Vec::new(),
@@ -268,6 +272,7 @@ fn case(
         name: name.into(),
         what: what.into(),
         scene,
+        later: Vec::new(),
         // A case's edit (a slicing, a grid) can make a combination a variant file would be
         // refused for (CPU assignment with a dynamic range): those are not run.
         variants: variants
@@ -786,7 +791,150 @@ pub fn all() -> Vec<Case> {
     ));
     spot_cases(&mut cases);
     transparency_cases(&mut cases);
+    motion_cases(&mut cases);
     cases
+}
+
+/// Forward+ with every list strategy (`clusters.update`) on each method whose lists it
+/// keeps: one-level, two-level, with sample bounds, the light BVH; and clustered deferred
+/// with static and dynamic lists (its still image is the resolve's).
+fn strategies() -> Vec<(String, Variant)> {
+    let mut out = Vec::new();
+    let methods: [(&str, Culling, Option<u32>, bool); 4] = [
+        ("one_level", Culling::Boxes, None, false),
+        ("two_level", Culling::Boxes, Some(2), false),
+        ("sample_bounds", Culling::Boxes, None, true),
+        ("bvh", Culling::Bvh, None, false),
+    ];
+    for (method, culling, big_tiles, bounds) in methods {
+        for update in ListUpdate::iter() {
+            let name = format!("forward_plus_{method}_{}", update.label().replace('+', "_"));
+            let mut v = variant(&name, Pipeline::ClusteredForward);
+            let c = v.clusters.as_mut().expect("clustered");
+            (c.culling, c.big_tiles, c.update) = (culling, big_tiles, update);
+            (c.active_clusters, c.sample_bounds) = (bounds, bounds);
+            out.push((name, v));
+        }
+    }
+    let mut deferred = variant("deferred_static_dynamic", Pipeline::ClusteredDeferred);
+    deferred.clusters.as_mut().expect("clustered").update = ListUpdate::StaticDynamic;
+    out.push(("deferred_static_dynamic".into(), deferred));
+    // Refit is for the BVH alone: the others are refused.
+    out.into_iter()
+        .filter(|(_, v)| check(v).is_empty())
+        .collect()
+}
+
+/// A room lit by `frames[i]` in frame i, the camera still: the case of a sequence whose
+/// lights move (each light that differs between frames is a moving one).
+fn motion_case(name: &str, what: &str, frames: Vec<Vec<Light>>) -> Case {
+    let m = room();
+    let cam = default_camera(&m);
+    let bytes = |l: &Light| bytemuck::bytes_of(l).to_vec();
+    let moving: Vec<u32> = (0..frames[0].len())
+        .filter(|&i| frames.iter().any(|f| bytes(&f[i]) != bytes(&frames[0][i])))
+        .map(|i| i as u32)
+        .collect();
+    let mut scenes: Vec<Scene> = frames
+        .into_iter()
+        .enumerate()
+        .map(|(k, lights)| {
+            let mut s = scene(name, SIZE, room(), lights, cam);
+            s.params.time = 1.0 + k as f64 * crate::scene::FRAME_DT;
+            s.moving_lights = moving.clone();
+            s
+        })
+        .collect();
+    let first = scenes.remove(0);
+    Case {
+        name: name.into(),
+        what: what.into(),
+        scene: first,
+        later: scenes,
+        variants: strategies(),
+    }
+}
+
+/// World point that the default camera sees at pixel (x, y) of a `SIZE` image, at view
+/// depth `z`.
+fn seen_at(cam: &Camera, (x, y): (f64, f64), z: f64) -> DVec3 {
+    let (w, h) = (SIZE.0 as f64, SIZE.1 as f64);
+    let t = (cam.fov_y / 2.0).tan();
+    let ndc = (2.0 * x / w - 1.0, 1.0 - 2.0 * y / h);
+    let view = DVec3::new(ndc.0 * t * (w / h) * z, ndc.1 * t * z, -z);
+    cam.view().inverse().transform_point3(view)
+}
+
+/// Lights that move from frame to frame where lists go wrong: across a tile corner, across
+/// the frustum in one step, out of the view and back, and every light at once.
+fn motion_cases(cases: &mut Vec<Case>) {
+    let cam = default_camera(&room());
+    let still = lattice(27, 2.0);
+    let with = |moving: Light| {
+        let mut lights = still.clone();
+        lights.push(moving);
+        lights
+    };
+    // The corner of four tiles of the 8x6 grid, 4 units in: the light crosses it
+    // diagonally, a step a frame, through it exactly in the middle frame.
+    let corner = (SIZE.0 as f64 * 3.0 / 8.0, SIZE.1 as f64 * 2.0 / 6.0);
+    let crossing = (-2..=2)
+        .map(|k| {
+            let step = 0.6 * k as f64;
+            let p = seen_at(&cam, (corner.0 + step, corner.1 + step), 4.0);
+            with(light(p, 0.5, 4.0))
+        })
+        .collect();
+    cases.push(motion_case(
+        "motion_tile_corner",
+        "a small light crossing a tile corner diagonally, through the corner itself",
+        crossing,
+    ));
+    let left = seen_at(&cam, (4.0, SIZE.1 as f64 / 2.0), 5.0);
+    let right = seen_at(&cam, (SIZE.0 as f64 - 4.0, SIZE.1 as f64 / 2.0), 5.0);
+    let jumping = [left, left, right, right, left]
+        .into_iter()
+        .map(|p| with(light(p, 1.5, 6.0)))
+        .collect();
+    cases.push(motion_case(
+        "motion_jump_across",
+        "a light jumping across the frustum in one frame, and back",
+        jumping,
+    ));
+    // In view, at the edge, behind the camera, beyond the far side, in view again.
+    let inside = seen_at(&cam, (SIZE.0 as f64 / 2.0, SIZE.1 as f64 / 2.0), 4.0);
+    let edge = seen_at(&cam, (0.0, SIZE.1 as f64 / 2.0), 4.0);
+    let behind = cam.eye + (cam.eye - cam.target).normalize() * 4.0;
+    let beside = seen_at(&cam, (-3.0 * SIZE.0 as f64, SIZE.1 as f64 / 2.0), 4.0);
+    let leaving = [inside, edge, behind, beside, inside]
+        .into_iter()
+        .map(|p| with(light(p, 1.2, 6.0)))
+        .collect();
+    cases.push(motion_case(
+        "motion_leave_view",
+        "a light leaving the view (to its edge, behind the camera, beside it) and coming back",
+        leaving,
+    ));
+    let swirling = (0..5)
+        .map(|k| {
+            lattice(64, 1.5)
+                .into_iter()
+                .enumerate()
+                .map(|(i, mut l)| {
+                    let a = 0.7 * k as f32 + i as f32;
+                    l.position[0] += 0.8 * a.sin();
+                    l.position[1] += 0.3 * (1.3 * a).cos();
+                    l.position[2] += 0.8 * a.cos();
+                    l
+                })
+                .collect()
+        })
+        .collect();
+    cases.push(motion_case(
+        "motion_all_lights",
+        "every light moving at once, each its own way",
+        swirling,
+    ));
 }
 
 /// A square of half-size `half` facing `cam` at `distance` along its view axis, moved by

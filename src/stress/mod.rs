@@ -137,6 +137,16 @@ pub fn run_case(
         path: "built-in".into(),
         variant: v.clone(),
     };
+    if !case.later.is_empty() {
+        let checks = run_sequence_case(gpu, composer, references, case, &loaded);
+        return CaseRun {
+            case: case.name.to_string(),
+            variant: name.to_string(),
+            what: case.what.to_string(),
+            ok: checks.iter().all(|c| c.ok),
+            checks,
+        };
+    }
     let mut checks = Vec::new();
     // Two frames: with a depth range from the previous frame, the second frame's lists
     // are built on the range the first left (see `missing_lights_of`).
@@ -285,6 +295,78 @@ pub fn run_case(
         ok: checks.iter().all(|c| c.ok),
         checks,
     }
+}
+
+/// A case whose lights move: its frames as a sequence, every one checked against its
+/// reference and against the frame rendered from scratch by a new renderer (which holds
+/// every light a cluster's list must, and no other, as the single-frame cases check); and
+/// that each frame whose lights moved did the variant's list work, not a rebuild.
+fn run_sequence_case(
+    gpu: &Gpu,
+    composer: &Composer,
+    references: &ReferenceCache,
+    case: &Case,
+    v: &LoadedVariant,
+) -> Vec<Check> {
+    let frames = |i: u32| -> Result<Scene, crate::scene::SceneError> {
+        Ok(match i {
+            0 => case.scene.clone(),
+            i => case.later[i as usize - 1].clone(),
+        })
+    };
+    let spec = crate::sequence::SequenceSpec {
+        frames: 1 + case.later.len() as u32,
+        check_every: 1,
+    };
+    let run = match crate::sequence::run(gpu, composer, v, spec, &frames, references) {
+        Ok(run) => run,
+        Err(e) => return vec![check("renders", false, e.to_string())],
+    };
+    let r = &run.report;
+    let mut checks = vec![check("renders", true, "no GPU validation error".into())];
+    let checked: Vec<(u32, &crate::sequence::FrameCheck)> = r
+        .frames
+        .iter()
+        .filter_map(|f| f.check.as_ref().map(|c| (f.frame, c)))
+        .collect();
+    let meaningless = checked
+        .iter()
+        .find_map(|(i, c)| Some((i, c.failure.as_ref()?)));
+    checks.push(check(
+        "meaningful",
+        meaningless.is_none(),
+        meaningless.map_or(
+            "every frame has geometry in view and finite pixels".into(),
+            |(i, why)| format!("frame {i}: {why}"),
+        ),
+    ));
+    let differs = checked.iter().find(|(_, c)| !c.equals_fresh);
+    checks.push(check(
+        "equals a fresh frame",
+        differs.is_none(),
+        match differs {
+            None => format!(
+                "each of {} frames equals the frame rendered from scratch, its lists as sets",
+                checked.len()
+            ),
+            Some((i, c)) => format!("frame {i}: {}", c.difference.clone().unwrap_or_default()),
+        },
+    ));
+    let bound = error_bound(&v.variant);
+    let worst = checked.iter().max_by_key(|(_, c)| c.error.max_abs_8bit);
+    checks.push(check(
+        "error within bound",
+        worst.is_none_or(|(_, c)| c.error.max_abs_8bit <= bound),
+        worst.map_or(String::new(), |(i, c)| {
+            format!(
+                "worst frame {i}: max {} LSB (bound {bound})",
+                c.error.max_abs_8bit
+            )
+        }),
+    ));
+    let (ok, detail) = crate::sequence::followed(&v.variant, r);
+    checks.push(check("lists follow the lights", ok, detail));
+    checks
 }
 
 /// Each cluster's list, sorted here: a check must not depend on the GPU having sorted its

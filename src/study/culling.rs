@@ -526,17 +526,12 @@ pub fn plot(rows: &[CullingRow]) -> Option<Plot> {
                     .ok()?;
                 for (i, m) in methods().iter().enumerate() {
                     let color = crate::plot::series_color(i);
-                    let points = series(m.name, *value);
-                    chart
-                        .draw_series(LineSeries::new(points.clone(), color.stroke_width(2)))
-                        .ok()?
-                        .label(m.name)
-                        .legend(move |(x, y)| {
-                            PathElement::new(vec![(x, y), (x + 16, y)], color.stroke_width(2))
-                        });
-                    chart
-                        .draw_series(points.iter().map(|&p| Circle::new(p, 3, color.filled())))
-                        .ok()?;
+                    crate::plot::line_with_points(
+                        &mut chart,
+                        series(m.name, *value),
+                        color,
+                        m.name,
+                    )?;
                 }
                 crate::plot::legend(&mut chart, SeriesLabelPosition::UpperLeft)?;
             }

@@ -9,6 +9,7 @@ pub mod depth;
 pub mod msaa;
 pub mod slicing;
 pub mod table;
+pub mod temporal;
 pub mod transparency;
 
 use std::path::{Path, PathBuf};
@@ -97,6 +98,11 @@ pub enum StudyName {
     /// without: the transparent pass, the blended depths pass, and what the panes cost the
     /// opaque frame through shared list bounds.
     Transparency,
+    /// Every list strategy for moving lights (rebuild, static and dynamic lists, patch,
+    /// BVH refit) against the fraction of lights moving (0 to 100%), camera still and
+    /// moving, at 1024 and 16384 lights (or `--lights`) on the atrium: a sequence of
+    /// `--frames` frames after the first for each.
+    Temporal,
 }
 
 impl StudyName {
@@ -109,6 +115,7 @@ impl StudyName {
             StudyName::Culling => "culling",
             StudyName::Msaa => "msaa",
             StudyName::Transparency => "transparency",
+            StudyName::Temporal => "temporal",
         }
     }
 }
@@ -175,7 +182,8 @@ pub struct StudyOutput {
     /// False when the study found a disagreement it exists to rule out (codecs: GPU and
     /// CPU differ at the printed precision; slicing: a run failed; cones: a run failed or
     /// missed a light; culling: a run failed or its useful evaluations differ from the other
-    /// methods' on the same frame; msaa, transparency: a run failed or was over 1 LSB).
+    /// methods' on the same frame; msaa, transparency: a run failed or was over 1 LSB;
+    /// temporal: a sequence failed or a checked frame was not exact).
     pub ok: bool,
 }
 
@@ -296,6 +304,21 @@ pub fn run(
                 transparency::run(gpu, composer, options.size, options.lights, options.frames)?;
             let ok = transparency::all_exact(&rows);
             output(name, transparency::table(&rows), &rows, None, ok)
+        }
+        StudyName::Temporal => {
+            let counts = match options.lights {
+                Some(n) => vec![n],
+                None => temporal::LIGHT_COUNTS.to_vec(),
+            };
+            let rows = temporal::run(gpu, composer, options.size, &counts, options.frames)?;
+            let ok = temporal::all_exact(&rows);
+            output(
+                name,
+                temporal::table(&rows),
+                &rows,
+                temporal::plot(&rows),
+                ok,
+            )
         }
     }
 }

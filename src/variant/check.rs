@@ -227,6 +227,56 @@ fn check_clusters(c: &Clusters, v: &Variant, out: &mut Vec<Problem>) {
             "marking active clusters needs depth before shading: set `depth_prepass: true` or use ClusteredDeferred",
         ));
     }
+    check_update(c, out);
+}
+
+/// A list strategy other than `Rebuild` works on exact GPU lists that equal one-level
+/// assignment's (it patches or splits them with one-level's own test); `Refit` needs the
+/// light BVH.
+fn check_update(c: &Clusters, out: &mut Vec<Problem>) {
+    let update = c.update;
+    if update == ListUpdate::Rebuild {
+        return;
+    }
+    if update == ListUpdate::Refit {
+        if c.culling != Culling::Bvh {
+            out.push(problem(
+                "clusters.update",
+                format!(
+                    "Refit refits the light BVH's tree, and culling is {:?}: use `culling: Bvh`, or Rebuild, StaticDynamic or Patch",
+                    c.culling
+                ),
+            ));
+        }
+        return;
+    }
+    let one_level_lists = matches!(
+        c.culling,
+        Culling::Boxes | Culling::DepthMask | Culling::Bvh
+    );
+    if !one_level_lists {
+        out.push(problem(
+            "clusters.update",
+            format!(
+                "{update:?} keeps lists that equal one-level assignment's, and {:?} culling's do not: use Boxes, DepthMask or Bvh culling, or `update: Rebuild`",
+                c.culling
+            ),
+        ));
+    }
+    if c.lists != LightLists::Exact {
+        out.push(problem(
+            "clusters.update",
+            format!(
+                "{update:?} needs every light of a list (a cap forgets the lights it drops): use `lists: Exact`, or `update: Rebuild`"
+            ),
+        ));
+    }
+    if c.assignment != Assignment::Gpu {
+        out.push(problem(
+            "clusters.update",
+            format!("{update:?} updates the lists on the GPU: use `assignment: Gpu`, or `update: Rebuild`"),
+        ));
+    }
 }
 
 fn check_normals(v: &Variant, out: &mut Vec<Problem>) {

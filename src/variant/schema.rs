@@ -49,6 +49,14 @@ pub struct Variant {
     /// GPU), motion blur when the camera did not move. `false` runs every pass every frame,
     /// to measure what skipping saves.
     pub skip_unneeded: bool,
+    /// In a sequence (`clusterlab sequence`, `matrix --sequence`), reuse what did not change
+    /// since the previous frame: with the camera and geometry still, the depth pre-pass, the
+    /// G-buffer, the blended depths, the depth range, active-cluster marking and the cluster
+    /// bounds (only the lists and shading the moving lights change are redone, as
+    /// `clusters.update` says); with no light moving either, the whole frame is the previous
+    /// one. `false` redraws every pass every frame. A frame rendered again unchanged (the
+    /// matrix's timed frames) is never reused.
+    pub reuse_unchanged: bool,
 }
 
 impl Default for Variant {
@@ -66,6 +74,7 @@ impl Default for Variant {
             post: Post::default(),
             debug_view: DebugView::Off,
             skip_unneeded: true,
+            reuse_unchanged: true,
         }
     }
 }
@@ -146,6 +155,10 @@ pub struct Clusters {
     /// left out, each light tests every cluster of its range. Not with `ZBinning`,
     /// `Rasterised` or `Cpu` assignment.
     pub big_tiles: Option<u32>,
+    /// How the lists follow lights that move from frame to frame in a sequence, with the
+    /// camera and geometry still (a moving camera rebuilds every list, but `Refit`
+    /// refits). Every strategy keeps the lists exact.
+    pub update: ListUpdate,
 }
 
 impl Default for Clusters {
@@ -160,6 +173,48 @@ impl Default for Clusters {
             spot_test: SpotTest::Cone,
             culling: Culling::Boxes,
             big_tiles: None,
+            update: ListUpdate::Rebuild,
+        }
+    }
+}
+
+/// How a sequence's light lists follow the lights that move (`clusters.update`).
+#[derive(
+    Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, JsonSchema, strum::EnumIter,
+)]
+pub enum ListUpdate {
+    /// Every list rebuilt by the variant's culling method every frame a light moved.
+    Rebuild,
+    /// Two sets of lists: the still lights' built once by the variant's method (while the
+    /// camera and geometry stay still), the moving lights' every frame by one-level
+    /// assignment over them alone; shading walks both. Where a frame shades each pixel once
+    /// (one sample, and a pre-pass in forward), the still lights' part of each pixel is
+    /// shaded once into an image (`still_shading`, `still_resolve`) and reused, so a frame
+    /// shades only the moving lights. A light that was still and moves rebuilds both.
+    /// Needs exact lists, GPU assignment and a culling method whose lists are one-level's
+    /// (`Boxes` or `DepthMask`, with or without big tiles, or `Bvh`).
+    StaticDynamic,
+    /// The previous frame's lists, patched: each moved light is removed from the clusters
+    /// it left and added to those it entered (a cluster whose set changed takes new room in
+    /// the index buffer and is sorted; the rest keep theirs). When the index buffer fills,
+    /// the frame rebuilds every list (and compacts it). Needs exact lists, GPU assignment
+    /// and a method whose lists are one-level's (as `StaticDynamic`).
+    Patch,
+    /// The light BVH's tree refitted instead of rebuilt (Moreau, Pharr and Clarberg 2019):
+    /// the previous frame's light order kept, each node's range recomputed from its
+    /// children; the walks stay exact, only their length changes. Applies also when the
+    /// camera moves. `Bvh` culling only.
+    Refit,
+}
+
+impl ListUpdate {
+    /// Its short name (README's table, the matrix's labels).
+    pub fn label(self) -> &'static str {
+        match self {
+            ListUpdate::Rebuild => "rebuild",
+            ListUpdate::StaticDynamic => "static+dynamic",
+            ListUpdate::Patch => "patch",
+            ListUpdate::Refit => "refit",
         }
     }
 }

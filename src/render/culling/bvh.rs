@@ -16,11 +16,16 @@ use crate::render::clusters::ClusterBuffers;
 /// at most 65535, and the sorted order is a power of two: 2^20 entries make 32768 nodes.
 const MAX_LIGHTS: u32 = 1 << 20;
 
-pub(super) fn plan(c: &ClusterBuffers, lights: u32) -> Plan<'_> {
+/// The tree built (`refit` false: the lights sorted by key first) or refitted over the
+/// previous frame's order (Moreau et al. 2019: each node's range recomputed from its
+/// children, whatever the order; the walks stay exact).
+pub(super) fn plan(c: &ClusterBuffers, lights: u32, refit: bool) -> Plan<'_> {
     let mut clears = vec![Clear::whole(c.named("light_counts"))];
     clears.extend(Clear::long_lists(c));
     let mut steps = vec![Step::Dispatch("transform_lights", Over::Threads(lights, 1))];
-    steps.extend(sort_lights(lights));
+    if !refit {
+        steps.extend(sort_lights(lights));
+    }
     for nodes in level_sizes(sorted_size(lights)) {
         steps.push(Step::Dispatch("build_nodes", Over::Groups(nodes, 1, 1)));
     }

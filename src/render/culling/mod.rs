@@ -6,6 +6,7 @@
 
 mod bvh;
 mod one_level;
+mod patch;
 mod rasterised;
 mod two_level;
 mod zbinning;
@@ -44,16 +45,30 @@ impl CullingMethod {
         }
     }
 
-    /// The clears and steps of light assignment for `lights` lights.
-    fn plan(self, c: &ClusterBuffers, lights: u32) -> Plan<'_> {
+    /// The clears and steps of light assignment for `lights` lights (`refit`: the light
+    /// BVH refitted over its last order instead of sorted and built).
+    fn plan(self, c: &ClusterBuffers, lights: u32, refit: bool) -> Plan<'_> {
         match self {
             CullingMethod::OneLevel => one_level::plan(c, lights),
             CullingMethod::TwoLevel { big_tile } => two_level::plan(c, lights, big_tile),
             CullingMethod::ZBinning => zbinning::plan(c, lights),
             CullingMethod::Rasterised => rasterised::plan(c, lights),
-            CullingMethod::Bvh => bvh::plan(c, lights),
+            CullingMethod::Bvh => bvh::plan(c, lights, refit),
         }
     }
+}
+
+/// What one light-list pass of a frame does.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ListWork {
+    /// The variant's method builds every list over `lights` lights (the BVH `refit` over
+    /// its last order, where the frame refits).
+    Assign { lights: u32, refit: bool },
+    /// One-level assignment of StaticDynamic's moving lists over `moving` lights (the
+    /// moving set's buffers, `lists` their lists).
+    Moving { moving: u32 },
+    /// Patch: the lists moved along with `moved` lights.
+    Patch { moved: u32 },
 }
 
 /// What light assignment runs: buffers (or parts of them) cleared first, then its steps.
@@ -155,20 +170,23 @@ fn check_sorted(gpu: &Gpu, method: &str, lights: usize) -> Result<(), GpuError> 
     Ok(())
 }
 
-/// Encode light assignment by `method`: its clears, then its steps. The first compute pass
+/// Encode one light-list pass (`work`): its clears, then its steps. The first compute pass
 /// writes the beginning timestamp and the last the end (one pass writes both).
 #[allow(clippy::too_many_arguments)]
 pub fn encode(
-    method: CullingMethod,
+    work: ListWork,
     p: &ComputePipelines,
     binning: Option<&BinningPipelines>,
     groups: &[Option<wgpu::BindGroup>],
     encoder: &mut wgpu::CommandEncoder,
     slot: Option<TimestampSlot<'_>>,
     c: &ClusterBuffers,
-    lights: u32,
 ) {
-    let plan = method.plan(c, lights);
+    let plan = match work {
+        ListWork::Assign { lights, refit } => c.method.plan(c, lights, refit),
+        ListWork::Moving { moving } => one_level::plan(c, moving),
+        ListWork::Patch { moved } => patch::plan(c, moved),
+    };
     for Clear(buffer, at, bytes) in &plan.clears {
         encoder.clear_buffer(buffer, *at, *bytes);
     }

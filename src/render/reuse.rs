@@ -1,0 +1,325 @@
+//! Frames that follow each other (`Renderer::advance`): what changed since the frame the
+//! GPU holds (the camera, which lights), uploaded; and what the next frame redoes, from
+//! `Variant::reuse_unchanged` and `clusters.update`.
+
+use std::cell::Cell;
+
+use serde::Serialize;
+
+use super::{RenderError, Renderer, ViewUniform};
+use crate::compose::{ClusterPass, PassId, RasterPass, ScreenPass};
+use crate::scene::{Camera, Light, Scene, Vertex};
+use crate::variant::{DepthRangeSource, ListUpdate, ZSlicing};
+
+/// What a frame redoes of the one before it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) struct Redo {
+    /// The depth pre-pass, G-buffer, blended depths, depth range, marking and boxes.
+    pub surfaces: bool,
+    pub lists: Lists,
+    /// StaticDynamic: the still lights' lists and the still image.
+    pub still: bool,
+    /// Any pass at all: false when the frame is the previous one.
+    pub frame: bool,
+}
+
+/// What a frame does to its light lists.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum Lists {
+    /// Keeps them: nothing they depend on changed.
+    Keep,
+    /// Builds every list (StaticDynamic: both sets).
+    Build,
+    /// StaticDynamic: only the moving lights' lists.
+    Moving,
+    /// Patch: moves the moved lights in them.
+    Patch,
+    /// Refit: refits the light BVH over its last order and walks it again.
+    Refit,
+    /// Builds them and runs every other list pass too, over nothing (`draw_without_lights`,
+    /// which compiles every pass a sequence may run).
+    Every,
+}
+
+impl Redo {
+    /// Everything: a first frame, or a frame rendered again unchanged (its lists built as
+    /// every frame of a matrix cell builds them).
+    pub(super) const ALL: Redo = Redo {
+        surfaces: true,
+        lists: Lists::Build,
+        still: true,
+        frame: true,
+    };
+
+    /// Every pass a frame may run (a patch too, of no light).
+    pub(super) const EVERY: Redo = Redo {
+        lists: Lists::Every,
+        ..Redo::ALL
+    };
+}
+
+/// What changed between two frames of a sequence.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct FrameChange {
+    /// The camera (or the one a frame before it, which motion blur reads) moved.
+    pub camera_moved: bool,
+    /// The lights whose position, radius, colour or cone changed, ascending.
+    pub moved_lights: Vec<u32>,
+}
+
+/// What the GPU holds of the last frame: what `advance` compares the next one with.
+pub(super) struct Held {
+    lights: Vec<Light>,
+    camera: Camera,
+    prev_camera: Camera,
+    vertices: Vec<Vertex>,
+    indices: Vec<u32>,
+    blended: Vec<u32>,
+    /// Frames in a row whose view was the one before theirs.
+    still_frames: u32,
+    /// The images or marks are not the last frame's: an instrumented frame shaded over
+    /// the images and re-marked the clusters, or a debug view was drawn into the output.
+    pub(super) disturbed: Cell<bool>,
+}
+
+impl Held {
+    pub(super) fn of(scene: &Scene) -> Self {
+        Self {
+            lights: scene.lights.clone(),
+            camera: scene.camera,
+            prev_camera: scene.prev_camera,
+            vertices: scene.vertices.clone(),
+            indices: scene.indices.clone(),
+            blended: scene.blended.clone(),
+            still_frames: 0,
+            disturbed: Cell::new(false),
+        }
+    }
+
+    /// Why `scene` cannot follow the held frame, if it cannot: a sequence's frames share
+    /// their size, geometry and number of lights.
+    fn mismatch(&self, scene: &Scene, size: (u32, u32)) -> Option<String> {
+        let p = &scene.params;
+        if (p.width, p.height) != size {
+            return Some(format!(
+                "its size is {}x{}, the sequence's {}x{}",
+                p.width, p.height, size.0, size.1
+            ));
+        }
+        if scene.lights.len() != self.lights.len() {
+            return Some(format!(
+                "it has {} lights, the sequence {}",
+                scene.lights.len(),
+                self.lights.len()
+            ));
+        }
+        let same = bytemuck::cast_slice::<Vertex, u8>(&scene.vertices)
+            == bytemuck::cast_slice::<Vertex, u8>(&self.vertices)
+            && scene.indices == self.indices
+            && scene.blended == self.blended;
+        (!same).then(|| "its geometry differs (the geometry of a sequence never moves)".into())
+    }
+}
+
+impl Renderer<'_> {
+    /// Make the next frame `scene`: the same geometry, size and number of lights as the
+    /// frame before, at a later time. Uploads the lights that changed and the camera if it
+    /// moved, and decides what the next `render` redoes (with `reuse_unchanged`, only what
+    /// the change reaches; `clusters.update` says how the lists follow the lights).
+    pub fn advance(&mut self, scene: &Scene) -> Result<FrameChange, RenderError> {
+        if let Some(why) = self.held.mismatch(scene, (self.width, self.height)) {
+            return Err(RenderError::Scene(format!(
+                "scene `{}` at time {} s cannot follow the sequence's last frame: {why}",
+                scene.name, scene.params.time
+            )));
+        }
+        scene
+            .check()
+            .map_err(|e| RenderError::Scene(e.to_string()))?;
+        let moved: Vec<u32> = (0..scene.lights.len())
+            .filter(|&i| {
+                bytemuck::bytes_of(&scene.lights[i]) != bytemuck::bytes_of(&self.held.lights[i])
+            })
+            .map(|i| i as u32)
+            .collect();
+        let camera_moved =
+            scene.camera != self.held.camera || scene.prev_camera != self.held.prev_camera;
+        // What the renderer was made for must hold: the passes its plan runs and the
+        // shaders' features (a still first camera leaves motion blur out; spots, the cone).
+        let plan = crate::compose::plan(
+            &self.variant,
+            scene.camera == scene.prev_camera,
+            scene.has_blend(),
+        );
+        if plan != self.plan || (self.skips.no_spots && scene.lights.iter().any(|l| l.is_spot())) {
+            return Err(RenderError::Scene(format!(
+                "scene `{}` at time {} s cannot follow the sequence's last frame: it needs passes or shader features the first frame did not (a camera that starts to move under motion blur, or a light that becomes a spot)",
+                scene.name, scene.params.time
+            )));
+        }
+        self.upload_lights(scene, &moved);
+        let (near, far) = (scene.camera.near, scene.camera.far);
+        if camera_moved && (near, far) != (self.held.camera.near, self.held.camera.far) {
+            // The static slicing runs from near to far: the boxes are built again.
+            if let Some(c) = &self.res.clusters {
+                let range = super::ClusterRange::new(near as f32, far as f32);
+                self.gpu
+                    .queue
+                    .write_buffer(&c.range, 0, bytemuck::bytes_of(&range));
+            }
+            self.bounds_built = false;
+        }
+        if camera_moved || !moved.is_empty() {
+            // Lists built on the CPU start from the lights in view space; naive forward's
+            // counting stand-in is remade for the frame it counts.
+            if self.cpu_assignment.is_some() {
+                self.cpu_assignment = Some(super::lists::CpuAssignment::new(&self.variant, scene));
+            }
+            self.naive_stand_in = None;
+        }
+        if camera_moved {
+            let view = ViewUniform::new(scene, self.variant.depth.mapping());
+            self.gpu
+                .queue
+                .write_buffer(&self.res.scene.view, 0, bytemuck::bytes_of(&view));
+            if let Some((buffer, _)) = &self.res.scene.blended {
+                let order = scene.blend_order();
+                self.gpu
+                    .queue
+                    .write_buffer(buffer, 0, bytemuck::cast_slice(&order));
+            }
+        }
+        let h = &mut self.held;
+        h.lights.clone_from(&scene.lights);
+        (h.camera, h.prev_camera) = (scene.camera, scene.prev_camera);
+        h.still_frames = if camera_moved { 0 } else { h.still_frames + 1 };
+        // A sequence decides what each frame redoes; a still scene's rule is for frames
+        // rendered again unchanged.
+        self.skips.static_scene = false;
+        self.redo = self.plan_redo(camera_moved, &moved);
+        Ok(FrameChange {
+            camera_moved,
+            moved_lights: moved,
+        })
+    }
+
+    /// Write the lights that moved into the light buffer: runs of neighbours in one write.
+    fn upload_lights(&self, scene: &Scene, moved: &[u32]) {
+        let bytes = std::mem::size_of::<Light>() as u64;
+        let mut i = 0;
+        while i < moved.len() {
+            let mut j = i + 1;
+            while j < moved.len() && moved[j] == moved[j - 1] + 1 {
+                j += 1;
+            }
+            let (first, last) = (moved[i] as usize, moved[j - 1] as usize);
+            self.gpu.queue.write_buffer(
+                &self.res.scene.lights,
+                first as u64 * bytes,
+                bytemuck::cast_slice(&scene.lights[first..=last]),
+            );
+            i = j;
+        }
+    }
+
+    /// What the next frame redoes after a change of the camera (`camera_moved`) and of the
+    /// lights `moved`; sets the moving set the list passes read.
+    fn plan_redo(&mut self, camera_moved: bool, moved: &[u32]) -> Redo {
+        let disturbed = self.held.disturbed.replace(false);
+        if self.frames_done == 0 {
+            if let Some(ListUpdate::StaticDynamic) = self.update() {
+                let mut set = self.res.moving_set.lights.clone();
+                set.extend_from_slice(moved);
+                set.sort_unstable();
+                set.dedup();
+                self.res.moving_set.set(self.gpu, &set);
+            }
+            return Redo::ALL;
+        }
+        // The boxes and view-space lights hold while the view does; with a depth range from
+        // the previous frame, the range settles a frame after the view stops.
+        let late_range = self.variant.pipeline.is_clustered()
+            && self.variant.clusters().slicing
+                == (ZSlicing::DynamicRange {
+                    source: DepthRangeSource::PreviousFrame,
+                });
+        let frames_needed = 1 + u32::from(late_range);
+        let view_holds = !camera_moved && self.held.still_frames >= frames_needed;
+        let reuse = self.variant.reuse_unchanged;
+        let lists = match self.update() {
+            None => Lists::Keep,
+            Some(_) if view_holds && moved.is_empty() => Lists::Keep,
+            Some(ListUpdate::Refit) => Lists::Refit,
+            Some(_) if !view_holds => Lists::Build,
+            Some(ListUpdate::Rebuild) => Lists::Build,
+            Some(ListUpdate::Patch) => Lists::Patch,
+            Some(ListUpdate::StaticDynamic) => {
+                let held = &self.res.moving_set.lights;
+                if moved.iter().all(|i| held.binary_search(i).is_ok()) {
+                    Lists::Moving
+                } else {
+                    Lists::Build
+                }
+            }
+        };
+        match self.update() {
+            // A still light that moved joins the moving lights; both lists are rebuilt.
+            Some(ListUpdate::StaticDynamic) if lists == Lists::Build => {
+                let mut set = self.res.moving_set.lights.clone();
+                set.extend_from_slice(moved);
+                set.sort_unstable();
+                set.dedup();
+                self.res.moving_set.set(self.gpu, &set);
+            }
+            Some(ListUpdate::Patch) if lists == Lists::Patch => {
+                self.res.moving_set.set(self.gpu, moved);
+            }
+            _ => {}
+        }
+        let unchanged = reuse && view_holds && moved.is_empty() && !disturbed;
+        Redo {
+            surfaces: !(reuse && view_holds) || disturbed,
+            lists,
+            still: self.update() == Some(ListUpdate::StaticDynamic) && lists == Lists::Build,
+            frame: !unchanged,
+        }
+    }
+
+    /// The list strategy of a clustered variant (None without clusters).
+    pub(super) fn update(&self) -> Option<ListUpdate> {
+        self.variant
+            .pipeline
+            .is_clustered()
+            .then(|| self.variant.clusters().update)
+    }
+
+    /// Whether the frame's plan of what to redo leaves pass `id` out (never for an
+    /// instrumented frame, whose own rules are `skips_pass`'s).
+    pub(super) fn reuses(&self, id: PassId) -> bool {
+        let r = self.redo;
+        if !r.frame {
+            return true;
+        }
+        match id {
+            PassId::Raster(
+                RasterPass::DepthPrepass | RasterPass::GBuffer | RasterPass::TransparentDepths,
+            )
+            | PassId::Clustering(
+                ClusterPass::DepthRange | ClusterPass::MarkActive | ClusterPass::ClusterBounds,
+            ) => !r.surfaces,
+            PassId::Clustering(ClusterPass::LightAssign) => {
+                !matches!(r.lists, Lists::Build | Lists::Refit | Lists::Every)
+            }
+            PassId::Clustering(ClusterPass::MovingAssign) => {
+                !matches!(r.lists, Lists::Build | Lists::Moving | Lists::Every)
+            }
+            PassId::Clustering(ClusterPass::ListPatch) => {
+                !matches!(r.lists, Lists::Patch | Lists::Every)
+            }
+            PassId::Raster(RasterPass::StillShading) | PassId::Screen(ScreenPass::StillResolve) => {
+                !r.still
+            }
+            _ => false,
+        }
+    }
+}
