@@ -39,7 +39,7 @@ use std::time::Instant;
 use crate::compose::{self, ComposedPass, Composer, FramePlan, Pass, PassId, ShaderError};
 use crate::gpu::{Gpu, GpuError, TimestampSlot, Timings, read_texture};
 use crate::scene::Scene;
-use crate::variant::{Assignment, DepthRangeSource, Variant, ZSlicing};
+use crate::variant::{Assignment, Variant};
 use built::{BuiltPass, Pipelines};
 use lists::{CpuAssignment, Fit};
 use post::PostChain;
@@ -333,11 +333,7 @@ impl<'g> Renderer<'g> {
         // With a z-range from the previous frame, the first frame's lists were built on the
         // starting range, which its depth-range pass then replaced with this picture's: the
         // lists agree with the range shading reads from the second frame on.
-        let late_range = self.variant.pipeline.is_clustered()
-            && self.variant.clusters().slicing
-                == (ZSlicing::DynamicRange {
-                    source: DepthRangeSource::PreviousFrame,
-                });
+        let late_range = self.variant.range_from_previous_frame();
         self.last_frame_countable = !late_range || self.frames_done >= 2;
         // A frame rendered again without `advance` redoes everything.
         self.redo = Redo::ALL;

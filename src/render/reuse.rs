@@ -9,7 +9,7 @@ use serde::Serialize;
 use super::{RenderError, Renderer, ViewUniform};
 use crate::compose::{ClusterPass, PassId, RasterPass, ScreenPass};
 use crate::scene::{Camera, Light, Scene, Vertex};
-use crate::variant::{DepthRangeSource, ListUpdate, ZSlicing};
+use crate::variant::ListUpdate;
 
 /// What a frame redoes of the one before it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -228,22 +228,13 @@ impl Renderer<'_> {
         let disturbed = self.held.disturbed.replace(false);
         if self.frames_done == 0 {
             if let Some(ListUpdate::StaticDynamic) = self.update() {
-                let mut set = self.res.moving_set.lights.clone();
-                set.extend_from_slice(moved);
-                set.sort_unstable();
-                set.dedup();
-                self.res.moving_set.set(self.gpu, &set);
+                self.join_moving(moved);
             }
             return Redo::ALL;
         }
         // The boxes and view-space lights hold while the view does; with a depth range from
         // the previous frame, the range settles a frame after the view stops.
-        let late_range = self.variant.pipeline.is_clustered()
-            && self.variant.clusters().slicing
-                == (ZSlicing::DynamicRange {
-                    source: DepthRangeSource::PreviousFrame,
-                });
-        let frames_needed = 1 + u32::from(late_range);
+        let frames_needed = 1 + u32::from(self.variant.range_from_previous_frame());
         let view_holds = !camera_moved && self.held.still_frames >= frames_needed;
         let reuse = self.variant.reuse_unchanged;
         let lists = match self.update() {
@@ -264,13 +255,7 @@ impl Renderer<'_> {
         };
         match self.update() {
             // A still light that moved joins the moving lights; both lists are rebuilt.
-            Some(ListUpdate::StaticDynamic) if lists == Lists::Build => {
-                let mut set = self.res.moving_set.lights.clone();
-                set.extend_from_slice(moved);
-                set.sort_unstable();
-                set.dedup();
-                self.res.moving_set.set(self.gpu, &set);
-            }
+            Some(ListUpdate::StaticDynamic) if lists == Lists::Build => self.join_moving(moved),
             Some(ListUpdate::Patch) if lists == Lists::Patch => {
                 self.res.moving_set.set(self.gpu, moved);
             }
@@ -283,6 +268,15 @@ impl Renderer<'_> {
             still: self.update() == Some(ListUpdate::StaticDynamic) && lists == Lists::Build,
             frame: !unchanged,
         }
+    }
+
+    /// StaticDynamic: lights `moved` join the moving set (its lists are built next).
+    fn join_moving(&mut self, moved: &[u32]) {
+        let mut set = self.res.moving_set.lights.clone();
+        set.extend_from_slice(moved);
+        set.sort_unstable();
+        set.dedup();
+        self.res.moving_set.set(self.gpu, &set);
     }
 
     /// The list strategy of a clustered variant (None without clusters).

@@ -25,7 +25,7 @@ use crate::reference::ReferenceCache;
 use crate::render::{FrameChange, FrameOutput, FrameStats, RenderError, Renderer};
 use crate::run::{RunError, median, round3};
 use crate::scene::{FRAME_DT, Scene, SceneError};
-use crate::variant::{DepthRangeSource, ListUpdate, LoadedVariant, Variant, ZSlicing};
+use crate::variant::{ListUpdate, LoadedVariant, Variant};
 
 /// How long a sequence is and which of its frames are checked.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -431,13 +431,8 @@ fn fresh_difference(
     let mut fresh = Renderer::new(gpu, composer, v, scene)?;
     // With a depth range from the previous frame, the second frame's lists are built on
     // this picture's range, as a sequence's are once its view holds.
-    let late_range = v.pipeline.is_clustered()
-        && v.clusters().slicing
-            == (ZSlicing::DynamicRange {
-                source: DepthRangeSource::PreviousFrame,
-            });
     let mut image = fresh.render()?;
-    if late_range {
+    if v.range_from_previous_frame() {
         image = fresh.render()?;
     }
     let bits = |p: &[f32; 4]| p.map(f32::to_bits);

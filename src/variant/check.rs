@@ -466,6 +466,15 @@ impl Variant {
     pub fn clusters(&self) -> Clusters {
         self.clusters.clone().unwrap_or_default()
     }
+    /// Whether a frame's lists are built on the depth range the previous frame reduced (a
+    /// renderer's first frame, or a sequence's first after the view moved, on another).
+    pub fn range_from_previous_frame(&self) -> bool {
+        self.pipeline.is_clustered()
+            && self.clusters().slicing
+                == (ZSlicing::DynamicRange {
+                    source: DepthRangeSource::PreviousFrame,
+                })
+    }
     /// The G-buffer settings in effect (the defaults when the file leaves them out).
     pub fn gbuffer(&self) -> GBuffer {
         self.gbuffer.clone().unwrap_or_default()
