@@ -444,6 +444,13 @@ mod tests {
         std::fs::write(dir.join("images/notes.txt"), "").unwrap();
         assert!(matches!(owner(&dir).unwrap(), Owner::Foreign(_)));
         std::fs::remove_file(dir.join("images/notes.txt")).unwrap();
+        // A sequence's animation is a run's in images/, and in no other folder.
+        std::fs::write(dir.join("images/a.gif"), "").unwrap();
+        assert_eq!(owner(&dir).unwrap(), Owner::Run(None));
+        std::fs::create_dir(dir.join("plots")).unwrap();
+        std::fs::write(dir.join("plots/a.gif"), "").unwrap();
+        assert!(matches!(owner(&dir).unwrap(), Owner::Foreign(_)));
+        std::fs::remove_file(dir.join("plots/a.gif")).unwrap();
         // A marker the tool did not write is not one.
         std::fs::write(dir.join(MARKER_NAME), "mine\n").unwrap();
         assert!(matches!(owner(&dir).unwrap(), Owner::Foreign(_)));
