@@ -65,6 +65,8 @@ fn explain_variants(variants: &[Value], indent: &str, defs: &Map<String, Value>,
             let _ = writeln!(out, "{indent}  {name}");
         } else if let Some((name, body)) = v["properties"].as_object().and_then(|p| p.iter().next())
         {
+            // A variant that wraps a struct (`Sampled(Sampling)`) shows the struct's fields.
+            let body = resolve(body, defs).unwrap_or(body);
             let fields: Vec<String> = body["properties"]
                 .as_object()
                 .map(|f| {

@@ -5,6 +5,7 @@
 //! the frame is compared ([`metrics`]) with an independent [`cpu`] reference. The
 //! [`matrix`] runs many such cells and reports them side by side.
 
+pub mod bias;
 pub mod common;
 pub mod compose;
 pub mod cpu;

@@ -92,7 +92,9 @@ enum Command {
     /// Run a study against published numbers: codecs (normal codec angular error, GPU and
     /// CPU), depth (view depth rebuilt from the depth buffer), slicing (culling efficiency of
     /// each z-slicing scheme and grid), cones (spot lights culled by sphere or cone), culling
-    /// (every culling method, and which did best on each scene and light count).
+    /// (every culling method, and which did best on each scene and light count), msaa,
+    /// transparency, temporal (list strategies for moving lights) and sampling (sampled
+    /// light loops against the exact ones).
     Study {
         /// Which study.
         name: clusterlab::study::StudyName,
@@ -112,8 +114,9 @@ enum Command {
         /// every built-in scene).
         #[arg(long, value_delimiter = ',')]
         scenes: Vec<String>,
-        /// Slicing, cones and culling: lights in every scene (default: each scene's own;
-        /// culling: 64, 1024, 4096 and 16384).
+        /// Slicing, cones, culling, msaa, transparency, temporal and sampling: lights in every
+        /// scene (default: each scene's own; culling: 64, 1024, 4096 and 16384; temporal:
+        /// 1024 and 16384; sampling: 1024, 4096 and 16384).
         #[arg(long)]
         lights: Option<u32>,
         /// Slicing, cones and culling: timed frames per run, at least 1 (the median is reported).

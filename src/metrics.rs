@@ -23,13 +23,21 @@ pub struct ErrorMetrics {
     pub pixels_over_1lsb: u64,
     /// Pixels whose HDR value is NaN or infinite in some channel.
     pub nan_pixels: u64,
+    /// Relative MSE of the linear HDR images, as the many-light sampling literature reports
+    /// it: the mean of (x - r)^2 / (r^2 + RELATIVE_MSE_OFFSET) per channel.
+    #[serde(default)]
+    pub relative_mse: f64,
 }
+
+/// What relative MSE adds to the reference's square, so that black pixels do not divide by
+/// zero (Rousselle et al. 2011 use 1e-2 or 1e-3; radiance here is near 1 where lit).
+pub const RELATIVE_MSE_OFFSET: f64 = 1e-2;
 
 /// Compare `frame` with `reference` (same size).
 pub fn compare(frame: &FrameOutput, reference: &ReferenceFrame) -> ErrorMetrics {
     let n = frame.ldr.len().min(reference.ldr.len());
     let (mut max8, mut sq8, mut over1, mut nan) = (0u32, 0f64, 0u64, 0u64);
-    let (mut max_hdr, mut sq_hdr) = (0f64, 0f64);
+    let (mut max_hdr, mut sq_hdr, mut relative) = (0f64, 0f64, 0f64);
     for i in 0..n {
         let mut pixel_max = 0;
         for c in 0..3 {
@@ -50,6 +58,7 @@ pub fn compare(frame: &FrameOutput, reference: &ReferenceFrame) -> ErrorMetrics 
             let d = (*h as f64 - r).abs();
             max_hdr = max_hdr.max(d);
             sq_hdr += d * d;
+            relative += d * d / (r * r + RELATIVE_MSE_OFFSET);
         }
     }
     let samples = (3 * n.max(1)) as f64;
@@ -63,7 +72,19 @@ pub fn compare(frame: &FrameOutput, reference: &ReferenceFrame) -> ErrorMetrics 
         flip_mean: flip_mean(frame, reference),
         pixels_over_1lsb: over1,
         nan_pixels: nan,
+        relative_mse: relative / samples,
     }
+}
+
+/// The 8-bit RMSE of `frame` against `reference` alone (what a sequence of many frames
+/// checks each frame by; `compare` gives every figure).
+pub fn rmse_8bit(frame: &FrameOutput, reference: &ReferenceFrame) -> f64 {
+    let n = frame.ldr.len().min(reference.ldr.len());
+    let sq: f64 = (0..n)
+        .flat_map(|i| (0..3).map(move |c| (i, c)))
+        .map(|(i, c)| (frame.ldr[i][c] as f64 - reference.ldr[i][c] as f64).powi(2))
+        .sum();
+    (sq / (3 * n.max(1)) as f64).sqrt()
 }
 
 fn rgb8(pixels: impl Iterator<Item = [u8; 3]>) -> Vec<u8> {

@@ -296,3 +296,54 @@ fn every_list_strategy_has_a_shipped_variant_a_study_row_and_a_stress_run() {
     }
     assert!(missing.is_empty(), "{}", missing.join("\n"));
 }
+
+/// Each kind of sampled light loop (an exhaustive match: a new sampler does not compile
+/// until it is named here) has a shipped variant, and every shipped sampled variant is in
+/// `study sampling` and in the bias tests.
+#[test]
+fn every_sampler_has_a_shipped_variant_a_study_row_and_a_bias_test() {
+    use clusterlab::variant::Sampler;
+    let kind = |s: &Sampler| match s {
+        Sampler::Uniform { .. } => "uniform",
+        Sampler::Ris { temporal: None, .. } => "RIS",
+        Sampler::Ris {
+            temporal: Some(_), ..
+        } => "RIS with temporal reuse",
+        Sampler::StochasticCulling { .. } => "stochastic culling",
+    };
+    let kinds = [
+        "uniform",
+        "RIS",
+        "RIS with temporal reuse",
+        "stochastic culling",
+    ];
+    let sampled: Vec<variant::LoadedVariant> = shipped()
+        .into_iter()
+        .filter(|v| v.variant.shading.lights.sampling().is_some())
+        .collect();
+    let kind_of =
+        |v: &variant::LoadedVariant| kind(&v.variant.shading.lights.sampling().unwrap().method);
+    let tested: Vec<String> = crate::sampling::unbiased_samplers()
+        .into_iter()
+        .map(|(v, _)| v.name)
+        .collect();
+    let study = clusterlab::study::sampling::SAMPLERS;
+    let mut missing = Vec::new();
+    for k in kinds {
+        if !sampled.iter().any(|v| kind_of(v) == k) {
+            missing.push(format!("{k}: no shipped variant"));
+        }
+    }
+    for v in &sampled {
+        let name = v.name.as_str();
+        if !study.contains(&name) && name != clusterlab::study::sampling::TEMPORAL {
+            missing.push(format!("{name}: no row in `study sampling`"));
+        }
+        if !tested.iter().any(|t| t == name) {
+            missing.push(format!(
+                "{name}: not in the bias tests (`tests/sampling.rs`)"
+            ));
+        }
+    }
+    assert!(missing.is_empty(), "{}", missing.join("\n"));
+}

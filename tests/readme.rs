@@ -81,11 +81,15 @@ fn gbuffer(v: &Variant) -> String {
     format!("{layout}, {normals}")
 }
 
-fn shading(v: &Variant) -> &'static str {
-    match v.shading.model {
+fn shading(v: &Variant) -> String {
+    let model = match v.shading.model {
         ShadingModel::Lambert => "Lambert",
         ShadingModel::BlinnPhong { .. } => "Blinn-Phong",
         ShadingModel::Ggx => "GGX",
+    };
+    match v.shading.lights.sampling() {
+        None => model.into(),
+        Some(s) => format!("{model}, {}", s.label()),
     }
 }
 

@@ -24,6 +24,7 @@ mod naive;
 mod post;
 mod properties;
 mod readme;
+mod sampling;
 mod sequence;
 mod shards;
 mod skipping;

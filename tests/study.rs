@@ -523,3 +523,79 @@ fn the_temporal_study_runs_every_strategy_at_every_fraction_exactly() {
     assert!(table.notes.iter().any(|n| n.contains("Moreau")));
     assert!(temporal::plot(&rows).is_some());
 }
+
+/// The sampling study runs every exact variant, every sampler and its sweep at a point, and
+/// its figures are what its frames did: exact rows within 1 LSB and evaluating what they
+/// look at, useful evaluations among the evaluated and those among the candidates, the
+/// sweeps stopping at the first point that reaches the target, the front holding the
+/// fastest single frame and no dominated row, the temporal row beside it.
+#[test]
+fn the_sampling_study_measures_every_sampler_against_the_exact_variants() {
+    use clusterlab::study::sampling;
+    let gpu = common::gpu();
+    let rows = sampling::run(&gpu, &Composer::default(), (64, 36), &[256], 1).expect("study");
+    assert!(sampling::all_ran(&rows), "{rows:#?}");
+    let points = sampling::RADII.len();
+    let shipped = |r: &&sampling::SamplingRow| !r.sweep;
+    assert_eq!(
+        rows.iter().filter(shipped).count(),
+        points * (sampling::EXACT.len() + sampling::SAMPLERS.len() + 1)
+    );
+    for r in &rows {
+        if r.sampler == "exact" {
+            assert!(r.max_abs_8bit <= 1, "{r:#?}");
+            assert_eq!(r.candidates, r.evaluations, "{r:#?}");
+        }
+        assert!(
+            r.useful <= r.evaluations && r.evaluations <= r.candidates,
+            "{r:#?}"
+        );
+        assert!(!(r.pareto && r.last_rmse_8bit.is_some()), "{r:#?}");
+    }
+    for &(lo, hi) in &sampling::RADII {
+        let here: Vec<&sampling::SamplingRow> = rows
+            .iter()
+            .filter(|r| (r.radius_min, r.radius_max) == (lo, hi))
+            .collect();
+        let single: Vec<&&sampling::SamplingRow> =
+            here.iter().filter(|r| r.last_rmse_8bit.is_none()).collect();
+        let fastest = single
+            .iter()
+            .min_by(|a, b| a.frame_ms.total_cmp(&b.frame_ms))
+            .unwrap();
+        assert!(fastest.pareto, "{fastest:#?}");
+        for a in &single {
+            for b in &single {
+                let dominates = b.frame_ms < a.frame_ms && b.rmse_8bit < a.rmse_8bit;
+                assert!(
+                    !(a.pareto && dominates),
+                    "{} on the front, {} better",
+                    a.variant,
+                    b.variant
+                );
+            }
+        }
+        // A sweep ends at its first point within the target.
+        for base in sampling::SAMPLERS {
+            let family: Vec<&&sampling::SamplingRow> = here
+                .iter()
+                .filter(|r| r.sweep && r.variant.starts_with(&format!("{base}@")))
+                .collect();
+            if let Some(i) = family
+                .iter()
+                .position(|r| r.rmse_8bit <= sampling::TARGET_RMSE_8BIT)
+            {
+                assert_eq!(i + 1, family.len(), "{base}: {family:#?}");
+            }
+        }
+        let temporal = here
+            .iter()
+            .find(|r| r.variant == sampling::TEMPORAL)
+            .unwrap();
+        assert!(temporal.last_rmse_8bit.is_some());
+    }
+    let table = sampling::table(&rows);
+    assert_eq!(table.rows.len(), rows.len());
+    assert!(table.notes.iter().any(|n| n.contains("Bitterli")));
+    assert!(sampling::plot(&rows).is_some());
+}

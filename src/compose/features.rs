@@ -99,7 +99,31 @@ pub fn feature_flags(v: &Variant) -> Vec<(&'static str, bool)> {
     let toon = v.post.toon.as_ref();
     let slicing = clusters.slicing;
     let static_dynamic = p.is_clustered() && clusters.update == ListUpdate::StaticDynamic;
+    let sampling = v.shading.lights.sampling().map(|s| s.method);
+    let ris = matches!(sampling, Some(Sampler::Ris { .. }));
     let mut flags = vec![
+        // Sampled light loops (`shading.lights`): RIS, with or without temporal reuse, or
+        // stochastic light culling.
+        ("sampled", sampling.is_some()),
+        ("ris", ris),
+        (
+            "temporal_reuse",
+            matches!(
+                sampling,
+                Some(Sampler::Ris {
+                    temporal: Some(_),
+                    ..
+                })
+            ),
+        ),
+        (
+            "stochastic_culling",
+            matches!(sampling, Some(Sampler::StochasticCulling { .. })),
+        ),
+        (
+            "uniform_sampling",
+            matches!(sampling, Some(Sampler::Uniform { .. })),
+        ),
         (
             "blinn_phong",
             matches!(v.shading.model, ShadingModel::BlinnPhong { .. }),
@@ -228,6 +252,17 @@ pub fn constants_module(v: &Variant) -> String {
     let outline = toon.outlines.clone().unwrap_or_default();
     let bloom = v.post.bloom.clone().unwrap_or_default();
     let motion = v.post.motion_blur.clone().unwrap_or_default();
+    let (candidates, kept, history, threshold) = match v.shading.lights.sampling().map(|s| s.method)
+    {
+        Some(Sampler::Ris {
+            candidates,
+            kept,
+            temporal,
+        }) => (candidates, kept, temporal.unwrap_or(0), 1.0),
+        Some(Sampler::StochasticCulling { threshold }) => (1, 1, 0, threshold),
+        Some(Sampler::Uniform { candidates }) => (candidates, 1, 0, 1.0),
+        None => (1, 1, 0, 1.0),
+    };
     let gbuffer_channel = match v.debug_view {
         DebugView::GBuffer { channel } => channel as u32,
         _ => 0,
@@ -252,6 +287,9 @@ pub fn constants_module(v: &Variant) -> String {
         ("MOTION_BLUR_SAMPLES", motion.samples),
         ("GBUFFER_CHANNEL", gbuffer_channel),
         ("MSAA_SAMPLES", v.msaa.samples),
+        ("CANDIDATES", candidates),
+        ("KEPT", kept),
+        ("HISTORY_FRAMES", history),
     ]);
     // The CPU twins' slack and clamps, in single precision: the same numbers on both sides.
     let f32s = [
@@ -280,6 +318,7 @@ pub fn constants_module(v: &Variant) -> String {
             "BLOOM_WEIGHT_SUM",
             crate::cpu::post::bloom_weight_sum(bloom.radius) as f32,
         ),
+        ("CULL_THRESHOLD", threshold),
     ];
     let mut text = String::new();
     for (name, value) in u32s {

@@ -253,7 +253,7 @@ pub const COLUMNS: &[Column] = &[
     Column {
         key: "rmse_8bit",
         heading: "RMSE8",
-        shown: CSV_ONLY,
+        shown: CSV_AND_HTML,
         value: |m| m.error.map(|e| e.rmse_8bit).into(),
         text: |m| or_dash(m.error, |e| format!("{:.3}", e.rmse_8bit)),
     },
@@ -263,6 +263,13 @@ pub const COLUMNS: &[Column] = &[
         shown: CSV_ONLY,
         value: |m| m.error.map(|e| e.pixels_over_1lsb).into(),
         text: |m| or_dash(m.error, |e| e.pixels_over_1lsb.to_string()),
+    },
+    Column {
+        key: "relative_mse",
+        heading: "relMSE",
+        shown: CSV_AND_HTML,
+        value: |m| m.error.map(|e| e.relative_mse).into(),
+        text: |m| or_dash(m.error, |e| format!("{:.2e}", e.relative_mse)),
     },
     Column {
         key: "rmse_hdr",
@@ -321,6 +328,20 @@ pub const COLUMNS: &[Column] = &[
                 )
             })
         },
+    },
+    Column {
+        key: "light_candidates",
+        heading: "candidates",
+        shown: CSV_ONLY,
+        value: |m| m.stats.map(|s| s.light_candidates).into(),
+        text: |m| or_dash(m.stats, |s| count(s.light_candidates)),
+    },
+    Column {
+        key: "sampler",
+        heading: "sampler",
+        shown: CSV_AND_HTML,
+        value: |m| Cell::Text(m.stats.and_then(|s| s.sampler.clone()).unwrap_or_default()),
+        text: |m| m.stats.and_then(|s| s.sampler.clone()).unwrap_or_default(),
     },
     Column {
         key: "edge_fraction",

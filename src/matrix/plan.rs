@@ -230,10 +230,12 @@ pub const TRANSPARENCY_GROUP: [&str; 14] = [
     "forward_plus_cpu_assignment",
 ];
 
-/// The default matrix: every variant on every built-in scene but the glass one, a
+/// The default matrix: every variant (but the sampled and list-strategy ones, which have
+/// groups of their own) on every built-in scene but the glass one, a
 /// light-count sweep of naive forward, Forward+ and clustered deferred on the atrium, those
 /// with 1 and 4 samples (`MSAA_GROUP`), and every pipeline and culling method on the glass
-/// scene (`TRANSPARENCY_GROUP`, at a quarter of its pixels).
+/// scene (`TRANSPARENCY_GROUP`, at a quarter of its pixels), the sampled light loops beside
+/// exact ones where lists are long (`SAMPLING_EXACT`), and the list strategies in sequences.
 pub fn default_groups() -> Result<Vec<Group>, String> {
     let glass = crate::study::transparency::SCENE;
     let scenes = crate::scene::SCENES
@@ -247,7 +249,11 @@ pub fn default_groups() -> Result<Vec<Group>, String> {
         // has no change to follow.
         Group {
             name: "variants".into(),
-            variants: variants.iter().filter(|e| !updates(e)).cloned().collect(),
+            variants: variants
+                .iter()
+                .filter(|e| !updates(e) && !samples(e))
+                .cloned()
+                .collect(),
             scenes,
             sweeps: vec![],
             size: None,
@@ -283,6 +289,19 @@ pub fn default_groups() -> Result<Vec<Group>, String> {
             size: Some((320, 180)),
             sequence: None,
         },
+        // Time against error: the sampled light loops beside the exact ones, where lists
+        // grow long.
+        Group {
+            name: "sampling".into(),
+            variants: sampling_variants(&variants)?,
+            scenes: vec!["atrium".into()],
+            sweeps: vec![
+                Sweep::Lights(vec![SAMPLING_LIGHTS]),
+                Sweep::Radius(vec![SAMPLING_RADIUS]),
+            ],
+            size: Some(SAMPLING_SIZE),
+            sequence: None,
+        },
         // Lights that move: every list strategy, frame after frame.
         Group {
             name: "sequence".into(),
@@ -316,6 +335,32 @@ fn sequence_variants(variants: &[VariantEntry]) -> Result<Vec<VariantEntry>, Str
     let mut out = find_variants(&SEQUENCE_REBUILDS.map(String::from))?;
     out.extend(variants.iter().filter(|e| updates(e)).cloned());
     Ok(out)
+}
+
+/// The exact variants the sampling group's samplers are set beside.
+pub const SAMPLING_EXACT: [&str; 3] = [
+    "forward_plus",
+    "clustered_deferred_16x16x24",
+    "forward_plus_zbinning",
+];
+/// The sampling group's lights, radii and size: lists of about 700 lights a pixel.
+pub const SAMPLING_LIGHTS: u32 = 4096;
+pub const SAMPLING_RADIUS: (f32, f32) = (4.0, 8.0);
+pub const SAMPLING_SIZE: (u32, u32) = (256, 144);
+
+/// The default matrix's sampling group: `SAMPLING_EXACT` and every sampled variant of
+/// `variants`.
+fn sampling_variants(variants: &[VariantEntry]) -> Result<Vec<VariantEntry>, String> {
+    let mut out = find_variants(&SAMPLING_EXACT.map(String::from))?;
+    out.extend(variants.iter().filter(|e| samples(e)).cloned());
+    Ok(out)
+}
+
+/// Whether a variant's light loop samples (`shading.lights`).
+fn samples(e: &VariantEntry) -> bool {
+    e.loaded
+        .as_ref()
+        .is_ok_and(|v| v.variant.shading.lights.sampling().is_some())
 }
 
 /// Whether a variant follows moving lights otherwise than by rebuilding its lists.

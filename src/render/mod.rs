@@ -22,6 +22,7 @@ mod readback;
 mod reflect;
 mod resources;
 mod reuse;
+mod sampling;
 mod screen;
 mod skips;
 mod stats;
@@ -324,12 +325,24 @@ impl<'g> Renderer<'g> {
     /// Render one frame (timed) and read back its images.
     pub fn render(&mut self) -> Result<FrameOutput, RenderError> {
         let start = Instant::now();
+        if let Some(s) = &self.res.sampling {
+            let gpu = self.gpu;
+            gpu.scoped("starting a sampled frame", || {
+                let mut e = gpu.device.create_command_encoder(&Default::default());
+                s.start_frame(&mut e);
+                gpu.queue.submit([e.finish()]);
+            })?;
+        }
         let FrameRun {
             timings,
             cpu_ms: cpu_assign_ms,
             mut skipped,
         } = self.run_fitted(false)?;
         self.frames_done += 1;
+        // A frame drawn again without `advance` draws as this one did, with no history.
+        if let Some(s) = &mut self.res.sampling {
+            s.set_frame(self.gpu, self.held.time, false);
+        }
         // With a z-range from the previous frame, the first frame's lists were built on the
         // starting range, which its depth-range pass then replaced with this picture's: the
         // lists agree with the range shading reads from the second frame on.
@@ -353,6 +366,16 @@ impl<'g> Renderer<'g> {
             cpu_assign_ms,
             skipped,
         })
+    }
+
+    /// Seed a sampled variant's random numbers with `seed` instead of its own, from the
+    /// next frame on, with no history (independent runs of one frame: the bias tests and
+    /// `study sampling`). Nothing for an exact variant.
+    pub fn reseed(&mut self, seed: u32) {
+        if let Some(s) = &mut self.res.sampling {
+            s.reseed(seed);
+            s.set_frame(self.gpu, self.held.time, false);
+        }
     }
 
     /// Run the frame until its light lists fit: the index buffer grows to the exact total a

@@ -350,10 +350,12 @@ pub struct Counters {
     pub clusters: wgpu::Buffer,
     /// Multisampled frames: the shadings of each pixel.
     pub shadings: Option<wgpu::Buffer>,
+    /// Sampled light loops: the candidates each pixel drew or walked.
+    pub candidates: Option<wgpu::Buffer>,
 }
 
 impl Counters {
-    pub fn new(gpu: &Gpu, pixels: u64, multisampled: bool) -> Self {
+    pub fn new(gpu: &Gpu, pixels: u64, multisampled: bool, sampled: bool) -> Self {
         let buffer = |label| {
             gpu.device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some(label),
@@ -369,6 +371,7 @@ impl Counters {
             useful: buffer("pixel useful evaluations"),
             clusters: buffer("pixel cluster indices"),
             shadings: multisampled.then(|| buffer("pixel shadings")),
+            candidates: sampled.then(|| buffer("pixel candidates")),
         }
     }
 
@@ -377,6 +380,7 @@ impl Counters {
         for b in [&self.evals, &self.useful, &self.clusters]
             .into_iter()
             .chain(&self.shadings)
+            .chain(&self.candidates)
         {
             encoder.clear_buffer(b, 0, None);
         }
@@ -441,6 +445,8 @@ pub struct FrameResources {
     /// Scenes with blended materials, clustered variants: each pixel's nearest and farthest
     /// blended depth (`clustering/transparent_depths.wesl`), two words a pixel.
     pub transparent_depths: Option<wgpu::Buffer>,
+    /// Sampled light loops: the frame's seed and the reservoirs.
+    pub sampling: Option<super::sampling::SampleBuffers>,
 }
 
 impl FrameResources {
@@ -454,6 +460,7 @@ impl FrameResources {
         proxies: Option<super::culling::ProxyLayout>,
     ) -> Self {
         let (w, h) = (scene.params.width, scene.params.height);
+        let sampling = variant.shading.lights.sampling();
         let depth = DepthSetup::of(variant);
         let samples = variant.msaa.samples;
         let targets = Targets {
@@ -516,8 +523,16 @@ impl FrameResources {
             clusters,
             moving,
             moving_set: MovingSet::new(gpu, moving_room),
-            counters: Counters::new(gpu, w as u64 * h as u64, variant.msaa.on()),
+            counters: Counters::new(
+                gpu,
+                w as u64 * h as u64,
+                variant.msaa.on(),
+                sampling.is_some(),
+            ),
             transparent_depths,
+            sampling: sampling.map(|s| {
+                super::sampling::SampleBuffers::new(gpu, s, w as u64 * h as u64, scene.params.time)
+            }),
         }
     }
 
@@ -533,6 +548,9 @@ impl FrameResources {
         let name = slot.name;
         if let Some(frame) = self.scene.frame_binding(name) {
             return Some(frame);
+        }
+        if let Some(s) = self.sampling.as_ref().and_then(|s| s.binding(name)) {
+            return Some(s);
         }
         match name {
             "moving_lights" => return Some(self.moving_set.ids.as_entire_binding()),
@@ -565,6 +583,11 @@ impl FrameResources {
             "pixel_shadings" => self
                 .counters
                 .shadings
+                .as_ref()
+                .map(|b| b.as_entire_binding()),
+            "pixel_candidates" => self
+                .counters
+                .candidates
                 .as_ref()
                 .map(|b| b.as_entire_binding()),
             _ => self

@@ -75,6 +75,8 @@ pub(super) struct Held {
     vertices: Vec<Vertex>,
     indices: Vec<u32>,
     blended: Vec<u32>,
+    /// The frame's time, seconds (sampled loops seed their random numbers with it).
+    pub(super) time: f64,
     /// Frames in a row whose view was the one before theirs.
     still_frames: u32,
     /// The images or marks are not the last frame's: an instrumented frame shaded over
@@ -91,6 +93,7 @@ impl Held {
             vertices: scene.vertices.clone(),
             indices: scene.indices.clone(),
             blended: scene.blended.clone(),
+            time: scene.params.time,
             still_frames: 0,
             disturbed: Cell::new(false),
         }
@@ -190,6 +193,11 @@ impl Renderer<'_> {
             }
         }
         let h = &mut self.held;
+        h.time = scene.params.time;
+        if let Some(s) = &mut self.res.sampling {
+            // The next frame follows this renderer's last one: its reservoirs are history.
+            s.set_frame(self.gpu, scene.params.time, self.frames_done > 0);
+        }
         h.lights.clone_from(&scene.lights);
         (h.camera, h.prev_camera) = (scene.camera, scene.prev_camera);
         h.still_frames = if camera_moved { 0 } else { h.still_frames + 1 };
@@ -237,8 +245,11 @@ impl Renderer<'_> {
         let frames_needed = 1 + u32::from(self.variant.range_from_previous_frame());
         let view_holds = !camera_moved && self.held.still_frames >= frames_needed;
         let reuse = self.variant.reuse_unchanged;
+        // Stochastic culling draws every light's range again each frame.
+        let redrawn = self.variant.shading.lights.redraws_ranges();
         let lists = match self.update() {
             None => Lists::Keep,
+            Some(_) if redrawn => Lists::Build,
             Some(_) if view_holds && moved.is_empty() => Lists::Keep,
             Some(ListUpdate::Refit) => Lists::Refit,
             Some(_) if !view_holds => Lists::Build,
@@ -261,7 +272,9 @@ impl Renderer<'_> {
             }
             _ => {}
         }
-        let unchanged = reuse && view_holds && moved.is_empty() && !disturbed;
+        // A sampled frame draws new random numbers: it is never the last one again.
+        let sampled = self.variant.shading.lights.sampling().is_some();
+        let unchanged = reuse && view_holds && moved.is_empty() && !disturbed && !sampled;
         Redo {
             surfaces: !(reuse && view_holds) || disturbed,
             lists,

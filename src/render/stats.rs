@@ -18,6 +18,15 @@ pub struct FrameStats {
     pub light_evals: u64,
     /// Those with the surface closer to the light than its radius (and inside its cone).
     pub useful_light_evals: u64,
+    /// The lights the shading looked at: its lists' entries walked (exact loops: the
+    /// evaluations), or a sampled loop's candidates (RIS: drawn, each then evaluated;
+    /// stochastic culling: walked, of which the roulette keeps the evaluated ones).
+    #[serde(default)]
+    pub light_candidates: u64,
+    /// A sampled light loop: its estimator and whether it is biased (absent for an exact
+    /// loop), so the report labels what it plots.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sampler: Option<String>,
     /// Most useful evaluations at one pixel: the most lights that light one surface point
     /// (summed over the fragments shaded there).
     #[serde(default)]
@@ -85,6 +94,8 @@ pub struct PixelCounters {
     pub clusters: Vec<u32>,
     /// Multisampled frames: how many times each pixel was shaded (empty with one sample).
     pub shadings: Vec<u32>,
+    /// Sampled loops: the candidates each pixel drew or walked (empty for exact loops).
+    pub candidates: Vec<u32>,
 }
 
 impl PixelCounters {
@@ -104,7 +115,11 @@ impl<'g> Renderer<'g> {
     /// Nothing to do for other pipelines; a stand-in that cannot be made (its cluster buffers
     /// over a limit) leaves naive forward counting on its own frame: slower, as exact.
     pub fn prepare_counting(&mut self, composer: &Composer, scene: &Scene) {
-        if self.variant.pipeline != Pipeline::NaiveForward || self.naive_stand_in.is_some() {
+        // A sampled loop counts on its own frame: its candidates are not a list's.
+        if self.variant.pipeline != Pipeline::NaiveForward
+            || self.naive_stand_in.is_some()
+            || self.variant.shading.lights.sampling().is_some()
+        {
             return;
         }
         let stand_in = Variant {
@@ -143,6 +158,12 @@ impl<'g> Renderer<'g> {
                 .map(read)
                 .transpose()?
                 .unwrap_or_default(),
+            candidates: c
+                .candidates
+                .as_ref()
+                .map(read)
+                .transpose()?
+                .unwrap_or_default(),
         })
     }
 
@@ -167,6 +188,17 @@ impl<'g> Renderer<'g> {
         let mut stats = FrameStats {
             light_evals: sum(&pixels.evals),
             useful_light_evals: sum(&pixels.useful),
+            sampler: self
+                .variant
+                .shading
+                .lights
+                .sampling()
+                .map(|s| format!("{} ({})", s.label(), s.bias_label())),
+            light_candidates: if self.variant.shading.lights.sampling().is_some() {
+                sum(&pixels.candidates)
+            } else {
+                sum(&pixels.evals)
+            },
             max_useful_per_pixel: pixels.useful.iter().copied().max().unwrap_or(0),
             edge_fraction: pixels.shadings.iter().filter(|&&n| n > 1).count() as f64
                 / pixels.evals.len().max(1) as f64,
@@ -261,6 +293,11 @@ impl<'g> Renderer<'g> {
             .map(size)
             .sum::<u32>()
             + self.post.bytes_per_pixel()
+            + self
+                .res
+                .sampling
+                .as_ref()
+                .map_or(0, |s| s.bytes_per_pixel())
     }
 
     /// Clusters holding a visible sample of the last frame's depth (exact marking).

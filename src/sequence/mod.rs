@@ -116,6 +116,10 @@ pub struct FrameCheck {
     /// The first difference from the fresh frame, when there is one.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub difference: Option<String>,
+    /// The frame carries earlier frames' reservoirs (temporal reuse): a fresh renderer has
+    /// none, so it is not compared with one (`equals_fresh` is then false, and no failure).
+    #[serde(default)]
+    pub carries_history: bool,
     /// Why the frame means nothing (NaN pixels, nothing in view), when it does not.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub failure: Option<String>,
@@ -144,6 +148,12 @@ pub struct SequenceSummary {
     /// The worst checked frame's 8-bit error and temporal error.
     pub max_abs_8bit: u32,
     pub max_temporal_8bit: u32,
+    /// The 8-bit RMSE of the first and last checked frames (a sampled loop's error, and
+    /// with temporal reuse how far the frames took it).
+    #[serde(default)]
+    pub first_rmse_8bit: f64,
+    #[serde(default)]
+    pub last_rmse_8bit: f64,
     /// Every checked frame within 1 LSB of its reference and equal to its fresh frame.
     pub exact: bool,
     /// Patch frames that found no room and rebuilt every list instead.
@@ -406,13 +416,25 @@ fn check_frame(
         }
         None => None,
     };
-    let difference = fresh_difference(gpu, composer, variant, scene, frame, renderer)?;
+    let carries_history = variant
+        .variant
+        .shading
+        .lights
+        .sampling()
+        .is_some_and(|s| s.reuses_frames())
+        && before.is_some();
+    let difference = if carries_history {
+        None
+    } else {
+        fresh_difference(gpu, composer, variant, scene, frame, renderer)?
+    };
     Ok(FrameCheck {
         failure: crate::run::meaningless(reference, None, Some(&error)),
         error,
         temporal,
-        equals_fresh: difference.is_none(),
+        equals_fresh: difference.is_none() && !carries_history,
         difference,
+        carries_history,
     })
 }
 
@@ -532,6 +554,8 @@ fn summarize(
             .map(|t| t.max_abs_8bit)
             .max()
             .unwrap_or(0),
+        first_rmse_8bit: checks.first().map_or(0.0, |c| c.error.rmse_8bit),
+        last_rmse_8bit: checks.last().map_or(0.0, |c| c.error.rmse_8bit),
         exact: checks
             .iter()
             .all(|c| c.error.max_abs_8bit <= 1 && c.equals_fresh && c.failure.is_none()),

@@ -220,14 +220,17 @@ pub fn table(report: &SequenceReport) -> String {
         let check = match &f.check {
             None => String::new(),
             Some(c) => format!(
-                "max {} LSB{}{}",
+                "max {} LSB, RMSE {:.2}{}{}",
                 c.error.max_abs_8bit,
+                c.error.rmse_8bit,
                 c.temporal.as_ref().map_or(String::new(), |t| format!(
                     ", change {} LSB",
                     t.max_abs_8bit
                 )),
                 if c.equals_fresh {
                     ", equals a fresh frame"
+                } else if c.carries_history {
+                    ", carries earlier frames"
                 } else {
                     ", DIFFERS from a fresh frame"
                 }
@@ -250,7 +253,7 @@ pub fn table(report: &SequenceReport) -> String {
     let m = &report.summary;
     let _ = writeln!(
         s,
-        "first frame {:.3} ms; later frames median {:.3} ms [{:.3}, {:.3}], {} reused whole; checked {} frames: max {} LSB, change max {} LSB, {}{}",
+        "first frame {:.3} ms; later frames median {:.3} ms [{:.3}, {:.3}], {} reused whole; checked {} frames: max {} LSB, RMSE {:.2} to {:.2}, change max {} LSB, {}{}",
         m.first_ms,
         m.frame_ms,
         m.frame_ms_spread[0],
@@ -258,6 +261,8 @@ pub fn table(report: &SequenceReport) -> String {
         m.frames_reused,
         m.checked_frames,
         m.max_abs_8bit,
+        m.first_rmse_8bit,
+        m.last_rmse_8bit,
         m.max_temporal_8bit,
         if m.exact { "exact" } else { "NOT exact" },
         if m.patch_rebuilds > 0 {

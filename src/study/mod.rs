@@ -7,6 +7,7 @@ pub mod cones;
 pub mod culling;
 pub mod depth;
 pub mod msaa;
+pub mod sampling;
 pub mod slicing;
 pub mod table;
 pub mod temporal;
@@ -103,6 +104,11 @@ pub enum StudyName {
     /// moving, at 1024 and 16384 lights (or `--lights`) on the atrium: a sequence of
     /// `--frames` frames after the first for each.
     Temporal,
+    /// Time against error: the sampled light loops (RIS, stochastic light culling, ReSTIR's
+    /// temporal reuse) beside the fastest exact variants on the atrium at 1024, 4096 and
+    /// 16384 lights (or `--lights`), radius 2..4 and 4..8: each sampler's error, the
+    /// candidates each needs for 2 LSB RMSE, and the frames temporal reuse needs.
+    Sampling,
 }
 
 impl StudyName {
@@ -116,6 +122,7 @@ impl StudyName {
             StudyName::Msaa => "msaa",
             StudyName::Transparency => "transparency",
             StudyName::Temporal => "temporal",
+            StudyName::Sampling => "sampling",
         }
     }
 }
@@ -183,7 +190,8 @@ pub struct StudyOutput {
     /// CPU differ at the printed precision; slicing: a run failed; cones: a run failed or
     /// missed a light; culling: a run failed or its useful evaluations differ from the other
     /// methods' on the same frame; msaa, transparency: a run failed or was over 1 LSB;
-    /// temporal: a sequence failed or a checked frame was not exact).
+    /// temporal: a sequence failed or a checked frame was not exact; sampling: a run
+    /// failed).
     pub ok: bool,
 }
 
@@ -317,6 +325,21 @@ pub fn run(
                 temporal::table(&rows),
                 &rows,
                 temporal::plot(&rows),
+                ok,
+            )
+        }
+        StudyName::Sampling => {
+            let counts = match options.lights {
+                Some(n) => vec![n],
+                None => sampling::LIGHT_COUNTS.to_vec(),
+            };
+            let rows = sampling::run(gpu, composer, options.size, &counts, options.frames)?;
+            let ok = sampling::all_ran(&rows);
+            output(
+                name,
+                sampling::table(&rows),
+                &rows,
+                sampling::plot(&rows),
                 ok,
             )
         }

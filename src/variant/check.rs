@@ -66,6 +66,7 @@ pub fn check(v: &Variant) -> Vec<Problem> {
     }
     check_normals(v, &mut out);
     check_shading(&v.shading, &mut out);
+    check_sampling(v, &mut out);
     if v.shading.model == ShadingModel::Ggx
         && v.post
             .toon
@@ -338,6 +339,114 @@ fn check_shading(s: &Shading, out: &mut Vec<Problem>) {
                 "shading.model.specular",
                 format!("is {specular}; it must be in 0..=1"),
             ));
+        }
+    }
+}
+
+/// Most candidates a sampled light loop draws per pixel.
+pub const MAX_CANDIDATES: u32 = 256;
+/// Most lights RIS keeps per pixel.
+pub const MAX_KEPT: u32 = 8;
+/// Longest temporal history, in frames' worth of candidates.
+pub const MAX_HISTORY: u32 = 100;
+
+fn check_sampling(v: &Variant, out: &mut Vec<Problem>) {
+    let Some(s) = v.shading.lights.sampling() else {
+        return;
+    };
+    let p = v.pipeline;
+    if p == Pipeline::DeferredScissor {
+        out.push(problem(
+            "shading.lights",
+            "DeferredScissor blends one draw per light and has no per-pixel loop to sample; use `lights: Exact`, or NaiveForward, ClusteredForward or ClusteredDeferred",
+        ));
+    }
+    let c = v.clusters();
+    if p.is_clustered() && c.update == ListUpdate::StaticDynamic {
+        out.push(problem(
+            "shading.lights",
+            "a sampled loop draws from one list, and StaticDynamic shades two: use `lights: Exact`, or `clusters.update` Rebuild, Patch or Refit",
+        ));
+    }
+    if p.is_clustered() && c.culling == Culling::ZBinning {
+        out.push(problem(
+            "shading.lights",
+            "z-binning's lights are a walk over bitmasks, not a list to draw from: use `lights: Exact`, or another culling",
+        ));
+    }
+    if v.msaa.on() {
+        out.push(problem(
+            "shading.lights",
+            "sampled loops shade one point a pixel (their random numbers are per pixel): use `msaa: (samples: 1)` or `lights: Exact`",
+        ));
+    }
+    match s.method {
+        Sampler::Ris {
+            candidates,
+            kept,
+            temporal,
+        } => {
+            if !(1..=MAX_CANDIDATES).contains(&candidates) {
+                out.push(problem(
+                    "shading.lights.method.candidates",
+                    format!("is {candidates}; it must be in 1..={MAX_CANDIDATES}"),
+                ));
+            }
+            if !(1..=MAX_KEPT).contains(&kept) {
+                out.push(problem(
+                    "shading.lights.method.kept",
+                    format!("is {kept}; it must be in 1..={MAX_KEPT}"),
+                ));
+            }
+            if let Some(t) = temporal {
+                if !(1..=MAX_HISTORY).contains(&t) {
+                    out.push(problem(
+                        "shading.lights.method.temporal",
+                        format!("is {t}; it must be in 1..={MAX_HISTORY}, or None"),
+                    ));
+                }
+                if kept != 1 {
+                    out.push(problem(
+                        "shading.lights.method.kept",
+                        format!(
+                            "is {kept}; temporal reuse keeps one reservoir a pixel: use `kept: 1`"
+                        ),
+                    ));
+                }
+                if p != Pipeline::ClusteredDeferred {
+                    out.push(problem(
+                        "shading.lights.method.temporal",
+                        format!(
+                            "temporal reuse keeps a reservoir per pixel, which needs one shading a pixel from a G-buffer (pipeline is {p:?}): use ClusteredDeferred, or `temporal: None`"
+                        ),
+                    ));
+                }
+            }
+        }
+        Sampler::Uniform { candidates } => {
+            if !(1..=MAX_CANDIDATES).contains(&candidates) {
+                out.push(problem(
+                    "shading.lights.method.candidates",
+                    format!("is {candidates}; it must be in 1..={MAX_CANDIDATES}"),
+                ));
+            }
+        }
+        Sampler::StochasticCulling { threshold } => {
+            if p.is_clustered() && c.update != ListUpdate::Rebuild {
+                out.push(problem(
+                    "shading.lights",
+                    format!(
+                        "stochastic culling draws every light's range again each frame, so its lists are rebuilt, and `clusters.update` is {:?}: use `update: Rebuild`",
+                        c.update
+                    ),
+                ));
+            }
+            if !(threshold > 0.0 && threshold <= 1e6) {
+                out.push(problem(
+                    "shading.lights.method.threshold",
+                    format!("is {threshold}; it must be in (0, 1e6]"),
+                ));
+            }
         }
     }
 }

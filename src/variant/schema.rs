@@ -483,6 +483,9 @@ pub struct Shading {
     pub model: ShadingModel,
     /// Constant ambient light, as a fraction of albedo, in 0..=1.
     pub ambient: f32,
+    /// How a surface point's lights are summed: every light of its list (`Exact`), or an
+    /// unbiased or labelled-biased estimate from a few of them (`Sampled`).
+    pub lights: Lights,
 }
 
 impl Default for Shading {
@@ -490,6 +493,144 @@ impl Default for Shading {
         Self {
             model: ShadingModel::Lambert,
             ambient: 0.02,
+            lights: Lights::Exact,
+        }
+    }
+}
+
+/// How a surface point's light loop sums its lights.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize, JsonSchema)]
+pub enum Lights {
+    /// Every light of the pixel's list (naive forward: every light), in index order.
+    #[default]
+    Exact,
+    /// A stochastic estimate, its random numbers from a hash of the pixel, the frame's time
+    /// and `seed`: every run reproducible.
+    Sampled(Sampling),
+}
+
+/// A stochastic light loop.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields, default)]
+pub struct Sampling {
+    /// The estimator.
+    pub method: Sampler,
+    /// Seed of the random numbers, mixed with each pixel and each frame's time.
+    pub seed: u32,
+}
+
+impl Default for Sampling {
+    fn default() -> Self {
+        Self {
+            method: Sampler::Ris {
+                candidates: 8,
+                kept: 1,
+                temporal: None,
+            },
+            seed: 0,
+        }
+    }
+}
+
+/// Stochastic light loops (`docs/ARCHITECTURE.md`, "Sampled lights", has the estimators).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
+pub enum Sampler {
+    /// Plain Monte Carlo, what RIS resamples from: `candidates` lights drawn uniformly from
+    /// the list, each shaded, their mean times the list's length. Unbiased.
+    Uniform {
+        /// Candidates a pixel draws, in 1..=256.
+        candidates: u32,
+    },
+    /// Resampled importance sampling (Talbot 2005; ReSTIR's first step, Bitterli 2020):
+    /// `candidates` lights drawn uniformly from the list, each weighted by its target (the
+    /// luminance of its unshadowed contribution, which is the contribution itself here: no
+    /// visibility to defer), and `kept` of them chosen in proportion, each shaded with weight
+    /// `sum of weights / (candidates x target)`; every candidate counts, also those whose
+    /// target is 0. Unbiased. With `temporal` (clustered deferred only), ReSTIR DI's
+    /// temporal reuse: the previous frame's reservoir at the reprojected pixel, its count
+    /// capped at `temporal` times `candidates`, joins this frame's; unbiased while the camera
+    /// and the lights hold still, biased (1/M weights across changed targets) once they move.
+    Ris {
+        /// Candidates a pixel draws, in 1..=256.
+        candidates: u32,
+        /// Lights kept and shaded, in 1..=8 (1 with temporal reuse).
+        kept: u32,
+        /// Temporal reuse: the previous reservoir's count capped at this many frames' worth
+        /// of candidates, in 1..=100; `None`: none.
+        temporal: Option<u32>,
+    },
+    /// Stochastic light culling (Tokuyoshi and Harada 2016): each light's range is drawn per
+    /// frame by Russian roulette, a light reaching a point with probability
+    /// `min(1, luminance(intensity) / (d^2 threshold))`, and a light kept there is weighted by
+    /// the inverse of that probability. Lists are built with the drawn ranges, so they
+    /// shorten. Unbiased.
+    StochasticCulling {
+        /// Linear radiance below which a light's unwindowed inverse-square intensity is
+        /// rouletted, in (0, 1e6].
+        threshold: f32,
+    },
+}
+
+impl Lights {
+    /// The sampler, if the loop samples.
+    pub fn sampling(&self) -> Option<&Sampling> {
+        match self {
+            Lights::Exact => None,
+            Lights::Sampled(s) => Some(s),
+        }
+    }
+
+    /// Whether each frame draws the lights' ranges, and so builds its lists, again
+    /// (stochastic culling: a real frame has new random numbers, so a frame never keeps the
+    /// lists of the one before).
+    pub fn redraws_ranges(&self) -> bool {
+        matches!(
+            self.sampling().map(|s| s.method),
+            Some(Sampler::StochasticCulling { .. })
+        )
+    }
+}
+
+impl Sampling {
+    /// Whether the estimate's expectation is the exact sum on every frame (temporal reuse
+    /// keeps it only while nothing moves: `unbiased_when_still`).
+    pub fn unbiased(&self) -> bool {
+        !self.reuses_frames()
+    }
+
+    /// Whether the estimator reuses earlier frames' reservoirs.
+    pub fn reuses_frames(&self) -> bool {
+        matches!(
+            self.method,
+            Sampler::Ris {
+                temporal: Some(_),
+                ..
+            }
+        )
+    }
+
+    /// How a report labels the estimator's bias.
+    pub fn bias_label(&self) -> &'static str {
+        if self.unbiased() {
+            "unbiased"
+        } else {
+            "unbiased while still, biased in motion"
+        }
+    }
+
+    /// A short label: `RIS 8/1`, `RIS 8 +temporal 20`, `stochastic culling 0.01`.
+    pub fn label(&self) -> String {
+        match self.method {
+            Sampler::Ris {
+                candidates,
+                kept,
+                temporal,
+            } => {
+                let t = temporal.map_or(String::new(), |t| format!(" +temporal {t}"));
+                format!("RIS {candidates}/{kept}{t}")
+            }
+            Sampler::StochasticCulling { threshold } => format!("stochastic culling {threshold}"),
+            Sampler::Uniform { candidates } => format!("uniform {candidates}"),
         }
     }
 }

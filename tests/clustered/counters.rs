@@ -337,6 +337,9 @@ fn a_hand_built_scene_counts_what_was_worked_out_by_hand() {
             let want = FrameStats {
                 light_evals: evals,
                 useful_light_evals: 60,
+                // An exact loop looks at the lights it evaluates.
+                light_candidates: evals,
+                sampler: None,
                 max_useful_per_pixel: 1,
                 edge_fraction: 0.0,
                 dropped_lights: 0,
