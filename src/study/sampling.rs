@@ -120,30 +120,17 @@ pub fn run(
                 .map_err(|e| StudyError::Usage(e.to_string()))?;
             let references = ReferenceCache::default();
             let mut point = Vec::new();
+            let measure_here = |v: &LoadedVariant, sweep: bool| {
+                measure(gpu, composer, v, &scene, &references, frames, sweep)
+            };
             for v in &exact {
-                point.push(measure(
-                    gpu,
-                    composer,
-                    v,
-                    &scene,
-                    &references,
-                    frames,
-                    false,
-                ));
+                point.push(measure_here(v, false));
             }
             for v in &samplers {
-                point.push(measure(
-                    gpu,
-                    composer,
-                    v,
-                    &scene,
-                    &references,
-                    frames,
-                    false,
-                ));
+                point.push(measure_here(v, false));
                 // Cheapest first: past the first point at the target, dearer ones say nothing.
                 for swept in sweep(v) {
-                    let row = measure(gpu, composer, &swept, &scene, &references, frames, true);
+                    let row = measure_here(&swept, true);
                     let reached = row.error.is_none() && row.rmse_8bit <= TARGET_RMSE_8BIT;
                     point.push(row);
                     if reached {
