@@ -9,6 +9,7 @@ pub mod bias;
 pub mod common;
 pub mod compose;
 pub mod cpu;
+pub mod efficiency;
 pub mod explain;
 pub mod files;
 pub mod flip;

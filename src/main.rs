@@ -28,6 +28,11 @@ enum Command {
         /// Variant files or folders of them.
         #[arg(default_value = "variants")]
         paths: Vec<PathBuf>,
+        /// Print one JSON object: each variant's passes, error, and needs of a device's
+        /// limits (bindings per stage, bind groups, workgroup storage and size, colour
+        /// attachment bytes) beside WebGPU's and wgpu's downlevel defaults.
+        #[arg(long)]
+        json: bool,
     },
     /// Print the composed WGSL of a variant's passes.
     Wgsl {
@@ -161,11 +166,21 @@ struct GpuArgs {
         value_parser = parse_seconds
     )]
     cell_timeout: f64,
+    /// Device limits to run within: the adapter's own, WebGPU's defaults (what a browser
+    /// grants), or wgpu's downlevel defaults; a variant that needs more is refused, naming
+    /// the limit (`validate --json` lists each variant's needs).
+    #[arg(long, value_enum, default_value_t)]
+    limits: clusterlab::gpu::adapters::LimitSet,
 }
 
 impl GpuArgs {
     fn open(&self) -> Result<clusterlab::gpu::Gpu, String> {
-        let gpu = clusterlab::gpu::Gpu::new(self.backend.as_deref()).map_err(|e| e.to_string())?;
+        let request = clusterlab::gpu::adapters::DeviceRequest {
+            limits: self.limits,
+            ..clusterlab::gpu::adapters::DeviceRequest::from_env().map_err(|e| e.to_string())?
+        };
+        let gpu = clusterlab::gpu::Gpu::with_request(self.backend.as_deref(), request)
+            .map_err(|e| e.to_string())?;
         gpu.set_cell_timeout(std::time::Duration::from_secs_f64(self.cell_timeout));
         Ok(gpu)
     }
@@ -485,7 +500,7 @@ fn main() -> ExitCode {
     }
     spread_software_gpu_threads();
     let result = match cli.command {
-        Command::Validate { paths } => validate(&paths),
+        Command::Validate { paths, json } => validate(&paths, json),
         Command::Wgsl { variant, pass } => wgsl(&variant, pass.as_deref()),
         Command::Explain => {
             print!("{}", clusterlab::explain::explain());
@@ -575,9 +590,10 @@ fn spread_software_gpu_threads() {
     }
 }
 
-fn validate(paths: &[PathBuf]) -> Result<bool, String> {
+fn validate(paths: &[PathBuf], json: bool) -> Result<bool, String> {
     let composer = Composer::default();
     let (mut ok, mut failed) = (0, 0);
+    let mut records = Vec::new();
     for path in paths {
         let files = variant::find_files(path)?;
         if files.is_empty() {
@@ -591,29 +607,83 @@ fn validate(paths: &[PathBuf]) -> Result<bool, String> {
                     let composed = composer
                         .compose_all(&v.variant)
                         .map_err(|e| e.to_string())?;
-                    Ok((v, composed.len()))
+                    let needs = clusterlab::render::variant_needs(&composer, &v.variant)
+                        .map_err(|e| e.to_string())?;
+                    Ok((v, composed.len(), needs))
                 });
             let ms = start.elapsed().as_secs_f64() * 1e3;
             match outcome {
-                Ok((v, n)) => {
+                Ok((v, n, needs)) => {
                     ok += 1;
-                    println!(
-                        "ok    {:<32} {n} passes, {ms:5.1} ms  {}",
-                        v.name, v.variant.description
-                    );
+                    if json {
+                        records.push(validated_json(&file, &v.name, n, &needs));
+                    } else {
+                        println!(
+                            "ok    {:<32} {n} passes, {ms:5.1} ms  {}",
+                            v.name, v.variant.description
+                        );
+                    }
                 }
                 Err(message) => {
                     failed += 1;
-                    println!("FAIL  {}", file.display());
-                    for line in message.lines() {
-                        println!("      {line}");
+                    if json {
+                        records.push(serde_json::json!({
+                            "file": file.display().to_string(),
+                            "ok": false,
+                            "error": message,
+                        }));
+                    } else {
+                        println!("FAIL  {}", file.display());
+                        for line in message.lines() {
+                            println!("      {line}");
+                        }
                     }
                 }
             }
         }
     }
-    println!("{} variants: {ok} ok, {failed} failed", ok + failed);
+    if json {
+        let out = serde_json::json!({ "variants": records, "ok": ok, "failed": failed });
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&out).map_err(|e| e.to_string())?
+        );
+    } else {
+        println!("{} variants: {ok} ok, {failed} failed", ok + failed);
+    }
     Ok(failed == 0)
+}
+
+/// A variant's `validate --json` record: its needs, and the limits of WebGPU's and wgpu's
+/// downlevel defaults it exceeds (the largest binding, which grows with the scene, is
+/// checked per frame).
+fn validated_json(
+    file: &Path,
+    name: &str,
+    passes: usize,
+    needs: &clusterlab::render::needs::Needs,
+) -> serde_json::Value {
+    let over = |limits: wgpu::Limits| -> Vec<serde_json::Value> {
+        needs
+            .against(&limits)
+            .into_iter()
+            .filter(|(_, need, allowed)| need.value > *allowed)
+            .map(|(limit, need, allowed)| {
+                serde_json::json!({ "limit": limit, "need": need.value, "pass": need.pass, "allowed": allowed })
+            })
+            .collect()
+    };
+    serde_json::json!({
+        "file": file.display().to_string(),
+        "name": name,
+        "ok": true,
+        "passes": passes,
+        "needs": needs,
+        "exceeds": {
+            "webgpu": over(wgpu::Limits::defaults()),
+            "downlevel": over(wgpu::Limits::downlevel_defaults()),
+        },
+    })
 }
 
 fn wgsl(arg: &str, only: Option<&str>) -> Result<bool, String> {

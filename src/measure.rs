@@ -111,6 +111,85 @@ pub struct FrameCount {
     pub timed: u32,
     /// A frame without lights was drawn first, untimed (frames by budget).
     pub frame_without_lights: bool,
+    /// Frames set aside because other processes took the cores while they ran
+    /// (`CpuClock`); when every frame was, they are the timed ones and this says so.
+    #[serde(default)]
+    pub disturbed: u32,
+}
+
+/// A software adapter shades on the CPU cores this process shares with every other one:
+/// a frame during which another process took a core is slower by what it took (a naive
+/// forward frame of several seconds, timed once, doubled so). A frame is disturbed when
+/// other processes used more than this share of the machine's CPU time while it ran.
+pub const DISTURBED_SHARE: f64 = 0.25;
+/// Frames shorter than this are not judged: the kernel counts CPU time in ticks of 10 ms,
+/// so over 250 ms on 2 cores a share is known to about 4%; shorter frames are many, and
+/// their median already leaves a disturbed one out.
+pub const JUDGED_FRAME_MS: f64 = 250.0;
+/// Frames a cell takes past its budget to find one that no other process disturbed.
+pub const DISTURBED_RETRIES: u32 = 2;
+
+/// The machine's and this process's CPU time at one moment (Linux: `/proc/stat` and
+/// `getrusage`; elsewhere there is none, and no frame is judged).
+#[derive(Clone, Copy, Debug)]
+pub struct CpuClock {
+    /// Seconds of CPU time the machine spent busy (steal included: the host took it) and in
+    /// all.
+    machine_busy_s: f64,
+    machine_total_s: f64,
+    /// Seconds of CPU time this process used, every thread (the software GPU's) included.
+    own_s: f64,
+}
+
+impl CpuClock {
+    #[cfg(target_os = "linux")]
+    pub fn now() -> Option<CpuClock> {
+        use std::io::Read;
+        let mut text = String::new();
+        // The first line only: "cpu  user nice system idle iowait irq softirq steal ...".
+        std::fs::File::open("/proc/stat")
+            .ok()?
+            .take(4096)
+            .read_to_string(&mut text)
+            .ok()?;
+        let ticks: Vec<f64> = text
+            .lines()
+            .next()?
+            .split_whitespace()
+            .skip(1)
+            .take(8)
+            .map(|t| t.parse().ok())
+            .collect::<Option<_>>()?;
+        let [user, nice, system, idle, iowait, irq, softirq, steal] = ticks[..] else {
+            return None;
+        };
+        // SAFETY: sysconf and getrusage only write the value and the struct they are given.
+        let hz = unsafe { libc::sysconf(libc::_SC_CLK_TCK) } as f64;
+        let mut usage: libc::rusage = unsafe { std::mem::zeroed() };
+        if hz <= 0.0 || unsafe { libc::getrusage(libc::RUSAGE_SELF, &mut usage) } != 0 {
+            return None;
+        }
+        let seconds = |t: libc::timeval| t.tv_sec as f64 + t.tv_usec as f64 * 1e-6;
+        let busy = user + nice + system + irq + softirq + steal;
+        Some(CpuClock {
+            machine_busy_s: busy / hz,
+            machine_total_s: (busy + idle + iowait) / hz,
+            own_s: seconds(usage.ru_utime) + seconds(usage.ru_stime),
+        })
+    }
+
+    #[cfg(not(target_os = "linux"))]
+    pub fn now() -> Option<CpuClock> {
+        None
+    }
+
+    /// The share of the machine's CPU time from `self` to `later` that other processes
+    /// (and the host, as steal) used, in [0, 1].
+    pub fn others_share(&self, later: &CpuClock) -> Option<f64> {
+        let total = later.machine_total_s - self.machine_total_s;
+        let others = (later.machine_busy_s - self.machine_busy_s) - (later.own_s - self.own_s);
+        (total > 0.0).then(|| (others / total).clamp(0.0, 1.0))
+    }
 }
 
 #[cfg(test)]
@@ -156,6 +235,49 @@ mod tests {
         assert!(B.enough(&capped, 0.0));
         assert!(!B.enough(&[100.0, 200.0, 100.0], 0.0));
         assert!(B.enough(&[100.0, 200.0, 100.0, 100.0], 0.0));
+    }
+
+    /// Our own work is not another process's; busy processes on every core are.
+    #[cfg(target_os = "linux")]
+    #[test]
+    fn the_clock_tells_other_processes_work_from_ours() {
+        let spin = |ms: u64| {
+            let start = std::time::Instant::now();
+            let mut x = 0u64;
+            while start.elapsed().as_millis() < ms as u128 {
+                x = std::hint::black_box(x.wrapping_mul(31).wrapping_add(7));
+            }
+        };
+        let a = CpuClock::now().expect("a clock on Linux");
+        spin(400);
+        let ours = a.others_share(&CpuClock::now().unwrap()).unwrap();
+        let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+        let mut busy: Vec<_> = (0..cores)
+            .map(|_| {
+                std::process::Command::new("sh")
+                    .args(["-c", "while :; do :; done"])
+                    .spawn()
+                    .expect("sh")
+            })
+            .collect();
+        std::thread::sleep(std::time::Duration::from_millis(100));
+        let b = CpuClock::now().unwrap();
+        std::thread::sleep(std::time::Duration::from_millis(400));
+        let theirs = b.others_share(&CpuClock::now().unwrap()).unwrap();
+        for child in &mut busy {
+            let _ = child.kill();
+            let _ = child.wait();
+        }
+        // A quiet machine: the share is what the rest of the system does (well under it).
+        assert!(
+            ours < DISTURBED_SHARE,
+            "our own spin counted as others': {ours}"
+        );
+        // Every core busy elsewhere while we sleep: nearly all of the machine.
+        assert!(
+            theirs > 1.0 - DISTURBED_SHARE,
+            "busy processes not seen: {theirs}"
+        );
     }
 
     #[test]

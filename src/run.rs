@@ -10,8 +10,11 @@ use serde_json::{Map, Value};
 
 use crate::compose::Composer;
 use crate::cpu::frame::ReferenceFrame;
+use crate::efficiency::Efficiency;
 use crate::gpu::{AdapterSummary, Gpu, Timings};
-use crate::measure::{FrameCount, Frames};
+use crate::measure::{
+    CpuClock, DISTURBED_RETRIES, DISTURBED_SHARE, FrameCount, Frames, JUDGED_FRAME_MS,
+};
 use crate::metrics::{self, ErrorMetrics};
 use crate::reference::{ReferenceCache, reference_frame};
 use crate::render::{FrameOutput, FrameStats, RenderError, Renderer};
@@ -54,6 +57,10 @@ pub struct RenderReport {
     pub error: Option<ErrorMetrics>,
     /// Exact counters from an instrumented run of the frame (absent with `stats: false`).
     pub stats: Option<FrameStats>,
+    /// Distance from perfect culling, from the frame without lights, the frame and the
+    /// counters (absent without counters).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub efficiency: Option<Efficiency>,
     /// CPU milliseconds spent in the frame outside the GPU (light assignment on the CPU).
     pub cpu_ms: Map<String, Value>,
     /// Passes of the variant the last timed frame did not need and did not run (bloom_blur
@@ -187,7 +194,9 @@ pub fn run_scene_keeping_renderer<'g>(
     };
     let mut renderer = Renderer::new(gpu, composer, &variant.variant, scene)?;
     cost.setup = lap();
-    let (mut runs, frame_count) = timed_frames(&mut renderer, options.frames)?;
+    let software = gpu.software;
+    let (mut runs, frame_count, without_lights) =
+        timed_frames(&mut renderer, options.frames, software)?;
     cost.frames = lap();
     // A debug view is an extra: a cell whose view cannot be drawn still has its figures.
     let debug = options
@@ -247,6 +256,11 @@ pub fn run_scene_keeping_renderer<'g>(
     // of 7.6-13.2 ms), and the spread beside it is of the totals.
     let total = median(runs_total_ms);
     gpu_ms.insert("total".into(), round3(total).into());
+    let efficiency = stats.as_ref().and_then(|s| {
+        let shading = renderer.shading_pass_names();
+        let counts = (s.light_evals, s.useful_light_evals);
+        Efficiency::of(total, &timings, &without_lights, &shading, counts)
+    });
     for (name, ms) in &timings.passes {
         gpu_ms.insert(name.clone(), round3(*ms).into());
     }
@@ -273,6 +287,7 @@ pub fn run_scene_keeping_renderer<'g>(
         reference_ms: round3(reference_ms),
         error,
         stats,
+        efficiency,
         cpu_ms,
         skipped_passes: frame.skipped.clone(),
         images,
@@ -323,37 +338,84 @@ pub fn meaningless(
     None
 }
 
-/// Render the frames `policy` asks for; returns the timed ones.
+/// Render the frames `policy` asks for; returns the timed ones. On a `software` adapter a
+/// long frame that other processes disturbed (`measure::CpuClock`) is set aside and another
+/// taken, up to `DISTURBED_RETRIES` more in all.
 fn timed_frames(
     renderer: &mut Renderer<'_>,
     policy: Frames,
-) -> Result<(Vec<FrameOutput>, FrameCount), RenderError> {
+    software: bool,
+) -> Result<(Vec<FrameOutput>, FrameCount, Timings), RenderError> {
     let mut count = FrameCount::default();
     let mut runs: Vec<FrameOutput> = Vec::new();
+    // The frame without lights the efficiency is measured from (`efficiency`), timed after
+    // a first draw has compiled and touched what the frame uses.
+    let without_lights;
     match policy {
         Frames::Exact { warmup, timed } => {
             for _ in 0..warmup {
                 renderer.render()?;
             }
             count.warmup = warmup;
-            for _ in 0..timed.max(1) {
-                runs.push(renderer.render()?);
+            without_lights = renderer.draw_without_lights()?;
+            let mut disturbed = Vec::new();
+            while runs.len() < timed.max(1) as usize {
+                match judged_frame(renderer, software)? {
+                    (frame, true) if disturbed.len() < DISTURBED_RETRIES as usize => {
+                        disturbed.push(frame)
+                    }
+                    (frame, _) => runs.push(frame),
+                }
             }
+            count.disturbed = disturbed.len() as u32;
         }
         Frames::Budget(budget) => {
-            let untimed_ms = renderer.draw_without_lights()?;
+            let first = renderer.draw_without_lights()?;
+            without_lights = renderer.draw_without_lights()?;
+            let untimed_ms = first.total_ms() + without_lights.total_ms();
             count.frame_without_lights = true;
+            let mut disturbed: Vec<FrameOutput> = Vec::new();
             loop {
-                runs.push(renderer.render()?);
+                match judged_frame(renderer, software)? {
+                    (frame, true) => disturbed.push(frame),
+                    (frame, false) => runs.push(frame),
+                }
+                count.disturbed = disturbed.len() as u32;
+                if runs.is_empty() {
+                    if count.disturbed > DISTURBED_RETRIES {
+                        runs = std::mem::take(&mut disturbed);
+                        break;
+                    }
+                    continue;
+                }
                 let times: Vec<f64> = runs.iter().map(|f| f.timings.total_ms()).collect();
-                if budget.enough(&times, untimed_ms) {
+                let set_aside: f64 = disturbed.iter().map(|f| f.timings.total_ms()).sum();
+                if budget.enough(&times, untimed_ms + set_aside) {
                     break;
                 }
             }
         }
     }
     count.timed = runs.len() as u32;
-    Ok((runs, count))
+    Ok((runs, count, without_lights))
+}
+
+/// One timed frame, and whether other processes disturbed it: on a `software` adapter, a
+/// frame of at least `JUDGED_FRAME_MS` during which they took more than `DISTURBED_SHARE`
+/// of the machine's CPU time.
+fn judged_frame(
+    renderer: &mut Renderer<'_>,
+    software: bool,
+) -> Result<(FrameOutput, bool), RenderError> {
+    let before = CpuClock::now();
+    let frame = renderer.render()?;
+    let others = before
+        .zip(CpuClock::now())
+        .and_then(|(a, b)| a.others_share(&b));
+    let disturbed = software
+        && frame.timings.total_ms() >= JUDGED_FRAME_MS
+        && others.is_some_and(|s| s > DISTURBED_SHARE);
+    Ok((frame, disturbed))
 }
 
 /// `text` as a file name: characters other than letters, digits and `_-.@=` become `_`

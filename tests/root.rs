@@ -10,6 +10,7 @@ mod compose;
 mod constants;
 mod debug_views;
 mod device;
+mod features;
 mod folders;
 mod fuzz;
 mod ggx;

@@ -152,6 +152,12 @@ pub fn feature_flags(v: &Variant) -> Vec<(&'static str, bool)> {
             v.msaa.on() && v.msaa.resolve == MsaaResolve::Tonemapped,
         ),
         ("reversed_z", v.depth.reversed_z),
+        ("depth_unorm24", v.depth.format == DepthFormat::Unorm24),
+        // The device forces early depth tests (`Gpu::early_depth`; off for an instrumented
+        // frame where it does not, whose passes then test depth themselves), and the pass is
+        // the transparent one (`passes::pass_flags`).
+        ("early_depth", true),
+        ("transparent_pass", false),
         ("infinite_far", v.depth.mapping().infinite_far),
         (
             "capped_lists",

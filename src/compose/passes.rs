@@ -217,7 +217,9 @@ pub fn pass_flags(id: PassId) -> &'static [(&'static str, bool)] {
         }
         // Panes are shaded over the opaque frame, their fragments several a pixel: with RIS
         // as it is, but no pixel reservoir to keep (the opaque surface's is).
-        PassId::Raster(RasterPass::Transparent) => &[("temporal_reuse", false)],
+        PassId::Raster(RasterPass::Transparent) => {
+            &[("temporal_reuse", false), ("transparent_pass", true)]
+        }
         _ => &[],
     }
 }

@@ -111,29 +111,98 @@ pub fn pick(request: &Request) -> Result<wgpu::Adapter, GpuError> {
     Err(GpuError::NoAdapter { backends })
 }
 
-/// The optional features clusterlab asks for when the adapter has them.
-pub fn wanted_features() -> wgpu::Features {
+/// The variable that masks optional features from the device request, so a machine that
+/// has them runs as one without would (a Mac has no forced early depth tests).
+pub const WITHOUT: &str = "CLUSTERLAB_WITHOUT";
+
+/// The optional features clusterlab asks for when the adapter has them, by the names
+/// `CLUSTERLAB_WITHOUT` masks them with, and what a device without each does instead.
+pub const OPTIONAL_FEATURES: [(&str, wgpu::Features, &str); 4] = [
+    (
+        "early-depth",
+        wgpu::Features::SHADER_EARLY_DEPTH_TEST,
+        "instrumented forward and transparent passes test depth in the shader, with no depth attached",
+    ),
+    (
+        "timestamps",
+        wgpu::Features::TIMESTAMP_QUERY,
+        "each pass is submitted alone and timed by the wall clock",
+    ),
+    (
+        "float32-blend",
+        wgpu::Features::FLOAT32_BLENDABLE,
+        "the HDR target is rgba16float",
+    ),
+    (
+        "format-features",
+        wgpu::Features::TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES,
+        "formats do only what WebGPU guarantees: sample counts 1 and 4 where multisampling is allowed at all, no rgba32float target on OpenGL",
+    ),
+];
+
+/// The features `CLUSTERLAB_WITHOUT` (a comma list of `OPTIONAL_FEATURES`' names) masks;
+/// an unknown name is an error that lists the valid ones (`Gpu::new` refuses it).
+pub fn masked_features() -> Result<wgpu::Features, String> {
+    let Ok(list) = std::env::var(WITHOUT) else {
+        return Ok(wgpu::Features::empty());
+    };
+    let mut masked = wgpu::Features::empty();
+    for name in list.split(',').map(str::trim).filter(|n| !n.is_empty()) {
+        match OPTIONAL_FEATURES.iter().find(|(n, _, _)| *n == name) {
+            Some((_, f, _)) => masked |= *f,
+            None => {
+                let valid: Vec<&str> = OPTIONAL_FEATURES.iter().map(|(n, _, _)| *n).collect();
+                return Err(format!(
+                    "`{name}` (from {WITHOUT}) is not an optional feature; use a comma list of {}",
+                    valid.join(", ")
+                ));
+            }
+        }
+    }
+    Ok(masked)
+}
+
+/// The optional features clusterlab asks for when the adapter has them, less `without`.
+pub fn wanted_features(without: wgpu::Features) -> wgpu::Features {
     // Adapter-specific format features: OpenGL reports rgba32float as renderable only here.
     // Forced early depth tests let instrumented passes count what early-Z shades.
-    wgpu::Features::TIMESTAMP_QUERY
-        | wgpu::Features::SHADER_EARLY_DEPTH_TEST
-        | wgpu::Features::FLOAT32_BLENDABLE
-        | wgpu::Features::TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES
+    let all = OPTIONAL_FEATURES
+        .iter()
+        .fold(wgpu::Features::empty(), |a, (_, f, _)| a | *f);
+    all - without
+}
+
+/// What a device with `features` may do with `format`: the adapter's own format features
+/// where it asked for them, else only what WebGPU guarantees.
+pub fn format_features(
+    adapter: &wgpu::Adapter,
+    format: wgpu::TextureFormat,
+    features: wgpu::Features,
+) -> wgpu::TextureFormatFeatures {
+    if features.contains(wgpu::Features::TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES) {
+        adapter.get_texture_format_features(format)
+    } else {
+        format.guaranteed_format_features(features)
+    }
 }
 
 /// Whether rgba32float can be rendered to and blended.
 fn float32_target(adapter: &wgpu::Adapter, features: wgpu::Features) -> bool {
-    let usages = adapter
-        .get_texture_format_features(wgpu::TextureFormat::Rgba32Float)
-        .allowed_usages;
+    let usages =
+        format_features(adapter, wgpu::TextureFormat::Rgba32Float, features).allowed_usages;
     usages.contains(wgpu::TextureUsages::RENDER_ATTACHMENT)
         && features.contains(wgpu::Features::FLOAT32_BLENDABLE)
 }
 
-/// The HDR colour target's format: rgba32float where the adapter can render and blend it,
-/// else rgba16float (OpenGL through wgpu).
-pub fn hdr_format(adapter: &wgpu::Adapter) -> wgpu::TextureFormat {
-    if float32_target(adapter, adapter.features() & wanted_features()) {
+/// The features a device on `adapter` is opened with, `without` masked.
+pub fn device_features(adapter: &wgpu::Adapter, without: wgpu::Features) -> wgpu::Features {
+    adapter.features() & wanted_features(without)
+}
+
+/// The HDR colour target's format for a device with `features`: rgba32float where it can
+/// render and blend it, else rgba16float (OpenGL through wgpu).
+pub fn hdr_format(adapter: &wgpu::Adapter, features: wgpu::Features) -> wgpu::TextureFormat {
+    if float32_target(adapter, features) {
         wgpu::TextureFormat::Rgba32Float
     } else {
         wgpu::TextureFormat::Rgba16Float
@@ -181,9 +250,13 @@ pub const MULTISAMPLED_FORMATS: [wgpu::TextureFormat; 8] = [
     wgpu::TextureFormat::Depth24Plus,
 ];
 
-/// The sample counts (of 1, 2, 4, 8) the adapter can render `format` with.
-pub fn sample_counts(adapter: &wgpu::Adapter, format: wgpu::TextureFormat) -> Vec<u32> {
-    let flags = adapter.get_texture_format_features(format).flags;
+/// The sample counts (of 1, 2, 4, 8) a device with `features` can render `format` with.
+pub fn sample_counts(
+    adapter: &wgpu::Adapter,
+    format: wgpu::TextureFormat,
+    features: wgpu::Features,
+) -> Vec<u32> {
+    let flags = format_features(adapter, format, features).flags;
     [1, 2, 4, 8]
         .into_iter()
         .filter(|&n| flags.sample_count_supported(n))
@@ -202,6 +275,9 @@ pub struct FormatSamples {
 pub struct Capability {
     pub name: &'static str,
     pub present: bool,
+    /// The adapter has it, but `CLUSTERLAB_WITHOUT` masks it from the device.
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub masked: bool,
     /// What clusterlab does with it, and without it.
     #[serde(rename = "use")]
     pub use_: &'static str,
@@ -249,65 +325,78 @@ pub struct Survey {
 fn capabilities(adapter: &wgpu::Adapter) -> Vec<Capability> {
     let f = adapter.features();
     let down = adapter.get_downlevel_capabilities().flags;
+    let masked = masked_features().unwrap_or_default();
     let has = |x: wgpu::Features| f.contains(x);
     let d = |x: wgpu::DownlevelFlags| down.contains(x);
+    let feature = |name, x: wgpu::Features, use_| Capability {
+        name,
+        present: has(x),
+        masked: has(x) && masked.contains(x),
+        use_,
+    };
     vec![
         Capability {
             name: "compute shaders",
+            masked: false,
             present: d(wgpu::DownlevelFlags::COMPUTE_SHADERS),
             use_: "required: cluster bounds, light assignment, post effects",
         },
         Capability {
             name: "storage writes in fragment shaders",
+            masked: false,
             present: d(wgpu::DownlevelFlags::FRAGMENT_WRITABLE_STORAGE),
             use_: "required: the counters of instrumented frames",
         },
         Capability {
             name: "per-sample shading",
+            masked: false,
             present: d(wgpu::DownlevelFlags::MULTISAMPLED_SHADING),
             use_: "multisampled scissor deferred, which shades every sample",
         },
         Capability {
             name: "indirect dispatch",
+            masked: false,
             present: d(wgpu::DownlevelFlags::INDIRECT_EXECUTION),
             use_: "required: bloom's blur sized by its bright pass",
         },
-        Capability {
-            name: "early depth test (SHADER_EARLY_DEPTH_TEST)",
-            present: has(wgpu::Features::SHADER_EARLY_DEPTH_TEST),
-            use_: "required by the forward pass: instrumented frames count only what early-Z shades",
-        },
-        Capability {
-            name: "timestamp queries (TIMESTAMP_QUERY)",
-            present: has(wgpu::Features::TIMESTAMP_QUERY),
-            use_: "per-pass GPU times on hardware adapters; without them each pass is timed by the wall clock",
-        },
-        Capability {
-            name: "float32 blending (FLOAT32_BLENDABLE)",
-            present: has(wgpu::Features::FLOAT32_BLENDABLE),
-            use_: "with a renderable rgba32float: a 32-bit HDR target; else rgba16float",
-        },
+        feature(
+            "early depth test (SHADER_EARLY_DEPTH_TEST)",
+            wgpu::Features::SHADER_EARLY_DEPTH_TEST,
+            "instrumented forward passes count only what early-Z shades; without it they test depth in the shader",
+        ),
+        feature(
+            "timestamp queries (TIMESTAMP_QUERY)",
+            wgpu::Features::TIMESTAMP_QUERY,
+            "per-pass GPU times on hardware adapters; without them each pass is timed by the wall clock",
+        ),
+        feature(
+            "float32 blending (FLOAT32_BLENDABLE)",
+            wgpu::Features::FLOAT32_BLENDABLE,
+            "with a renderable rgba32float: a 32-bit HDR target; else rgba16float",
+        ),
         Capability {
             name: "rgba32float render target",
+            masked: false,
             present: adapter
                 .get_texture_format_features(wgpu::TextureFormat::Rgba32Float)
                 .allowed_usages
                 .contains(wgpu::TextureUsages::RENDER_ATTACHMENT),
             use_: "with float32 blending: a 32-bit HDR target; else rgba16float",
         },
-        Capability {
-            name: "adapter-specific format features",
-            present: has(wgpu::Features::TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES),
-            use_: "OpenGL reports rgba32float as renderable only through it",
-        },
+        feature(
+            "adapter-specific format features",
+            wgpu::Features::TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES,
+            "OpenGL reports rgba32float as renderable only through it",
+        ),
     ]
 }
 
 fn report(adapter: &wgpu::Adapter, chosen: bool) -> AdapterReport {
     let info = adapter.get_info();
     let limits = adapter.limits();
-    let hdr = hdr_format(adapter);
-    let timestamps = adapter.features().contains(wgpu::Features::TIMESTAMP_QUERY)
+    let features = device_features(adapter, masked_features().unwrap_or_default());
+    let hdr = hdr_format(adapter, features);
+    let timestamps = features.contains(wgpu::Features::TIMESTAMP_QUERY)
         && timestamps_are_per_pass(info.device_type);
     AdapterReport {
         name: info.name.clone(),
@@ -321,7 +410,7 @@ fn report(adapter: &wgpu::Adapter, chosen: bool) -> AdapterReport {
             .iter()
             .map(|&f| FormatSamples {
                 format: format!("{f:?}").to_lowercase(),
-                samples: sample_counts(adapter, f),
+                samples: sample_counts(adapter, f, features),
             })
             .collect(),
         hdr_format: format!("{hdr:?}").to_lowercase(),
@@ -382,7 +471,15 @@ pub fn survey(backend: Option<&str>) -> Survey {
                 .to_string(),
         );
     }
-    for var in ["WGPU_BACKEND", "CLUSTERLAB_TIMING", "WGPU_ADAPTER_NAME"] {
+    if let Err(e) = masked_features() {
+        notes.push(e);
+    }
+    for var in [
+        "WGPU_BACKEND",
+        "CLUSTERLAB_TIMING",
+        WITHOUT,
+        "WGPU_ADAPTER_NAME",
+    ] {
         if let Ok(v) = std::env::var(var) {
             notes.push(format!("{var}={v}"));
         }
@@ -464,13 +561,12 @@ impl Survey {
                 a.max_buffer_bytes >> 20
             );
             for c in &a.capabilities {
-                let _ = writeln!(
-                    s,
-                    "   [{}] {}: {}",
-                    if c.present { "x" } else { " " },
-                    c.name,
-                    c.use_
-                );
+                let mark = match (c.present, c.masked) {
+                    (_, true) => format!("[-] {} (masked by {WITHOUT})", c.name),
+                    (true, false) => format!("[x] {}", c.name),
+                    (false, false) => format!("[ ] {}", c.name),
+                };
+                let _ = writeln!(s, "   {mark}: {}", c.use_);
             }
             for why in &a.declared_differences {
                 let _ = writeln!(s, "   differs (declared): {why}");
@@ -490,5 +586,65 @@ impl Survey {
             let _ = writeln!(s, "note: {note}");
         }
         s
+    }
+}
+
+/// The names of the optional features in `without` that `adapter` has, as reports record
+/// them beside the adapter.
+pub fn masked_names(adapter: &wgpu::Adapter, without: wgpu::Features) -> Vec<String> {
+    let masked = without & adapter.features();
+    OPTIONAL_FEATURES
+        .iter()
+        .filter(|(_, f, _)| masked.contains(*f))
+        .map(|(n, _, _)| n.to_string())
+        .collect()
+}
+
+/// Which limits the device is asked for (`--limits`): the adapter's own (the most it
+/// offers), WebGPU's defaults (what a browser grants without asking), or wgpu's downlevel
+/// defaults (WebGL2-class and older hardware). Each is lowered where the adapter offers less.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum LimitSet {
+    #[default]
+    Adapter,
+    Webgpu,
+    Downlevel,
+}
+
+impl LimitSet {
+    /// The name `--limits` gives it.
+    pub fn name(self) -> &'static str {
+        match self {
+            LimitSet::Adapter => "adapter",
+            LimitSet::Webgpu => "webgpu",
+            LimitSet::Downlevel => "downlevel",
+        }
+    }
+
+    /// The limits to request of an adapter that offers `offered`.
+    pub fn request(self, offered: &wgpu::Limits) -> wgpu::Limits {
+        match self {
+            LimitSet::Adapter => offered.clone(),
+            LimitSet::Webgpu => wgpu::Limits::defaults().or_worse_values_from(offered),
+            LimitSet::Downlevel => wgpu::Limits::downlevel_defaults().or_worse_values_from(offered),
+        }
+    }
+}
+
+/// How to open a device: the limits to ask for and the optional features to go without.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct DeviceRequest {
+    pub limits: LimitSet,
+    pub without: wgpu::Features,
+}
+
+impl DeviceRequest {
+    /// The adapter's limits, without what `CLUSTERLAB_WITHOUT` masks.
+    pub fn from_env() -> Result<Self, GpuError> {
+        Ok(DeviceRequest {
+            limits: LimitSet::Adapter,
+            without: masked_features().map_err(GpuError::Setting)?,
+        })
     }
 }

@@ -22,6 +22,9 @@ pub struct AdapterSummary {
     pub name: String,
     pub backend: String,
     pub driver: String,
+    /// Optional features the adapter has that `CLUSTERLAB_WITHOUT` masked from the device.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub without: Vec<String>,
 }
 
 /// Why the GPU could not be used.
@@ -93,6 +96,12 @@ pub struct Gpu {
     /// Pass times come from timestamp queries (hardware adapters that have them); otherwise
     /// each pass is submitted alone and timed by the wall clock.
     pub timestamps: bool,
+    /// Fragment shaders may force early depth tests (SHADER_EARLY_DEPTH_TEST); without it
+    /// the instrumented passes test depth themselves (`render::raster::tests_depth_itself`).
+    pub early_depth: bool,
+    /// A software adapter (lavapipe, llvmpipe): it shades on the CPU cores this process
+    /// shares with every other.
+    pub software: bool,
     /// Format of HDR colour targets: rgba32float where the adapter can render (and blend)
     /// it, else rgba16float (OpenGL through wgpu).
     pub hdr_format: wgpu::TextureFormat,
@@ -106,6 +115,8 @@ pub struct Gpu {
     overran: AtomicBool,
     /// The backends asked for, so `reopen` asks for the same.
     requested: Option<String>,
+    /// The limits and masked features asked for, so `reopen` asks for the same.
+    pub request: adapters::DeviceRequest,
     /// Nanoseconds one cell's GPU work may take (`--cell-timeout`).
     cell_timeout_ns: AtomicU64,
     /// When the current cell began (`begin_cell`); its waits share the limit.
@@ -116,31 +127,36 @@ pub struct Gpu {
 
 impl Gpu {
     /// Open the best adapter of `backend` (e.g. "vulkan", "gl"); `None` honours
-    /// `WGPU_BACKEND`, else prefers Vulkan and falls back to any backend.
+    /// `WGPU_BACKEND`, else prefers Vulkan and falls back to any backend. The device gets
+    /// the adapter's limits and every optional feature `CLUSTERLAB_WITHOUT` does not mask.
     pub fn new(backend: Option<&str>) -> Result<Gpu, GpuError> {
+        Self::with_request(backend, adapters::DeviceRequest::from_env()?)
+    }
+
+    /// [`Gpu::new`] with the device's limits and masked features given.
+    pub fn with_request(
+        backend: Option<&str>,
+        request: adapters::DeviceRequest,
+    ) -> Result<Gpu, GpuError> {
         adapters::timing_override().map_err(GpuError::Setting)?;
-        let mut gpu = Self::find(backend)?;
+        let adapter = adapters::pick(&adapters::Request::new(backend)?)?;
+        let mut gpu = Self::open(adapter, request)?;
         gpu.requested = backend.map(str::to_string);
         Ok(gpu)
     }
 
-    /// A new device on the same backends, with the same cell limit: what a run uses in place
-    /// of a device that became unusable.
+    /// A new device on the same backends, with the same request and cell limit: what a run
+    /// uses in place of a device that became unusable.
     pub fn reopen(&self) -> Result<Gpu, GpuError> {
-        let gpu = Self::new(self.requested.as_deref())?;
+        let gpu = Self::with_request(self.requested.as_deref(), self.request)?;
         gpu.set_cell_timeout(self.cell_timeout());
         Ok(gpu)
     }
 
-    fn find(backend: Option<&str>) -> Result<Gpu, GpuError> {
-        let request = adapters::Request::new(backend)?;
-        Self::open(adapters::pick(&request)?)
-    }
-
-    fn open(adapter: wgpu::Adapter) -> Result<Gpu, GpuError> {
+    fn open(adapter: wgpu::Adapter, request: adapters::DeviceRequest) -> Result<Gpu, GpuError> {
         let info = adapter.get_info();
-        let features = adapter.features() & adapters::wanted_features();
-        let limits = adapter.limits();
+        let features = adapters::device_features(&adapter, request.without);
+        let limits = request.limits.request(&adapter.limits());
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("clusterlab"),
             required_features: features,
@@ -165,7 +181,7 @@ impl Gpu {
                 *l = Some(format!("{reason:?}: {message}"));
             }
         });
-        let hdr_format = adapters::hdr_format(&adapter);
+        let hdr_format = adapters::hdr_format(&adapter, features);
         let driver = driver_string(&info);
         Ok(Gpu {
             device,
@@ -174,20 +190,24 @@ impl Gpu {
                 name: info.name.clone(),
                 backend: info.backend.to_string(),
                 driver,
+                without: adapters::masked_names(&adapter, request.without),
             },
             backend: info.backend,
+            early_depth: features.contains(wgpu::Features::SHADER_EARLY_DEPTH_TEST),
+            software: info.device_type == wgpu::DeviceType::Cpu,
             timestamps: features.contains(wgpu::Features::TIMESTAMP_QUERY)
                 && adapters::timestamps_are_per_pass(info.device_type),
             hdr_format,
             limits: with_buffer_cap(limits),
             sample_counts: adapters::MULTISAMPLED_FORMATS
                 .iter()
-                .map(|&f| (f, adapters::sample_counts(&adapter, f)))
+                .map(|&f| (f, adapters::sample_counts(&adapter, f, features)))
                 .collect(),
             uncaptured,
             lost,
             overran: AtomicBool::new(false),
             requested: None,
+            request,
             cell_timeout_ns: AtomicU64::new(DEFAULT_CELL_TIMEOUT.as_nanos() as u64),
             cell_started: Mutex::new(None),
             pipelines: Default::default(),

@@ -19,6 +19,7 @@ pub struct Measured<'a> {
     pub pareto: bool,
     pub error: Option<&'a ErrorMetrics>,
     pub stats: Option<&'a FrameStats>,
+    pub efficiency: Option<&'a crate::efficiency::Efficiency>,
     pub skipped_passes: &'a [String],
     pub vs_baseline: Option<&'a BaselineChange>,
     /// Timed frames, untimed ones before them, and whether the one timed frame was a
@@ -49,12 +50,14 @@ impl CellRecord {
             pareto: self.pareto,
             error: self.error.as_ref(),
             stats: self.stats.as_ref(),
+            efficiency: self.efficiency.as_ref(),
             skipped_passes: &self.skipped_passes,
             vs_baseline: self.vs_baseline.as_ref(),
             frames: self.ok().then_some(crate::measure::FrameCount {
                 warmup: self.warmup_frames,
                 timed: self.frames,
                 frame_without_lights: self.frame_without_lights,
+                disturbed: self.disturbed_frames,
             }),
         }
     }
@@ -69,6 +72,7 @@ impl RenderReport {
             pareto: false,
             error: self.error.as_ref(),
             stats: self.stats.as_ref(),
+            efficiency: self.efficiency.as_ref(),
             skipped_passes: &self.skipped_passes,
             vs_baseline: None,
             frames: Some(self.frame_count),
@@ -223,9 +227,15 @@ pub const COLUMNS: &[Column] = &[
         shown: CSV_AND_HTML,
         value: |m| m.frames.map(|f| f.timed).into(),
         text: |m| {
-            or_dash(m.frames, |f| match f.warmup {
-                0 => f.timed.to_string(),
-                w => format!("{w}+{}", f.timed),
+            or_dash(m.frames, |f| {
+                let timed = match f.warmup {
+                    0 => f.timed.to_string(),
+                    w => format!("{w}+{}", f.timed),
+                };
+                match f.disturbed {
+                    0 => timed,
+                    d => format!("{timed} ({d} disturbed)"),
+                }
             })
         },
     },
@@ -235,6 +245,49 @@ pub const COLUMNS: &[Column] = &[
         shown: EVERYWHERE,
         value: |m| m.speedup_vs_naive.into(),
         text: |m| or_dash(m.speedup_vs_naive, |x| format!("{x:.1}x")),
+    },
+    Column {
+        key: "efficiency",
+        heading: "efficiency",
+        shown: CSV_AND_HTML,
+        value: |m| m.efficiency.map(|e| e.efficiency).into(),
+        text: |m| or_dash(m.efficiency, |e| format!("{:.0}%", e.efficiency * 100.0)),
+    },
+    Column {
+        key: "ns_per_useful_evaluation",
+        heading: "ns/useful",
+        shown: CSV_AND_HTML,
+        value: |m| m.efficiency.map(|e| e.ns_per_useful_evaluation).into(),
+        text: |m| {
+            or_dash(m.efficiency, |e| {
+                format!("{:.2}", e.ns_per_useful_evaluation)
+            })
+        },
+    },
+    Column {
+        key: "bound_ms",
+        heading: "bound ms",
+        shown: CSV_ONLY,
+        value: |m| m.efficiency.map(|e| e.bound_ms).into(),
+        text: |m| or_dash(m.efficiency, |e| format!("{:.2}", e.bound_ms)),
+    },
+    Column {
+        key: "frame_without_lights_ms",
+        heading: "no-light ms",
+        shown: CSV_ONLY,
+        value: |m| m.efficiency.map(|e| e.frame_without_lights_ms).into(),
+        text: |m| {
+            or_dash(m.efficiency, |e| {
+                format!("{:.2}", e.frame_without_lights_ms)
+            })
+        },
+    },
+    Column {
+        key: "ns_per_evaluation",
+        heading: "ns/eval",
+        shown: CSV_ONLY,
+        value: |m| m.efficiency.map(|e| e.ns_per_evaluation).into(),
+        text: |m| or_dash(m.efficiency, |e| format!("{:.2}", e.ns_per_evaluation)),
     },
     Column {
         key: "pareto",

@@ -132,13 +132,15 @@ fn provenance(h: &mut String, results: &Results) {
     }
 }
 
-/// Per scene and parameters: the fastest exact variant and its speed-up, the most accurate
+/// Per scene and parameters: the fastest exact variant and its speed-up, the most
+/// efficient exact one (nearest its perfect-culling bound, `efficiency`), the most accurate
 /// lossy one, and what failed.
 fn at_a_glance(h: &mut String, results: &Results) {
     let _ = write!(
         h,
         "<h2>At a glance</h2><table class=\"meta\"><tr><th class=\"name\">scene</th>\
          <th class=\"name\">fastest exact (within 1 LSB, no light dropped)</th>\
+         <th class=\"name\">most efficient exact (bound over frame)</th>\
          <th class=\"name\">most accurate lossy</th><th class=\"name\">failed</th></tr>"
     );
     for (group, cells) in grouped(results) {
@@ -160,6 +162,19 @@ fn at_a_glance(h: &mut String, results: &Results) {
                         .map_or(String::new(), |x| format!(", {x:.1}x naive"))
                 )
             });
+        let efficient = cells
+            .iter()
+            .filter(|c| shown(c) && exact(c))
+            .filter_map(|c| Some((c.efficiency?, c)))
+            .max_by(|a, b| a.0.efficiency.total_cmp(&b.0.efficiency))
+            .map_or("-".into(), |(e, c)| {
+                format!(
+                    "{} ({:.0}%, {:.2} ns a useful evaluation)",
+                    label(c),
+                    e.efficiency * 100.0,
+                    e.ns_per_useful_evaluation
+                )
+            });
         let lossy = cells
             .iter()
             .filter(|c| shown(c) && !exact(c))
@@ -176,9 +191,10 @@ fn at_a_glance(h: &mut String, results: &Results) {
         };
         let _ = write!(
             h,
-            "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
+            "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
             esc(&group),
             esc(&fastest),
+            esc(&efficient),
             esc(&lossy),
             esc(&failed)
         );

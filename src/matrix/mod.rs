@@ -55,6 +55,9 @@ pub struct CellRecord {
     pub reference_ms: Option<f64>,
     pub error: Option<ErrorMetrics>,
     pub stats: Option<FrameStats>,
+    /// Distance from perfect culling (`efficiency`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub efficiency: Option<crate::efficiency::Efficiency>,
     /// Image files, relative to the results folder.
     pub images: Images,
     /// Naive forward's total time over this cell's, on the same scene and parameters.
@@ -73,6 +76,9 @@ pub struct CellRecord {
     /// `measure::Budget`).
     #[serde(default)]
     pub frame_without_lights: bool,
+    /// Frames set aside because other processes took the cores (`measure::CpuClock`).
+    #[serde(default)]
+    pub disturbed_frames: u32,
     /// Where the cell's wall-clock time went (absent for a failed cell).
     #[serde(default)]
     pub cost_ms: Option<CellCost>,
@@ -126,6 +132,7 @@ impl CellRecord {
             reference_ms: None,
             error: None,
             stats: None,
+            efficiency: None,
             images: Images::default(),
             speedup_vs_naive: None,
             pareto: false,
@@ -133,6 +140,7 @@ impl CellRecord {
             skipped_passes: Vec::new(),
             warmup_frames: 0,
             frame_without_lights: false,
+            disturbed_frames: 0,
             cost_ms: None,
             sequence_summary: None,
         }
@@ -515,6 +523,7 @@ fn run_one(
         reference_ms: Some(r.reference_ms),
         error: r.error,
         stats: r.stats,
+        efficiency: r.efficiency,
         images: files,
         speedup_vs_naive: None,
         pareto: false,
@@ -522,6 +531,7 @@ fn run_one(
         skipped_passes: r.skipped_passes,
         warmup_frames: r.frame_count.warmup,
         frame_without_lights: r.frame_count.frame_without_lights,
+        disturbed_frames: r.frame_count.disturbed,
         cost_ms: Some(r.cost_ms),
         sequence_summary: None,
     }
@@ -607,6 +617,7 @@ fn run_sequence(
         reference_ms: None,
         error,
         stats: r.stats,
+        efficiency: None,
         images: files,
         speedup_vs_naive: None,
         pareto: false,
@@ -618,6 +629,7 @@ fn run_sequence(
             .unwrap_or_default(),
         warmup_frames: 0,
         frame_without_lights: true,
+        disturbed_frames: 0,
         cost_ms: Some(CellCost {
             setup: 0.0,
             frames: run.frames_ms,

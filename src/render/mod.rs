@@ -15,6 +15,7 @@ mod culling;
 mod gbuffer;
 mod limits;
 mod lists;
+pub mod needs;
 mod passes;
 mod post;
 mod raster;
@@ -64,6 +65,9 @@ pub enum RenderError {
     /// A variant value that only the scene can check (a depth against its camera).
     #[error("field `{field}` {message}")]
     VariantForScene { field: String, message: String },
+    /// The frame needs more than the device's limits allow (`needs`).
+    #[error("{0}")]
+    Limits(String),
 }
 
 /// What one frame produced.
@@ -84,6 +88,46 @@ pub struct FrameOutput {
     /// Passes of the variant this frame did not run, and `spot_cone` when its light loops
     /// were composed without the cone (see `Variant::skip_unneeded`).
     pub skipped: Vec<String>,
+}
+
+/// The pass that draws the most colour targets a frame of `variant` attaches, and their
+/// formats: the G-buffer pass's, else the forward pass's HDR target.
+fn targets_of(
+    variant: &Variant,
+    hdr: wgpu::TextureFormat,
+) -> (&'static str, Vec<wgpu::TextureFormat>) {
+    if variant.pipeline.is_deferred() {
+        let formats = gbuffer::formats(variant).into_iter().map(|(_, f)| f);
+        ("gbuffer", formats.collect())
+    } else {
+        ("forward", vec![hdr])
+    }
+}
+
+/// What every pass of a variant's frames needs of a device's limits: its timed and
+/// instrumented passes on a scene with blended materials (the most a frame composes), an
+/// rgba32float HDR target.
+pub fn variant_needs(
+    composer: &crate::compose::Composer,
+    variant: &Variant,
+) -> Result<needs::Needs, RenderError> {
+    let blend = compose::SceneFeatures {
+        spots: true,
+        textures: true,
+        masks: false,
+        blend: true,
+    };
+    let timed = compose::frame_features(blend, None);
+    let counting = compose::frame_features(blend, Some(false));
+    let mut passes = Vec::new();
+    for p in compose::passes_for(variant, true) {
+        passes.push(composer.compose_with(variant, &p, &timed)?);
+        if p.id.is_shading() {
+            passes.push(composer.compose_with(variant, &p, &counting)?);
+        }
+    }
+    let targets = targets_of(variant, wgpu::TextureFormat::Rgba32Float);
+    needs::Needs::of(&passes, (targets.0, &targets.1))
 }
 
 /// A variant ready to render a scene: composed passes, pipelines and resources.
@@ -176,7 +220,9 @@ impl<'g> Renderer<'g> {
         let skips = Skips::new(variant, scene);
         let scene_features = compose::SceneFeatures::of(scene, !skips.no_spots);
         let frame = compose::frame_features(scene_features, None);
-        let instrumented_frame = compose::frame_features(scene_features, Some(count_every_light));
+        let mut instrumented_frame =
+            compose::frame_features(scene_features, Some(count_every_light));
+        instrumented_frame.push(("early_depth", gpu.early_depth));
         let mut composed: Composed = Vec::new();
         for p in &plan.passes {
             if composed.iter().any(|(q, _, _)| q.id == p.id) {
@@ -194,6 +240,13 @@ impl<'g> Renderer<'g> {
             .iter()
             .map(|p| Ok((*p, composer.compose_with(variant, p, &frame)?)))
             .collect::<Result<Vec<_>, RenderError>>()?;
+        let every_pass = composed
+            .iter()
+            .flat_map(|(_, c, i)| std::iter::once(c).chain(i))
+            .chain(support.iter().map(|(_, c)| c));
+        let targets = targets_of(variant, gpu.hdr_format);
+        needs::Needs::of(every_pass, (targets.0, &targets.1))?
+            .check(&gpu.limits, gpu.request.limits.name())?;
         let proxies = composed
             .iter()
             .find(|(p, _, _)| p.id == PassId::Clustering(compose::ClusterPass::LightAssign))
@@ -299,7 +352,7 @@ impl<'g> Renderer<'g> {
     /// compiles their shader variants (on first draw) and the images are touched, for about
     /// what a frame with nothing to shade costs; the renderer is warm afterwards (`cold` is
     /// false). It leaves no trace in later frames: they count as if it had not been drawn.
-    pub fn draw_without_lights(&mut self) -> Result<f64, RenderError> {
+    pub fn draw_without_lights(&mut self) -> Result<crate::gpu::Timings, RenderError> {
         let lights = self.res.scene.light_count;
         self.set_light_count(0);
         // Every pass a sequence's frames may run: a patch of no light, too.
@@ -309,7 +362,18 @@ impl<'g> Renderer<'g> {
         self.set_light_count(lights);
         self.drew_without_lights = true;
         self.last_frame_countable = false;
-        Ok(run?.timings.total_ms())
+        Ok(run?.timings)
+    }
+
+    /// The names of the passes that shade with the lights (`PassId::is_shading`), as the
+    /// frame's timings name them.
+    pub fn shading_pass_names(&self) -> Vec<&'static str> {
+        self.plan
+            .passes
+            .iter()
+            .filter(|p| p.id.is_shading())
+            .map(|p| p.name())
+            .collect()
     }
 
     /// The light count the frame's passes see: in the view uniform, and for the draws and
@@ -545,6 +609,7 @@ impl<'g> Renderer<'g> {
                 &res.scene,
                 res.transparent_depths.as_ref(),
                 &self.variant,
+                instrumented && raster::tests_depth_itself(p, &self.variant, self.gpu.early_depth),
             ),
             (PassId::Screen(p), Pipelines::Render(pl)) => {
                 screen::encode(p, pl, groups, encoder, slot, res)

@@ -12,6 +12,18 @@ use crate::variant::Variant;
 /// `dst = src + (1 - src_alpha) dst`, in linear HDR.
 pub const OVER: wgpu::BlendState = wgpu::BlendState::PREMULTIPLIED_ALPHA_BLENDING;
 
+/// Whether an instrumented raster pass tests depth in its shader with no depth attached:
+/// on a device without forced early depth tests, the forward pass after a pre-pass and the
+/// transparent pass (`passes/forward.wesl`; OpenGL refuses a depth both attached and read).
+pub fn tests_depth_itself(pass: RasterPass, variant: &Variant, early_depth: bool) -> bool {
+    !early_depth
+        && match pass {
+            RasterPass::Forward => variant.depth_prepass,
+            RasterPass::Transparent => true,
+            _ => false,
+        }
+}
+
 /// The render pipelines of a raster pass, drawn in order (`masked`: the scene has masked
 /// materials).
 pub fn pipelines(
@@ -25,6 +37,7 @@ pub fn pipelines(
 ) -> Result<Vec<wgpu::RenderPipeline>, GpuError> {
     let d = DepthSetup::of(variant);
     let vertex = [Some(SceneBuffers::vertex_layout())];
+    let unattached = instrumented && tests_depth_itself(pass, variant, gpu.early_depth);
     let build = |fs: Option<&str>, targets: &[Option<wgpu::ColorTargetState>], depth| {
         render_pipeline(
             gpu,
@@ -33,7 +46,7 @@ pub fn pipelines(
             ("vs_main", fs),
             &vertex,
             targets,
-            Some(depth),
+            (!unattached).then_some(depth),
             variant.msaa.samples,
         )
     };
@@ -123,10 +136,11 @@ pub fn encode(
     scene: &SceneBuffers,
     transparent_depths: Option<&wgpu::Buffer>,
     variant: &Variant,
+    depth_unattached: bool,
 ) {
     let d = DepthSetup::of(variant);
     let depth = |clear: bool| {
-        Some(wgpu::RenderPassDepthStencilAttachment {
+        (!depth_unattached).then_some(wgpu::RenderPassDepthStencilAttachment {
             view: &targets.depth.view,
             depth_ops: Some(wgpu::Operations {
                 load: if clear {
