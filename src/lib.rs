@@ -27,3 +27,4 @@ pub mod sequence;
 pub mod stress;
 pub mod study;
 pub mod variant;
+pub mod view;

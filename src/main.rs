@@ -78,6 +78,11 @@ enum Command {
     /// its change against the reference's, and the same frame rendered from scratch. Writes
     /// the animation, a plot of time per pass, the per-frame table and the report.
     Sequence(SequenceArgs),
+    /// Open a window on the renderer: change variant, scene, lights, time, debug view and
+    /// samples on a panel; fly the camera (W A S D Q E, drag, wheel); shaders and variant
+    /// files reload when saved; P writes what `render` writes, R records an animation.
+    /// Needs a display (or `xvfb-run`).
+    View(ViewArgs),
     /// Run the variant matrix: variants x scenes x sweeps, each cell timed and measured
     /// against the reference; writes results.json, results.csv, images and index.html.
     /// With no arguments: every variant in variants/ on every scene, plus a light-count
@@ -270,6 +275,13 @@ struct CellArgs {
     /// A built-in scene (see `clusterlab scenes`), or a glTF file (.gltf or .glb).
     #[arg(long)]
     scene: String,
+    #[command(flatten)]
+    options: SceneOptions,
+}
+
+/// What a command may change of a scene's defaults.
+#[derive(clap::Args)]
+struct SceneOptions {
     /// Number of lights (default: the scene's).
     #[arg(long)]
     lights: Option<u32>,
@@ -290,15 +302,10 @@ struct CellArgs {
     spots: Option<f32>,
 }
 
-impl CellArgs {
-    /// The variant, loaded.
-    fn variant(&self) -> Result<variant::LoadedVariant, String> {
-        variant::load(&variant::resolve(&self.variant)).map_err(|e| e.to_string())
-    }
-
-    /// The scene's defaults with what was given.
-    fn params(&self) -> Result<clusterlab::scene::SceneParams, String> {
-        let mut params = clusterlab::scene::defaults(&self.scene).map_err(|e| e.to_string())?;
+impl SceneOptions {
+    /// Scene `name`'s defaults with what was given.
+    fn params(&self, name: &str) -> Result<clusterlab::scene::SceneParams, String> {
+        let mut params = clusterlab::scene::defaults(name).map_err(|e| e.to_string())?;
         if let Some((w, h)) = self.size {
             (params.width, params.height) = (w, h);
         }
@@ -308,6 +315,18 @@ impl CellArgs {
         params.time = self.time.unwrap_or(params.time);
         params.spots = self.spots.unwrap_or(params.spots);
         Ok(params)
+    }
+}
+
+impl CellArgs {
+    /// The variant, loaded.
+    fn variant(&self) -> Result<variant::LoadedVariant, String> {
+        variant::load(&variant::resolve(&self.variant)).map_err(|e| e.to_string())
+    }
+
+    /// The scene's defaults with what was given.
+    fn params(&self) -> Result<clusterlab::scene::SceneParams, String> {
+        self.options.params(&self.scene)
     }
 }
 
@@ -328,6 +347,14 @@ struct RenderArgs {
     /// Skip the instrumented frame that counts light evaluations.
     #[arg(long)]
     no_stats: bool,
+    /// Samples per pixel instead of the variant's msaa.samples: 1, 2, 4 or 8.
+    #[arg(long)]
+    samples: Option<u32>,
+    /// Place the camera instead of the scene's own: EX,EY,EZ,TX,TY,TZ, its eye and the
+    /// point it looks at (+Y up; the scene's field of view and near plane; still). The
+    /// viewer shows its flown camera as this argument.
+    #[arg(long, value_parser = clusterlab::scene::CameraPose::parse)]
+    camera: Option<clusterlab::scene::CameraPose>,
     /// Folder for the PNG and its heat map.
     #[arg(long, default_value = "out")]
     out: PathBuf,
@@ -336,6 +363,30 @@ struct RenderArgs {
     /// Print one JSON object instead of a summary.
     #[arg(long)]
     json: bool,
+}
+
+#[derive(clap::Args)]
+struct ViewArgs {
+    /// Variant files or names to offer beside those in variants/; the first is shown first
+    /// (default: forward_plus).
+    #[arg(long)]
+    variant: Vec<String>,
+    /// A built-in scene (see `clusterlab scenes`), or a glTF file (.gltf or .glb).
+    #[arg(long, default_value = "atrium")]
+    scene: String,
+    #[command(flatten)]
+    options: SceneOptions,
+    /// Start on this camera, EX,EY,EZ,TX,TY,TZ (as `render --camera`).
+    #[arg(long, value_parser = clusterlab::scene::CameraPose::parse)]
+    camera: Option<clusterlab::scene::CameraPose>,
+    /// Folder for screenshots and recordings.
+    #[arg(long, default_value = "out")]
+    out: PathBuf,
+    /// Play the timed inputs of this RON file, then exit (non-zero if a step failed).
+    #[arg(long)]
+    script: Option<PathBuf>,
+    #[command(flatten)]
+    gpu: GpuArgs,
 }
 
 #[derive(clap::Args)]
@@ -518,6 +569,7 @@ fn main() -> ExitCode {
         }
         Command::Adapters { json, backend } => adapters(json, backend.as_deref()),
         Command::Render(args) => render(&args),
+        Command::View(args) => view(&args),
         Command::Sequence(args) => sequence(&args),
         Command::Matrix(args) => matrix(&args),
         Command::Merge {
@@ -780,6 +832,38 @@ fn adapters(json: bool, backend: Option<&str>) -> Result<bool, String> {
     Ok(survey.chosen.is_some())
 }
 
+fn view(args: &ViewArgs) -> Result<bool, String> {
+    // Said before anything slow: without a display there is nothing to wait for.
+    if let Some(why) = clusterlab::view::missing_display() {
+        return Err(why);
+    }
+    let given: Vec<PathBuf> = args.variant.iter().map(|v| variant::resolve(v)).collect();
+    let mut variants = variant::find_files(Path::new("variants")).unwrap_or_default();
+    for v in &given {
+        if !variants.contains(v) {
+            variants.push(v.clone());
+        }
+    }
+    let first = given
+        .first()
+        .cloned()
+        .unwrap_or_else(|| variant::resolve("forward_plus"));
+    let params = args.options.params(&args.scene)?;
+    let gpu = args.gpu.open()?;
+    clusterlab::view::run(
+        clusterlab::view::ViewOptions {
+            variant: first,
+            variants,
+            scene: args.scene.clone(),
+            params,
+            camera: args.camera,
+            out: args.out.clone(),
+            script: args.script.clone(),
+        },
+        &gpu,
+    )
+}
+
 fn render(args: &RenderArgs) -> Result<bool, String> {
     let mut loaded = args.cell.variant()?;
     if let Some(view) = args.debug_view {
@@ -790,16 +874,31 @@ fn render(args: &RenderArgs) -> Result<bool, String> {
         }
         loaded.name = format!("{}+{}", loaded.name, view.name());
     }
+    if let Some(n) = args.samples {
+        loaded.variant.msaa.samples = n;
+        let problems = variant::check(&loaded.variant);
+        if let Some(p) = problems.first() {
+            return Err(format!("--samples: {} {}", p.field, p.message));
+        }
+    }
     let params = args.cell.params()?;
     let scene = &args.cell.scene;
     let gpu = args.gpu.open()?;
+    let failed =
+        |e: &dyn std::fmt::Display| format!("variant `{}` on scene `{scene}`: {e}", loaded.name);
+    gpu.check_size(params.width, params.height)
+        .map_err(|e| failed(&e))?;
+    let mut made = clusterlab::scene::generate(scene, params).map_err(|e| failed(&e))?;
+    if let Some(pose) = args.camera {
+        made.place_camera(pose)
+            .map_err(|e| format!("--camera {}: {e}", pose.argument()))?;
+    }
     gpu.begin_cell();
-    let cell = clusterlab::run::run_cell(
+    let cell = clusterlab::run::run_scene(
         &gpu,
         &Composer::default(),
         &loaded,
-        scene,
-        params,
+        &made,
         clusterlab::run::CellOptions {
             frames: Frames::exact(args.warmup, args.frames),
             stats: !args.no_stats,

@@ -165,12 +165,19 @@ fn readme_is_a_front_page() {
     );
     // The two commands a newcomer runs come first, before any section.
     let first_section = readme.find("\n## ").unwrap_or(readme.len());
-    for command in ["cargo run --release -- matrix", "cargo test"] {
+    for command in [
+        "cargo run --release -- matrix",
+        "cargo test",
+        "cargo run --release -- view",
+    ] {
         assert!(
             readme[..first_section].contains(command),
             "`{command}` is not on README's first screen"
         );
     }
+    // The viewer's picture is there to see.
+    assert!(readme[..first_section].contains("](docs/viewer.png)"));
+    assert!(std::path::Path::new("docs/viewer.png").is_file());
 }
 
 /// The default matrix's size as README and the measurement notes state it is the size of

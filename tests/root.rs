@@ -31,3 +31,4 @@ mod shards;
 mod skipping;
 mod stress;
 mod study;
+mod view;

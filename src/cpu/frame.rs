@@ -3,6 +3,7 @@
 
 use glam::DVec3;
 use rayon::prelude::*;
+use std::sync::atomic::{AtomicU64, Ordering};
 
 use super::color::display8;
 use super::light_grid::LightGrid;
@@ -11,6 +12,15 @@ use super::post::{Geometry, Image, PostParams};
 use super::shading::{ShadingParams, direct_light};
 use super::truth::RasterTruth;
 use crate::common::Light;
+
+/// Samples shaded by every reference frame of this process so far: how far one under way
+/// has got (the viewer's progress bar reads it before and during one).
+static SHADED_SAMPLES: AtomicU64 = AtomicU64::new(0);
+
+/// Samples [`shade_reference`] has shaded in this process so far.
+pub fn shaded_samples() -> u64 {
+    SHADED_SAMPLES.load(Ordering::Relaxed)
+}
 
 /// A reference frame: linear HDR and 8-bit display values per pixel, row-major.
 #[derive(Clone, Debug)]
@@ -62,6 +72,7 @@ pub fn shade_reference(
     let (colours, lit): (Vec<[f64; 3]>, Vec<bool>) = (0..truth.position.len())
         .into_par_iter()
         .map(|i| {
+            SHADED_SAMPLES.fetch_add(1, Ordering::Relaxed);
             if !truth.covered(i) {
                 return ([0.0; 3], false);
             }

@@ -6,10 +6,12 @@ mod builtin;
 pub mod export;
 pub mod file;
 mod mesh;
+mod pose;
 mod textures;
 
 pub use builtin::{SCENES, SceneInfo, find_scene};
 pub use mesh::MeshBuilder;
+pub use pose::CameraPose;
 pub use textures::{MAX_TEXTURE_SIZE, TextureArray};
 
 use std::sync::Arc;

@@ -227,6 +227,31 @@ impl Cli {
     }
 }
 
+/// `clusterlab view ARGS` on a display: the session's own, else a virtual one of its own
+/// through `xvfb-run` (Debian's package xvfb, which CI installs), each on its own server
+/// number so that tests running side by side do not race for one.
+pub fn viewer<S: AsRef<OsStr>>(args: impl IntoIterator<Item = S>) -> Cli {
+    use std::sync::atomic::{AtomicU32, Ordering};
+    static NEXT_SERVER: AtomicU32 = AtomicU32::new(0);
+    if clusterlab::view::missing_display().is_none() {
+        return cli(["view"]).args(args);
+    }
+    let found = Command::new("xvfb-run").arg("--help").output().is_ok();
+    assert!(
+        found,
+        "the viewer's tests need a display or xvfb-run: apt-get install -y xvfb"
+    );
+    let server = 100 + std::process::id() % 300 * 8 + NEXT_SERVER.fetch_add(1, Ordering::Relaxed);
+    let mut command = Command::new("xvfb-run");
+    command
+        .args(["-n", &server.to_string(), "-s", "-screen 0 1280x1024x24"])
+        .arg(binary())
+        .arg("view")
+        .args(args)
+        .stdin(Stdio::null());
+    Cli(command)
+}
+
 /// A copy of the shipped shaders with edits to one module, each replacing text that must be
 /// there; removed when dropped.
 pub struct EditedShaders {
