@@ -251,11 +251,13 @@ struct MatrixArgs {
     /// Run every cell as a sequence of N frames (1 to 3600) instead of one frame rendered
     /// again: a fraction of the lights moving (`--moving`, or a `moving=` sweep), the
     /// camera on its path or still; each cell's times are of the frames after the first.
-    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=clusterlab::sequence::MAX_FRAMES as i64))]
+    /// A sequence times all its frames: the options that choose frames do not apply.
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=clusterlab::sequence::MAX_FRAMES as i64), conflicts_with_all = ["frames", "precision", "budget_ms", "max_frames"])]
     sequence: Option<u32>,
-    /// With --sequence: fraction of the lights that move, in 0..=1.
-    #[arg(long, default_value_t = 1.0, value_parser = parse_fraction, requires = "sequence")]
-    moving: f32,
+    /// With --sequence: fraction of the lights that move, in 0..=1 (default: all of them,
+    /// none of a glTF file's own lights, which cannot move).
+    #[arg(long, value_parser = parse_fraction, requires = "sequence")]
+    moving: Option<f32>,
     /// With --sequence: keep the camera where it is at the first frame.
     #[arg(long, requires = "sequence")]
     still_camera: bool,
@@ -397,9 +399,10 @@ struct SequenceArgs {
     #[arg(long, default_value_t = 30, value_parser = clap::value_parser!(u32).range(1..=clusterlab::sequence::MAX_FRAMES as i64))]
     frames: u32,
     /// Fraction of the lights that move, in 0..=1 (the rest stand where they were at the
-    /// first frame).
-    #[arg(long, default_value_t = 1.0, value_parser = parse_fraction)]
-    moving: f32,
+    /// first frame; default: all of them, none of a glTF file's own lights, which cannot
+    /// move).
+    #[arg(long, value_parser = parse_fraction)]
+    moving: Option<f32>,
     /// Keep the camera where it is at the first frame.
     #[arg(long)]
     still_camera: bool,
@@ -833,6 +836,7 @@ fn adapters(json: bool, backend: Option<&str>) -> Result<bool, String> {
 }
 
 fn view(args: &ViewArgs) -> Result<bool, String> {
+    clusterlab::files::write::check_folder(&args.out, "--out")?;
     // Said before anything slow: without a display there is nothing to wait for.
     if let Some(why) = clusterlab::view::missing_display() {
         return Err(why);
@@ -865,6 +869,7 @@ fn view(args: &ViewArgs) -> Result<bool, String> {
 }
 
 fn render(args: &RenderArgs) -> Result<bool, String> {
+    clusterlab::files::write::check_folder(&args.out, "--out")?;
     let mut loaded = args.cell.variant()?;
     if let Some(view) = args.debug_view {
         loaded.variant.debug_view = view;
@@ -956,10 +961,20 @@ fn render(args: &RenderArgs) -> Result<bool, String> {
 }
 
 fn sequence(args: &SequenceArgs) -> Result<bool, String> {
+    clusterlab::files::write::check_folder(&args.out, "--out")?;
     let loaded = args.cell.variant()?;
     let mut params = args.cell.params()?;
+    let fixed =
+        clusterlab::scene::lights_fixed(&args.cell.scene, &params).map_err(|e| e.to_string())?;
+    if fixed && args.moving.is_some_and(|m| m > 0.0) {
+        return Err(format!(
+            "--moving {}: the lights of `{}` are the file's own, which stand where it puts them; leave out --moving, or give --lights N for N seeded lights that move",
+            args.moving.unwrap_or_default(),
+            args.cell.scene
+        ));
+    }
     params.motion = clusterlab::scene::Motion {
-        lights: args.moving,
+        lights: args.moving.unwrap_or(if fixed { 0.0 } else { 1.0 }),
         camera: !args.still_camera,
         still_at: params.time,
     };
@@ -1208,6 +1223,7 @@ fn study(
     out: &Path,
     gpu: &GpuArgs,
 ) -> Result<bool, String> {
+    clusterlab::files::write::check_folder(out, "--out")?;
     let gpu = gpu.open()?;
     eprintln!(
         "study {} on {} ({}, {})",

@@ -19,7 +19,7 @@ use crate::metrics::{self, ErrorMetrics};
 use crate::reference::{ReferenceCache, reference_frame};
 use crate::render::{FrameOutput, FrameStats, RenderError, Renderer};
 use crate::scene::{Scene, SceneError, SceneParams};
-use crate::variant::LoadedVariant;
+use crate::variant::{LoadedVariant, Variant};
 
 /// What `clusterlab render --json` prints.
 #[derive(Clone, Debug, Serialize)]
@@ -238,7 +238,8 @@ pub fn run_scene_keeping_renderer<'g>(
     });
     let stats = stats?;
     cost.counters = lap();
-    let failure = meaningless(&reference, stats.as_ref(), error.as_ref());
+    let failure = meaningless(&reference, Some(&frame), stats.as_ref(), error.as_ref())
+        .or_else(|| inexact(&variant.variant, gpu, error.as_ref()));
     let images = match out {
         Some(dir) => write_images(
             dir,
@@ -305,10 +306,13 @@ pub fn run_scene_keeping_renderer<'g>(
 
 /// Why a frame measures nothing, if it does not: a score for it would look perfect or
 /// plausible and mean nothing. Pixels that are not finite; a view with no geometry in it (a
-/// camera looking away, a near plane beyond the scene); and no light evaluated at all where
-/// the reference is lit (light lists that lost every light).
+/// camera looking away, a near plane beyond the scene); an image all black where the
+/// reference shows something (whatever lost the light: a list, a skipped pass, a pipeline);
+/// and no light evaluated at all where the reference is lit (light lists that lost every
+/// light). `frame` and `error` are absent for a debug view, which shades no scene.
 pub fn meaningless(
     reference: &ReferenceFrame,
+    frame: Option<&FrameOutput>,
     stats: Option<&FrameStats>,
     error: Option<&ErrorMetrics>,
 ) -> Option<String> {
@@ -326,6 +330,17 @@ pub fn meaningless(
                 .into(),
         );
     }
+    let shown = |rgb: &[u8]| rgb.iter().any(|&c| c > 0);
+    let reference_shown = reference.ldr.iter().filter(|p| shown(&p[..])).count();
+    if let Some(f) = frame
+        && error.is_some()
+        && reference_shown > 0
+        && !f.ldr.iter().any(|p| shown(&p[..3]))
+    {
+        return Some(format!(
+            "the image is all black, yet {reference_shown} pixels of the reference are not: the frame lost what lights it"
+        ));
+    }
     if let Some(s) = stats
         && s.light_evals == 0
         && reference.lit > 0
@@ -336,6 +351,52 @@ pub fn meaningless(
         ));
     }
     None
+}
+
+/// Why an exact variant's frame is not exact, if it is not: an 8-bit error over the 1 LSB
+/// that single-precision shading and rounding allow (`exact_claim`).
+pub fn inexact(variant: &Variant, gpu: &Gpu, error: Option<&ErrorMetrics>) -> Option<String> {
+    let e = error?;
+    (exact_claim(variant, gpu) && e.max_abs_8bit > EXACT_LSB).then(|| {
+        format!(
+            "max {} LSB against the reference, {} pixels over {EXACT_LSB} LSB: an exact variant is within {EXACT_LSB} LSB",
+            e.max_abs_8bit, e.pixels_over_1lsb
+        )
+    })
+}
+
+/// The 8-bit error an exact variant's frame may have: one step of rounding (the f32
+/// shading's against the f64 reference's, both then rounded to 8 bits).
+pub const EXACT_LSB: u32 = 1;
+
+/// Whether `variant` claims to be exact on `gpu`, within [`EXACT_LSB`] of the reference:
+/// every light of every list evaluated (not sampled, no cap that drops lights and counts
+/// them), a shaded image (not a debug view), normals packed in 32 bits or more where a
+/// G-buffer holds them, and no Compact layout multisampled (it shades a sample on the pixel
+/// centre's ray) or with GGX (roughness and metallic in 8 bits move a highlight: 3 LSB on
+/// the stage); scissor deferred's blended sum only where the adapter adds without rounding
+/// (`gpu::expect`). Motion blur is not claimed either: each tap's texel is chosen from a
+/// velocity in single precision, and one that lands beside the reference's changes the
+/// pixel (6 LSB on one pixel of the atrium in the default matrix).
+pub fn exact_claim(variant: &Variant, gpu: &Gpu) -> bool {
+    use crate::gpu::expect;
+    use crate::variant::{DebugView, GBufferLayout, LightLists, Pipeline, ShadingModel};
+    let v = variant;
+    let capped =
+        v.pipeline.is_clustered() && matches!(v.clusters().lists, LightLists::Capped { .. });
+    let deferred = v.pipeline.is_deferred();
+    let compact = deferred && v.gbuffer().layout == GBufferLayout::Compact;
+    let compact_lossy = compact && (v.msaa.on() || v.shading.model == ShadingModel::Ggx);
+    let lossy_normals = deferred && v.normal_codec().bits() < 32;
+    let rounded_sum = v.pipeline == Pipeline::DeferredScissor
+        && expect::allowance(gpu, expect::Check::BlendedLightSum).is_some();
+    v.shading.lights.sampling().is_none()
+        && !capped
+        && v.debug_view == DebugView::Off
+        && !compact_lossy
+        && v.post.motion_blur.is_none()
+        && !lossy_normals
+        && !rounded_sum
 }
 
 /// Render the frames `policy` asks for; returns the timed ones. On a `software` adapter a

@@ -152,6 +152,8 @@ struct Case {
     /// The whole message, snapshotted; else only these must be in it.
     snapshot: bool,
     expect: Vec<&'static str>,
+    /// Run `clusterlab view ARGS` on a display (`common::viewer`) instead.
+    in_viewer: bool,
 }
 
 impl Case {
@@ -165,7 +167,13 @@ impl Case {
             allowed: Vec::new(),
             snapshot: true,
             expect: Vec::new(),
+            in_viewer: false,
         }
+    }
+    /// Run `clusterlab view` with the case's arguments, on a display.
+    fn in_viewer(mut self) -> Case {
+        self.in_viewer = true;
+        self
     }
     fn cwd(mut self, cwd: &'static str) -> Case {
         self.cwd = cwd;
@@ -204,7 +212,16 @@ impl Case {
         let before = s.tree();
         let args: Vec<&str> = self.args.iter().map(String::as_str).collect();
         let env: Vec<(&str, &str)> = self.env.iter().map(|(k, v)| (*k, v.as_str())).collect();
-        let (code, text) = s.run(self.cwd, &args, &env);
+        let (code, text) = if self.in_viewer {
+            let (code, text) = common::viewer(&args)
+                .dir(s.path(self.cwd))
+                .envs(&env)
+                .run()
+                .outcome();
+            (code, text.replace(s.root.to_str().unwrap(), "SANDBOX"))
+        } else {
+            s.run(self.cwd, &args, &env)
+        };
         let name = self.name;
         assert_eq!(
             code,
@@ -1061,4 +1078,460 @@ fn the_tree_comparison_sees_the_old_swap_replace_a_users_folder() {
         changed.contains(&"project/src/main.rs removed".to_string()),
         "{changed:?}"
     );
+}
+
+/// The features added after the last review (sequences, the viewer's scripts, shards) keep
+/// the same promises: nothing outside `--out` is written, nothing silently wrong passes.
+#[test]
+fn sequences_scripts_and_shards_keep_the_promises() {
+    let sequence = |name, extra: &[&str], code| {
+        let mut args = vec![
+            "sequence",
+            "--variant",
+            "variants/forward_plus.ron",
+            "--size",
+            "16x9",
+            "--frames",
+            "2",
+            "--check-every",
+            "1",
+            "--out",
+            "out",
+        ];
+        args.extend(extra);
+        case(name, &args, code).allow("project/out")
+    };
+    let merge = |name| case(name, &["merge", "shard", "--out", "merged"], 1);
+    run_all(vec![
+        // A folder of the user's that merely looks like a run's.
+        (
+            case("out_holds_a_users_results_json", &tiny_matrix("mine"), 1),
+            |s| {
+                s.write("project/mine/results.json", b"{\"my\":\"data\"}");
+                s.write("project/mine/index.html", b"<p>mine</p>");
+                s.write("project/mine/results.csv", b"a,b\n");
+                s.write("project/mine/images/photo.png", b"my photo");
+                s.write("project/mine/plots/chart.svg", b"<svg/>");
+            },
+        ),
+        // A shard whose images/ folder is a link out of it: merge copies nothing through it.
+        (merge("merge_images_folder_is_a_link_out"), |s| {
+            make_shard(s);
+            std::fs::rename(s.path("project/shard/images"), s.path("outside")).unwrap();
+            s.link("project/shard/images", "../../outside");
+        }),
+        // A shard whose figures no run could write.
+        (merge("merge_psnr_beyond_any_image"), |s| {
+            make_shard(s);
+            edit_results(s, |r| r["cells"][0]["error"]["psnr_db"] = 1e300.into());
+        }),
+        (merge("merge_relative_mse_negative"), |s| {
+            make_shard(s);
+            edit_results(s, |r| {
+                r["cells"][0]["error"]["relative_mse"] = (-1.0).into()
+            });
+        }),
+        (merge("merge_rmse_over_its_largest_term"), |s| {
+            make_shard(s);
+            edit_results(s, |r| {
+                let largest = r["cells"][0]["error"]["max_abs_8bit"].as_f64().unwrap();
+                r["cells"][0]["error"]["rmse_8bit"] = (largest + 0.5).into();
+            });
+        }),
+        (merge("merge_checked_frames_over_frames"), |s| {
+            let (code, text) = s.run("project", &tiny_sequence_matrix("shard"), &[]);
+            assert_eq!(code, Some(0), "{text}");
+            edit_results(s, |r| {
+                r["cells"][0]["sequence_summary"]["checked_frames"] = 9.into()
+            });
+        }),
+        // A glTF file's own lights cannot move: asking for them to is refused, and a
+        // sequence without --moving keeps them still.
+        (
+            sequence(
+                "sequence_moving_a_files_own_lights",
+                &["--scene", "scene/scene.gltf", "--moving", "1"],
+                1,
+            ),
+            |s| write_gltf(s, &gltf_parts().0, &gltf_parts().1),
+        ),
+        (
+            sequence(
+                "sequence_of_a_files_own_lights",
+                &["--scene", "scene/scene.gltf"],
+                0,
+            )
+            .expect("lights, 0% moving"),
+            |s| write_gltf(s, &gltf_parts().0, &gltf_parts().1),
+        ),
+        // An exact variant whose frames are not exact fails, in a sequence and in the
+        // matrix (the shaders' ambient term scaled by 1.5, a deliberate break).
+        (
+            sequence("sequence_not_exact", &["--scene", "one_light"], 1)
+                .env("CLUSTERLAB_SHADERS", "shaders")
+                .expect("an exact variant is within 1 LSB"),
+            break_ambient,
+        ),
+        (
+            case("matrix_sequence_not_exact", &tiny_sequence_matrix("out"), 1)
+                .allow("project/out")
+                .env("CLUSTERLAB_SHADERS", "shaders")
+                .expect("1 cells, 1 failed"),
+            break_ambient,
+        ),
+        // Options that would do nothing.
+        (
+            case(
+                "sweep_moving_without_sequence",
+                &["matrix", "--scenes", "one_light", "--sweep", "moving=0.5,1"],
+                1,
+            ),
+            nothing,
+        ),
+        (
+            case(
+                "frames_with_sequence",
+                &[&tiny_matrix("out")[..], &["--sequence", "2"]].concat(),
+                2,
+            ),
+            nothing,
+        ),
+        // A vertex colour below 0 renders black against a black reference: refused.
+        (
+            case("gltf_color_negative", &render_args("scene/scene.gltf"), 1),
+            |s| {
+                let (json, mut bin) = gltf_parts();
+                poke(&json, &mut bin, attribute(&json, "COLOR_0"), -1.0);
+                write_gltf(s, &json, &bin);
+            },
+        ),
+        // The reference's own pass fits WebGPU's limits, as validate says the variant does.
+        (
+            case(
+                "render_under_webgpu_limits",
+                &[
+                    &render_args_variant("variants/naive_forward.ron")[..],
+                    &["--limits", "webgpu", "--out", "out"],
+                ]
+                .concat(),
+                0,
+            )
+            .allow("project/out")
+            .expect("naive_forward on one_light"),
+            nothing,
+        ),
+        // An --out that cannot be written is refused before the work.
+        (
+            case(
+                "study_out_is_a_file",
+                &["study", "depth", "--out", "home.txt"],
+                1,
+            ),
+            nothing,
+        ),
+        (
+            case(
+                "sequence_out_is_a_file",
+                &[
+                    "sequence",
+                    "--variant",
+                    "forward_plus",
+                    "--scene",
+                    "one_light",
+                    "--out",
+                    "home.txt",
+                ],
+                1,
+            ),
+            nothing,
+        ),
+    ]);
+    // A .glb that is no GLB is refused by its header, before its 1.9 GB are read (a sparse
+    // file: no disk is used, and the tree comparison, which reads every file, is left out).
+    let s = Sandbox::new("glb_of_zeros");
+    let file = std::fs::File::create(s.path("project/zeros.glb")).unwrap();
+    file.set_len(1_900_000_000).unwrap();
+    let (code, text) = s.run("project", &render_args("zeros.glb"), &[]);
+    assert_eq!(code, Some(1), "{text}");
+    assert!(
+        text.contains("not a GLB file: it begins with the bytes [00, 00, 00, 00]"),
+        "{text}"
+    );
+    report();
+}
+
+/// The viewer's scripts write only under `--out` and edit only the files the viewer watches.
+#[test]
+fn a_viewer_script_writes_only_under_out_and_edits_only_what_it_watches() {
+    let play = |name| {
+        case(
+            name,
+            &[
+                "--size",
+                "16x9",
+                "--lights",
+                "4",
+                "--out",
+                "out",
+                "--script",
+                "script.ron",
+            ],
+            1,
+        )
+        .in_viewer()
+        .allow("project/out")
+        .allow("project/script.ron")
+    };
+    run_all(vec![
+        (play("script_state_absolute"), |s| {
+            let target = s.path("project/home.txt");
+            script(s, &format!("State({:?})", target.to_str().unwrap()));
+        }),
+        (play("script_state_dotdot"), |s| {
+            script(s, r#"State("../notes/todo.md")"#)
+        }),
+        (play("script_window_shot_dotdot"), |s| {
+            script(s, r#"WindowShot("../../thesis.txt")"#)
+        }),
+        (play("script_out_dotdot"), |s| {
+            script(s, r#"Out("../notes"), Screenshot"#)
+        }),
+        (
+            play("script_edits_an_unwatched_file")
+                .expect("Edit `home.txt`: the viewer watches only the shader modules under"),
+            |s| script(s, r#"Edit(file: "home.txt", find: "my", replace: "our")"#),
+        ),
+        (play("script_edit_that_changes_nothing"), |s| {
+            script(
+                s,
+                r#"Edit(file: "variants/forward_plus.ron", find: "Forward", replace: "Forward")"#,
+            )
+        }),
+    ]);
+    report();
+    // An edit of a watched file keeps its mode.
+    let s = Sandbox::new("script_edit_keeps_the_mode");
+    use std::os::unix::fs::PermissionsExt;
+    let variant = s.path("project/variants/forward_plus.ron");
+    std::fs::set_permissions(&variant, std::fs::Permissions::from_mode(0o600)).unwrap();
+    script(
+        &s,
+        r#"Edit(file: "variants/forward_plus.ron", find: "description: \"", replace: "description: \"mine: ")"#,
+    );
+    let (code, text) = common::viewer([
+        "--size",
+        "16x9",
+        "--lights",
+        "4",
+        "--out",
+        "out",
+        "--script",
+        "script.ron",
+    ])
+    .dir(s.path("project"))
+    .run()
+    .outcome();
+    assert_eq!(code, Some(0), "{text}");
+    let meta = std::fs::metadata(&variant).unwrap();
+    assert_eq!(meta.permissions().mode() & 0o777, 0o600);
+    assert!(
+        std::fs::read_to_string(&variant)
+            .unwrap()
+            .contains("mine: ")
+    );
+}
+
+/// A script of one step after the first frame, as `project/script.ron`.
+fn script(s: &Sandbox, step: &str) {
+    s.write(
+        "project/script.ron",
+        format!("[Wait(frames: 1), {step}]").as_bytes(),
+    );
+}
+
+/// A copy of the shaders in `project/shaders` whose ambient term is 1.5 times too bright.
+fn break_ambient(s: &Sandbox) {
+    common::copy_tree(Path::new("shaders"), &s.path("project/shaders"));
+    let module = s.path("project/shaders/shading/lighting.wesl");
+    let text = std::fs::read_to_string(&module).unwrap();
+    let from = "return AMBIENT * s.albedo;";
+    assert!(text.contains(from), "lighting.wesl no longer has `{from}`");
+    std::fs::write(
+        &module,
+        text.replace(from, "return AMBIENT * s.albedo * 1.5;"),
+    )
+    .unwrap();
+}
+
+/// A tiny matrix of 2-frame sequences, every frame checked: forward_plus and its naive
+/// baseline on one_light at 16x9.
+fn tiny_sequence_matrix(out: &str) -> Vec<&str> {
+    vec![
+        "matrix",
+        "--variants",
+        "variants/forward_plus.ron",
+        "--scenes",
+        "one_light",
+        "--size",
+        "16x9",
+        "--sequence",
+        "2",
+        "--check-every",
+        "1",
+        "--out",
+        out,
+    ]
+}
+
+/// A scene with no opaque triangle (the one_light scene exported with every material
+/// blended, half transparent) renders, exactly, in every pipeline: the empty opaque draw is
+/// drawn as nothing (wgpu refuses an empty index buffer slice; it was a panic, exit 101).
+#[test]
+fn a_scene_with_every_material_blended_renders_exactly_in_every_pipeline() {
+    let dir = scratch("all-blended");
+    let (mut json, bin) = gltf_parts();
+    for m in json["materials"].as_array_mut().unwrap() {
+        m["alphaMode"] = "BLEND".into();
+        m["pbrMetallicRoughness"]["baseColorFactor"] = json!([1.0, 1.0, 1.0, 0.5]);
+        m.as_object_mut().unwrap().remove("alphaCutoff");
+    }
+    std::fs::write(dir.join("scene.gltf"), serde_json::to_vec(&json).unwrap()).unwrap();
+    std::fs::write(dir.join("scene.bin"), &bin).unwrap();
+    let path = dir.join("scene.gltf").to_str().unwrap().to_string();
+    let mut params = scene::defaults(&path).unwrap();
+    (params.width, params.height) = (48, 27);
+    let made = scene::generate(&path, params).unwrap();
+    assert!(
+        made.indices.is_empty() && made.has_blend(),
+        "every triangle blended"
+    );
+    let gpu = common::gpu();
+    for name in [
+        "naive_forward",
+        "forward_plus",
+        "forward_plus_no_prepass",
+        "clustered_deferred_16x16x24",
+        "deferred_scissor",
+        "forward_plus_static_dynamic",
+    ] {
+        let cell = clusterlab::run::run_scene(
+            &gpu,
+            &clusterlab::compose::Composer::default(),
+            &common::load(name),
+            &made,
+            Default::default(),
+        )
+        .unwrap_or_else(|e| panic!("{name}: {e}"));
+        let r = &cell.report;
+        let e = r.error.as_ref().unwrap();
+        // An exact variant: within 1 LSB of the reference (`run::EXACT_LSB`).
+        assert!(
+            r.failure.is_none() && e.max_abs_8bit <= 1,
+            "{name}: {:?} {e:?}",
+            r.failure
+        );
+        assert!(
+            cell.reference.ldr.iter().any(|p| p.iter().any(|&c| c > 0)),
+            "{name}: something is shown"
+        );
+    }
+}
+
+/// StaticDynamic with no lights shows ambient, as the reference does: its still image (which
+/// holds ambient) is drawn even where a frame without lights builds no lists. It was all
+/// black, 35 LSB off, exit 0.
+#[test]
+fn a_static_dynamic_frame_without_lights_shows_ambient_exactly() {
+    let gpu = common::gpu();
+    for name in [
+        "forward_plus_static_dynamic",
+        "clustered_deferred_static_dynamic",
+    ] {
+        let c = common::cell(
+            &gpu,
+            &common::load(name),
+            "atrium",
+            common::small("atrium", 64, 36, Some(0)),
+        );
+        let e = c.report.error.as_ref().unwrap();
+        assert!(
+            c.report.failure.is_none() && e.max_abs_8bit <= 1,
+            "{name}: {:?} {e:?}",
+            c.report.failure
+        );
+    }
+}
+
+/// A frame all black where the reference shows something fails, whatever the cause: the
+/// deliberate break is a tonemap that maps everything to black (the counters still see every
+/// light evaluated, so only the image tells).
+#[test]
+fn an_all_black_frame_against_a_lit_reference_fails() {
+    let edited = common::EditedShaders::of(
+        "common/color.wesl",
+        "black-tonemap",
+        &[("max(hdr * exposure,", "max(hdr * 0.0 * exposure,")],
+    );
+    let gpu = common::gpu();
+    let v = common::load("forward_plus");
+    let made = scene::generate("one_light", common::small("one_light", 32, 18, None)).unwrap();
+    let cell =
+        clusterlab::run::run_scene(&gpu, &edited.composer, &v, &made, Default::default()).unwrap();
+    let why = cell.report.failure.unwrap_or_default();
+    assert!(why.starts_with("the image is all black, yet"), "{why}");
+    // The shipped shaders: the same frame passes.
+    let cell = clusterlab::run::run_scene(
+        &gpu,
+        &clusterlab::compose::Composer::default(),
+        &v,
+        &made,
+        Default::default(),
+    )
+    .unwrap();
+    assert!(cell.report.failure.is_none(), "{:?}", cell.report.failure);
+}
+
+/// No light of a kind: a sequence whose lights all stand still (no moving lists), all move
+/// (no still lists) or are none at all, for every list strategy, runs exactly.
+#[test]
+fn a_sequence_with_no_light_of_a_kind_runs_exactly() {
+    use clusterlab::variant::ListUpdate;
+    let gpu = common::gpu();
+    for update in [
+        "forward_plus_static_dynamic",
+        "forward_plus_patch",
+        "forward_plus_bvh_refit",
+    ] {
+        let v = common::load(update);
+        assert_ne!(v.variant.clusters().update, ListUpdate::Rebuild, "{update}");
+        for (moving, lights) in [(0.0, 16), (1.0, 16), (1.0, 0)] {
+            let mut p = common::small("atrium", 48, 27, Some(lights));
+            p.motion = scene::Motion {
+                lights: moving,
+                camera: false,
+                still_at: p.time,
+            };
+            let frames = clusterlab::sequence::scene_frames("atrium", p);
+            let spec = clusterlab::sequence::SequenceSpec {
+                frames: 3,
+                check_every: 1,
+            };
+            let run = clusterlab::sequence::run(
+                &gpu,
+                &clusterlab::compose::Composer::default(),
+                &v,
+                spec,
+                &frames,
+                &Default::default(),
+            )
+            .unwrap_or_else(|e| panic!("{update}, {moving} moving, {lights} lights: {e}"));
+            let r = &run.report;
+            assert!(
+                r.failure.is_none() && r.summary.exact,
+                "{update}, {moving} moving, {lights} lights: {:?}, max {} LSB",
+                r.failure,
+                r.summary.max_abs_8bit
+            );
+        }
+    }
 }

@@ -96,9 +96,11 @@ fn owner(dir: &Path) -> Result<Owner, String> {
                 Some(pid) => marker = Some(pid),
                 None => return foreign(format!("its `{MARKER_NAME}` is not one clusterlab wrote")),
             },
-            "results.json" | "results.csv" | "index.html" if kind.is_file() => {
-                results |= name == "results.json";
-            }
+            "results.json" if kind.is_file() => match results_problem(&entry.path()) {
+                None => results = true,
+                Some(why) => return foreign(format!("its results.json {why}")),
+            },
+            "results.csv" | "index.html" if kind.is_file() => {}
             "images" | "plots" if kind.is_dir() => {
                 let exts: &[&str] = if name == "images" {
                     &[".png", ".gif"]
@@ -129,6 +131,38 @@ fn owner(dir: &Path) -> Result<Owner, String> {
             "it holds no `{MARKER_NAME}` marker and no results.json"
         ))
     })
+}
+
+/// Why `path` is not a results file a clusterlab run wrote, if it is not: one is a JSON
+/// object whose `provenance` lists the runs that wrote it, each naming the tool and its
+/// version (`clusterlab X.Y.Z`), and whose `cells` is a list. A file of the user's that
+/// happens to be called results.json is not, and its folder is left alone.
+fn results_problem(path: &Path) -> Option<String> {
+    let bytes = match read(path, super::read::RESULTS) {
+        Ok(bytes) => bytes,
+        Err(e) => return Some(format!("cannot be read ({})", e.why)),
+    };
+    let value: serde_json::Value = match serde_json::from_slice(&bytes) {
+        Ok(v) => v,
+        Err(e) => return Some(format!("is not JSON ({e})")),
+    };
+    let is_tool = |p: &serde_json::Value| {
+        p["tool"].as_str().is_some_and(|t| {
+            t.strip_prefix("clusterlab ")
+                .is_some_and(|version| version.split('.').count() == 3)
+        })
+    };
+    let runs = value["provenance"].as_array();
+    if !runs.is_some_and(|r| !r.is_empty() && r.iter().all(is_tool)) {
+        return Some(
+            "names no clusterlab run in its `provenance`, where each run's `tool` is `clusterlab X.Y.Z`"
+                .into(),
+        );
+    }
+    if !value["cells"].is_array() {
+        return Some("has no list of `cells`".into());
+    }
+    None
 }
 
 /// The process a marker or lock file of the tool names (its first line `header`, its
@@ -415,6 +449,9 @@ mod tests {
         std::fs::canonicalize(dir).unwrap()
     }
 
+    /// The smallest results.json a run writes: one run's provenance, no cells.
+    const RUN_RESULTS: &str = r#"{"provenance": [{"tool": "clusterlab 0.1.0"}], "cells": []}"#;
+
     /// The lock of a clusterlab process `pid` that is gone.
     fn stale_lock(pid: u32) -> String {
         format!("{LOCK_HEADER}\nprocess {pid}\ncommand clusterlab matrix\n")
@@ -433,7 +470,7 @@ mod tests {
     fn a_folder_is_the_tools_only_by_its_contents() {
         let dir = scratch("owner");
         assert_eq!(owner(&dir).unwrap(), Owner::Empty);
-        std::fs::write(dir.join("results.json"), "{}").unwrap();
+        std::fs::write(dir.join("results.json"), RUN_RESULTS).unwrap();
         std::fs::create_dir(dir.join("images")).unwrap();
         std::fs::write(dir.join("images/a.png"), "").unwrap();
         assert_eq!(
@@ -501,7 +538,7 @@ mod tests {
         let old = dir.join(format!("out.old-{dead}"));
         std::fs::create_dir(&old).unwrap();
         mark(old.as_path(), dead);
-        std::fs::write(old.join("results.json"), "{}").unwrap();
+        std::fs::write(old.join("results.json"), RUN_RESULTS).unwrap();
 
         let folder = ResultFolder::acquire(&out).unwrap();
         assert!(!staging.exists(), "the dead run's staging folder goes");
@@ -523,7 +560,7 @@ mod tests {
         let dead = 4_194_304 + 18;
         std::fs::write(dir.join("out.lock"), stale_lock(dead)).unwrap();
         std::fs::create_dir(dir.join("out")).unwrap();
-        std::fs::write(dir.join("out/results.json"), "{}").unwrap();
+        std::fs::write(dir.join("out/results.json"), RUN_RESULTS).unwrap();
         let old = dir.join(format!("out.old-{dead}"));
         std::fs::create_dir(&old).unwrap();
         mark(old.as_path(), dead);

@@ -138,6 +138,37 @@ pub fn read(path: &Path, kind: Kind) -> Result<Vec<u8>, ReadError> {
     Ok(bytes)
 }
 
+/// The first `n` bytes of the regular file `path` (fewer when it is shorter) and its
+/// length, under [`read`]'s rules: a header looked at before a large file is read whole.
+pub fn read_head(path: &Path, n: u64, kind: Kind) -> Result<(Vec<u8>, u64), ReadError> {
+    let fail = |why: String, missing: bool| ReadError {
+        path: shown(path),
+        why,
+        missing,
+    };
+    let meta = std::fs::metadata(path).map_err(|e| {
+        fail(
+            format!("cannot read: {}", describe(&e)),
+            e.kind() == std::io::ErrorKind::NotFound,
+        )
+    })?;
+    if !meta.is_file() {
+        return Err(fail(
+            format!(
+                "not a regular file (a folder, device or pipe): {} must be one",
+                kind.what
+            ),
+            false,
+        ));
+    }
+    let file = open_without_blocking(path).map_err(|e| fail(describe(&e), false))?;
+    let mut bytes = Vec::new();
+    file.take(n)
+        .read_to_end(&mut bytes)
+        .map_err(|e| fail(format!("cannot read: {}", describe(&e)), false))?;
+    Ok((bytes, meta.len()))
+}
+
 /// The text of `path` (see [`read`] and [`text`]).
 pub fn read_text(path: &Path, kind: Kind) -> Result<String, ReadError> {
     let bytes = read(path, kind)?;

@@ -13,7 +13,14 @@ use super::{describe, shown};
 pub fn write_file(path: &Path, bytes: &[u8]) -> Result<(), String> {
     check_target(path)?;
     let (tmp, mut file) = temporary_beside(path)?;
-    let written = file.write_all(bytes).and_then(|()| file.flush());
+    // A file replaced keeps its permissions (a private 0600 file stays private).
+    let kept = match std::fs::metadata(path) {
+        Ok(meta) => file.set_permissions(meta.permissions()),
+        Err(_) => Ok(()),
+    };
+    let written = kept
+        .and_then(|()| file.write_all(bytes))
+        .and_then(|()| file.flush());
     drop(file);
     if let Err(e) = written {
         let _ = std::fs::remove_file(&tmp);
@@ -35,6 +42,21 @@ pub fn write_file(path: &Path, bytes: &[u8]) -> Result<(), String> {
 pub fn create_folder(dir: &Path) -> Result<(), String> {
     std::fs::create_dir_all(dir)
         .map_err(|e| format!("{}: cannot create folder: {}", shown(dir), describe(&e)))
+}
+
+/// Refuse `dir` as a folder to write files into when it exists and is not a folder (or a
+/// link to one): said before any work, not after it.
+pub fn check_folder(dir: &Path, option: &str) -> Result<(), String> {
+    match std::fs::metadata(dir) {
+        Ok(meta) if meta.is_dir() => Ok(()),
+        Ok(meta) => Err(format!(
+            "{option} `{}` is {}, not a folder: clusterlab writes its files into a folder; give a new path or a folder",
+            shown(dir),
+            what_is(&meta)
+        )),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(()),
+        Err(e) => Err(format!("{option} `{}`: {}", shown(dir), describe(&e))),
+    }
 }
 
 /// Refuse a target that exists and is not a regular file.

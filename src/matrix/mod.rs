@@ -760,7 +760,7 @@ pub fn merge(
 /// `plots/NAME.svg`, checked when its results were read) of result folder `dir` into `out`:
 /// a regular file inside `dir`, never a link out of it.
 fn copy_image(dir: &Path, file: &str, out: &Path) -> Result<(), String> {
-    let from = dir.join(file);
+    let from = crate::files::inside(dir, Path::new(file), "image path")?;
     match std::fs::symlink_metadata(&from) {
         Ok(meta) if meta.file_type().is_file() => {}
         Ok(meta) => {

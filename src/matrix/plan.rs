@@ -194,8 +194,9 @@ pub struct Group {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct GroupSequence {
     pub spec: SequenceSpec,
-    /// Fraction of the lights that move.
-    pub moving: f32,
+    /// Fraction of the lights that move; None: all of them, none where they cannot
+    /// (`scene::lights_fixed`).
+    pub moving: Option<f32>,
     pub still_camera: bool,
 }
 
@@ -314,7 +315,7 @@ pub fn default_groups() -> Result<Vec<Group>, String> {
                     frames: 30,
                     check_every: 10,
                 },
-                moving: 1.0,
+                moving: Some(1.0),
                 still_camera: true,
             }),
         },
@@ -532,6 +533,13 @@ pub fn expand(groups: &[Group]) -> Result<Vec<PlannedCell>, String> {
     let mut cells: Vec<PlannedCell> = Vec::new();
     for group in groups {
         check_distinct_names(&group.variants)?;
+        let swept = group.sweeps.iter().any(|s| matches!(s, Sweep::Moving(_)));
+        if swept && group.sequence.is_none() {
+            return Err(
+                "--sweep moving=...: a frame rendered again has no moving lights, so every point would run the same frame; sweep moving with --sequence N"
+                    .into(),
+            );
+        }
         for scene in &group.scenes {
             let mut base = crate::scene::defaults(scene).map_err(|e| e.to_string())?;
             let file = crate::scene::file_of(scene).map_err(|e| e.to_string())?;
@@ -540,7 +548,7 @@ pub fn expand(groups: &[Group]) -> Result<Vec<PlannedCell>, String> {
             }
             if let Some(s) = &group.sequence {
                 base.motion = crate::scene::Motion {
-                    lights: s.moving,
+                    lights: s.moving.unwrap_or(1.0),
                     camera: !s.still_camera,
                     still_at: base.time,
                 };
@@ -550,6 +558,7 @@ pub fn expand(groups: &[Group]) -> Result<Vec<PlannedCell>, String> {
                     let mut cell = make_cell(&group.name, entry, scene, base, &point);
                     cell.spec.scene_sha256 = file.as_ref().map(|f| f.sha256.clone());
                     if let Some(s) = &group.sequence {
+                        fixed_lights_stay(&mut cell.spec, s, point.moving.is_some())?;
                         cell.spec.sequence = Some(s.spec);
                         cell.spec.id = sequence_id(&cell.spec.id, s);
                     }
@@ -564,6 +573,24 @@ pub fn expand(groups: &[Group]) -> Result<Vec<PlannedCell>, String> {
     add_baselines(&mut cells);
     check_distinct_cells(&cells)?;
     Ok(cells)
+}
+
+/// A sequence cell on a scene whose lights cannot move (a glTF file's own): none move when
+/// no fraction was asked for; a fraction asked for (`--moving`, a `moving=` sweep) is
+/// refused, as it would report lights moving that stand still.
+fn fixed_lights_stay(spec: &mut CellSpec, s: &GroupSequence, swept: bool) -> Result<(), String> {
+    let params: SceneParams = spec.params.into();
+    if !crate::scene::lights_fixed(&spec.scene, &params).map_err(|e| e.to_string())? {
+        return Ok(());
+    }
+    if (s.moving.is_some() || swept) && spec.params.moving > 0.0 {
+        return Err(format!(
+            "scene `{}`: its lights are the file's own, which stand where it puts them, so a fraction {} of them moving cannot be run; leave out --moving (and the moving sweep) for this scene, or ask for another number of lights (seeded in its bounds, and moving)",
+            spec.scene, spec.params.moving
+        ));
+    }
+    spec.params.moving = 0.0;
+    Ok(())
 }
 
 /// A sequence cell's id: its frames and camera after the sweep's values, `@scene[...]`.

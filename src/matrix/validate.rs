@@ -101,11 +101,33 @@ fn check_cell(c: &CellRecord) -> Result<(), String> {
                 ));
             }
         }
+        // The smallest mean square error of two 8-bit images that differ is one step in one
+        // of the 3 x pixels channels: 1 / (3 pixels), so PSNR = 10 log10(255^2 / MSE) is at
+        // most 10 log10(255^2 x 3 pixels); the largest, 255 in every channel, gives 0.
+        let max_psnr = 10.0 * (255.0f64 * 255.0 * 3.0 * pixels as f64).log10();
         if let Some(psnr) = e.psnr_db
-            && !(psnr.is_finite() && psnr >= 0.0)
+            && !(psnr.is_finite() && (0.0..=max_psnr).contains(&psnr))
         {
+            let psnr = if psnr.abs() < 1e6 {
+                psnr.to_string()
+            } else {
+                format!("{psnr:e}")
+            };
             return Err(format!(
-                "`error.psnr_db` is {psnr}: a PSNR is finite and 0 or more (null when the images are identical)"
+                "`error.psnr_db` is {psnr}: the PSNR of two {pixels}-pixel 8-bit images that differ is in 0..={max_psnr:.2} dB (null when they are identical)"
+            ));
+        }
+        if !(e.relative_mse.is_finite() && e.relative_mse >= 0.0) {
+            return Err(format!(
+                "`error.relative_mse` is {}: a mean of squares is finite and 0 or more",
+                e.relative_mse
+            ));
+        }
+        // A root mean square is at most the largest of its terms.
+        if e.rmse_8bit > e.max_abs_8bit as f64 {
+            return Err(format!(
+                "`error.rmse_8bit` is {}, more than `error.max_abs_8bit` ({}): a root mean square is at most its largest term",
+                e.rmse_8bit, e.max_abs_8bit
             ));
         }
         for (field, n) in [
@@ -132,6 +154,12 @@ fn check_cell(c: &CellRecord) -> Result<(), String> {
                 s.active_clusters, s.assigned_clusters, s.clusters
             ));
         }
+        if !(s.edge_fraction.is_finite() && (0.0..=1.0).contains(&s.edge_fraction)) {
+            return Err(format!(
+                "`stats.edge_fraction` is {}: a fraction of the pixels is in 0..=1",
+                s.edge_fraction
+            ));
+        }
         let mean = s.mean_lights_per_visible_cluster;
         if !(mean.is_finite() && mean >= 0.0) {
             return Err(format!(
@@ -144,6 +172,29 @@ fn check_cell(c: &CellRecord) -> Result<(), String> {
             return Err(format!(
                 "`stats.z_range` is [{near}, {far}]: a depth range has 0 < near <= far"
             ));
+        }
+    }
+    if let Some(e) = &c.efficiency {
+        for (field, v) in [
+            (
+                "efficiency.frame_without_lights_ms",
+                e.frame_without_lights_ms,
+            ),
+            ("efficiency.bound_ms", e.bound_ms),
+        ] {
+            time(field, Some(v))?;
+        }
+        for (field, v) in [
+            ("efficiency.ns_per_evaluation", e.ns_per_evaluation),
+            (
+                "efficiency.ns_per_useful_evaluation",
+                e.ns_per_useful_evaluation,
+            ),
+            ("efficiency.efficiency", e.efficiency),
+        ] {
+            if !(v.is_finite() && v >= 0.0) {
+                return Err(format!("`{field}` is {v}: it is finite and 0 or more"));
+            }
         }
     }
     for (field, path) in [
@@ -167,6 +218,62 @@ fn check_cell(c: &CellRecord) -> Result<(), String> {
                 s.frames,
                 s.totals_ms.len()
             ));
+        }
+        let [lo, hi] = s.frame_ms_spread;
+        let (lo, hi) = (
+            time("sequence_summary.frame_ms_spread", Some(lo))?,
+            time("sequence_summary.frame_ms_spread", Some(hi))?,
+        );
+        if lo > hi {
+            return Err(format!(
+                "`sequence_summary.frame_ms_spread` is [{lo}, {hi}]: its min is above its max"
+            ));
+        }
+        for (name, v) in &s.pass_ms {
+            time(&format!("sequence_summary.pass_ms.{name}"), v.as_f64())?;
+        }
+        // The first frame is always checked and never reused.
+        for (field, n, most) in [
+            ("checked_frames", s.checked_frames, s.frames),
+            ("frames_reused", s.frames_reused, s.frames - 1),
+            ("patch_rebuilds", s.patch_rebuilds, s.frames - 1),
+        ] {
+            if n > most {
+                return Err(format!(
+                    "`sequence_summary.{field}` is {n}, more than the {most} a sequence of {} frames can have",
+                    s.frames
+                ));
+            }
+        }
+        if s.checked_frames == 0 {
+            return Err("`sequence_summary.checked_frames` is 0: a sequence checks its first and last frames".into());
+        }
+        if !(0.0..=1.0).contains(&s.moving) {
+            return Err(format!(
+                "`sequence_summary.moving` is {}: a fraction of the lights is in 0..=1",
+                s.moving
+            ));
+        }
+        for (field, n) in [
+            ("max_abs_8bit", s.max_abs_8bit),
+            ("max_temporal_8bit", s.max_temporal_8bit),
+        ] {
+            if n > 255 {
+                return Err(format!(
+                    "`sequence_summary.{field}` is {n}: 8-bit differences are 0 to 255"
+                ));
+            }
+        }
+        for (field, v) in [
+            ("first_rmse_8bit", s.first_rmse_8bit),
+            ("last_rmse_8bit", s.last_rmse_8bit),
+        ] {
+            if !(v.is_finite() && (0.0..=s.max_abs_8bit as f64).contains(&v)) {
+                return Err(format!(
+                    "`sequence_summary.{field}` is {v}: an 8-bit RMSE is finite, 0 or more and at most the largest error ({})",
+                    s.max_abs_8bit
+                ));
+            }
         }
     }
     for (field, path, what, folder, ext) in [

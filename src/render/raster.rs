@@ -207,6 +207,11 @@ pub fn encode(
     };
     let label = <&str>::from(pass);
     let mut rp = begin_render(encoder, label, &colors, depth, slot, groups);
+    // A scene with no triangle of this kind (all of them blended, say) still clears and
+    // loads the pass's targets; it draws nothing, and wgpu refuses an empty index slice.
+    if count == 0 {
+        return;
+    }
     rp.set_pipeline(&pipelines[0]);
     rp.set_vertex_buffer(0, scene.vertices.slice(..));
     rp.set_index_buffer(indices.slice(..), wgpu::IndexFormat::Uint32);

@@ -72,7 +72,9 @@ impl Renderer<'_> {
                 id,
                 PassId::Clustering(_) | PassId::Raster(compose::RasterPass::TransparentDepths)
             );
-        if s.no_lights && builds_clusters {
+        // Without lights the lists stay as made, empty (wgpu zeroes new buffers). The still
+        // image is not skipped: it holds ambient, which a frame without lights still shows.
+        if s.no_lights && builds_clusters && !still_image {
             return true;
         }
         // From a still scene's third frame on, the lists are those built before (an

@@ -76,20 +76,32 @@ pub fn raster_truth(
             } else {
                 depth.state(depth.compare(), true)
             };
-            let pipeline = render_pipeline(
-                gpu,
-                &pass,
-                &layout.pipeline,
-                ("vs_main", Some("fs_main")),
-                &vertex,
-                &[
-                    color_target(TRUTH_FORMAT),
-                    color_target(TRUTH_FORMAT),
-                    color_target(TRUTH_FORMAT),
-                ],
-                Some(depth_state),
-                variant.msaa.samples,
-            )?;
+            // Each group of targets is drawn whole, from a cleared depth: the same draws and
+            // tests pick the same fragment every time, so the groups agree sample for sample.
+            let pipelines = truth_target_groups(gpu)
+                .iter()
+                .map(|group| {
+                    let targets: Vec<_> = (0..TRUTH_TARGETS)
+                        .map(|t| {
+                            group
+                                .contains(&t)
+                                .then(|| color_target(TRUTH_FORMAT))
+                                .flatten()
+                        })
+                        .collect();
+                    let pipeline = render_pipeline(
+                        gpu,
+                        &pass,
+                        &layout.pipeline,
+                        ("vs_main", Some("fs_main")),
+                        &vertex,
+                        &targets,
+                        Some(depth_state.clone()),
+                        variant.msaa.samples,
+                    )?;
+                    Ok((pipeline, *group))
+                })
+                .collect::<Result<Vec<_>, RenderError>>()?;
             let prepass_pipeline = match &prepass {
                 Some(p) => {
                     let layout = PassLayout::of(gpu, p)?;
@@ -124,44 +136,56 @@ pub fn raster_truth(
             let mut encoder = gpu
                 .device
                 .create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
-            let draws = prepass_pipeline
-                .iter()
-                .map(|(p, g)| (p, g, false))
-                .chain([(&pipeline, &groups, true)]);
-            for (i, (pipeline, groups, colors)) in draws.enumerate() {
-                let attachments: Vec<_> = if colors {
-                    views.iter().map(clear_attachment).collect()
-                } else {
-                    Vec::new()
-                };
-                let mut rp = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                    label: Some("truth"),
-                    color_attachments: &attachments,
-                    depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                        view: &depth_view,
-                        depth_ops: Some(wgpu::Operations {
-                            load: if i == 0 {
-                                wgpu::LoadOp::Clear(depth.clear())
-                            } else {
-                                wgpu::LoadOp::Load
-                            },
-                            store: wgpu::StoreOp::Store,
+            for (pipeline, targets) in &pipelines {
+                let draws = prepass_pipeline
+                    .iter()
+                    .map(|(p, g)| (p, g, false))
+                    .chain([(pipeline, &groups, true)]);
+                for (i, (pipeline, groups, colors)) in draws.enumerate() {
+                    let attachments: Vec<_> = if colors {
+                        (0..TRUTH_TARGETS)
+                            .map(|t| {
+                                targets
+                                    .contains(&t)
+                                    .then(|| clear_attachment(&views[t]))
+                                    .flatten()
+                            })
+                            .collect()
+                    } else {
+                        Vec::new()
+                    };
+                    let mut rp = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                        label: Some("truth"),
+                        color_attachments: &attachments,
+                        depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                            view: &depth_view,
+                            depth_ops: Some(wgpu::Operations {
+                                load: if i == 0 {
+                                    wgpu::LoadOp::Clear(depth.clear())
+                                } else {
+                                    wgpu::LoadOp::Load
+                                },
+                                store: wgpu::StoreOp::Store,
+                            }),
+                            stencil_ops: None,
                         }),
-                        stencil_ops: None,
-                    }),
-                    timestamp_writes: None,
-                    occlusion_query_set: None,
-                    multiview_mask: None,
-                });
-                rp.set_pipeline(pipeline);
-                for (g, group) in groups.iter().enumerate() {
-                    if let Some(group) = group {
-                        rp.set_bind_group(g as u32, group, &[]);
+                        timestamp_writes: None,
+                        occlusion_query_set: None,
+                        multiview_mask: None,
+                    });
+                    rp.set_pipeline(pipeline);
+                    for (g, group) in groups.iter().enumerate() {
+                        if let Some(group) = group {
+                            rp.set_bind_group(g as u32, group, &[]);
+                        }
+                    }
+                    // No opaque triangle (every material blended): the targets stay clear.
+                    if buffers.index_count > 0 {
+                        rp.set_vertex_buffer(0, buffers.vertices.slice(..));
+                        rp.set_index_buffer(buffers.indices.slice(..), wgpu::IndexFormat::Uint32);
+                        rp.draw_indexed(0..buffers.index_count, 0, 0..1);
                     }
                 }
-                rp.set_vertex_buffer(0, buffers.vertices.slice(..));
-                rp.set_index_buffer(buffers.indices.slice(..), wgpu::IndexFormat::Uint32);
-                rp.draw_indexed(0..buffers.index_count, 0, 0..1);
             }
             gpu.queue.submit([encoder.finish()]);
             let (blended, offsets) = if let Some(pass) = &blended_pass {
@@ -201,6 +225,24 @@ pub fn raster_truth(
         blended,
         blended_offsets,
     })
+}
+
+/// The truth's targets: position, normal, albedo (`passes/truth.wesl`).
+const TRUTH_TARGETS: usize = 3;
+
+/// The truth's targets in groups one draw can write: all three at once where the device
+/// takes 48 bytes of colour a sample, else position and normal, then albedo (WebGPU's
+/// default limit is 32 bytes; the truth is the reference's, not the variant's, so the
+/// limits a variant is checked against say nothing of it).
+fn truth_target_groups(gpu: &Gpu) -> &'static [&'static [usize]] {
+    let bytes = TRUTH_FORMAT
+        .target_pixel_byte_cost()
+        .expect("a renderable format");
+    if gpu.device.limits().max_color_attachment_bytes_per_sample >= TRUTH_TARGETS as u32 * bytes {
+        &[&[0, 1, 2]]
+    } else {
+        &[&[0, 1], &[2]]
+    }
 }
 
 /// What the blended draws of the truth share with its opaque draw.

@@ -195,6 +195,12 @@ fn read_file(path: &str) -> Result<FileScene, String> {
     } else {
         files::read::GLTF
     };
+    if kind == files::read::GLB {
+        // The header first: a large file that is no GLB is refused before it is read.
+        let (head, length) =
+            files::read::read_head(Path::new(path), GLB_HEADER, kind).map_err(|e| e.why)?;
+        check_glb_file_header(&head, length)?;
+    }
     let bytes = files::read(Path::new(path), kind).map_err(|e| e.why)?;
     check_glb_header(&bytes)?;
     let parsed = gltf::Gltf::from_slice_without_validation(&bytes)
@@ -360,6 +366,40 @@ fn read_file(path: &str) -> Result<FileScene, String> {
         bounds,
         notes,
     })
+}
+
+/// Bytes of a GLB header: magic `glTF`, version, length.
+const GLB_HEADER: u64 = 12;
+
+/// A `.glb` file's header, read before the rest (`head`, its first bytes; `length`, the
+/// file's): the magic `glTF`, version 2, and a stated length that is the file's own.
+fn check_glb_file_header(head: &[u8], length: u64) -> Result<(), String> {
+    let word = |at: usize| {
+        head.get(at..at + 4)
+            .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+    };
+    let (Some(version), Some(stated)) = (word(4), word(8)) else {
+        return Err(format!(
+            "not a GLB file: {length} bytes, fewer than its 12-byte header (magic, version, length)"
+        ));
+    };
+    if !head.starts_with(b"glTF") {
+        return Err(format!(
+            "not a GLB file: it begins with the bytes {:02X?}, where a .glb begins with the magic `glTF` (a .gltf file holds JSON: name it .gltf)",
+            &head[..4]
+        ));
+    }
+    if version != 2 {
+        return Err(format!(
+            "its GLB header gives version {version}: clusterlab reads glTF 2.0 (version 2)"
+        ));
+    }
+    if stated as u64 != length {
+        return Err(format!(
+            "its GLB header gives a length of {stated} bytes, but the file has {length} bytes: it is cut short or has bytes added"
+        ));
+    }
+    Ok(())
 }
 
 /// A .glb's header as the gltf crate reads it: it takes the header's 12 bytes from the length
@@ -1242,6 +1282,17 @@ fn read_primitive(
             ));
         }
     }
+    // A vertex colour multiplies the base colour: a negative one is no colour (it renders
+    // black, and so does the reference, which would score the frame as perfect).
+    if let Some(at) = colors
+        .as_ref()
+        .and_then(|c| c.iter().position(|v| v.iter().any(|&x| x < 0.0)))
+    {
+        let accessor = primitive.get(&S::Colors(0)).map_or(0, |a| a.index());
+        return Err(format!(
+            "COLOR_0 (accessor {accessor}) holds a negative value at vertex {at}: a vertex colour multiplies the base colour, so each component must be 0 or more (glTF's normalized integer colours are 0..=1)"
+        ));
+    }
 
     let material = primitive.material();
     let pbr = material.pbr_metallic_roughness();
@@ -1483,15 +1534,19 @@ pub fn defaults(file: &FileScene) -> SceneParams {
     }
 }
 
+/// Whether a scene made from `file` with `params` has the file's own lights (it has some,
+/// or says it has none, and `params.lights` is their number), which never move.
+pub fn uses_own_lights(file: &FileScene, params: &SceneParams) -> bool {
+    (!file.lights.is_empty() || file.without_lights) && params.lights as usize == file.lights.len()
+}
+
 /// The scene a file makes with `params`: the file's own lights when it has some and
 /// `params.lights` is their number, else that many seeded lights in its bounds; the file's
 /// camera at `params.time` (and one frame earlier), else a camera framing the bounds.
 pub fn instantiate(file: &FileScene, params: SceneParams) -> Scene {
     let (lo, hi) = file.bounds;
-    let use_file_lights = (!file.lights.is_empty() || file.without_lights)
-        && params.lights as usize == file.lights.len();
     // A file's own lights stay where it put them.
-    let (lights, moving_lights) = if use_file_lights {
+    let (lights, moving_lights) = if uses_own_lights(file, &params) {
         (file.lights.clone(), Vec::new())
     } else {
         // Seeded lights inside the bounds (5% in from each side), as the built-in scenes

@@ -379,6 +379,16 @@ pub fn defaults(name: &str) -> Result<SceneParams, SceneError> {
         .ok_or_else(|| SceneError::Unknown(name.to_string()))
 }
 
+/// Whether scene `name` made with `params` has lights that cannot move: a glTF file's own
+/// lights stand where the file puts them (seeded lights in a file's bounds move as the
+/// built-in scenes' do).
+pub fn lights_fixed(name: &str, params: &SceneParams) -> Result<bool, SceneError> {
+    if !file::is_file(name) {
+        return Ok(false);
+    }
+    Ok(file::uses_own_lights(&*file::load(name)?, params))
+}
+
 /// The file behind scene `name` (None for a built-in scene).
 pub fn file_of(name: &str) -> Result<Option<SceneFile>, SceneError> {
     if file::is_file(name) {

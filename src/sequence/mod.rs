@@ -429,7 +429,8 @@ fn check_frame(
         fresh_difference(gpu, composer, variant, scene, frame, renderer)?
     };
     Ok(FrameCheck {
-        failure: crate::run::meaningless(reference, None, Some(&error)),
+        failure: crate::run::meaningless(reference, Some(frame), None, Some(&error))
+            .or_else(|| crate::run::inexact(&variant.variant, gpu, Some(&error))),
         error,
         temporal,
         equals_fresh: difference.is_none() && !carries_history,

@@ -53,7 +53,7 @@ pub fn error_bound(v: &Variant) -> u32 {
     if compact && v.msaa.on() {
         255
     } else if !v.pipeline.is_deferred() || v.normal_codec().bits() >= 32 {
-        1
+        crate::run::EXACT_LSB
     } else {
         3
     }

@@ -287,7 +287,7 @@ fn measure(
             .get_or_compute(gpu, composer, v, scene)
             .map_err(|e| StudyError::Usage(e.to_string()))?;
         let e = metrics::compare(&last, &reference);
-        if let Some(why) = crate::run::meaningless(&reference, None, Some(&e)) {
+        if let Some(why) = crate::run::meaningless(&reference, Some(&last), None, Some(&e)) {
             return Err(StudyError::Usage(why));
         }
         let stats = renderer.stats()?;

@@ -19,6 +19,9 @@ pub enum Changed {
 pub struct Watch {
     _watcher: notify::RecommendedWatcher,
     seen: Receiver<Changed>,
+    /// What is watched, canonical: the shader folder and the variant files' folders.
+    shader_root: PathBuf,
+    variant_folders: Vec<PathBuf>,
 }
 
 impl Watch {
@@ -34,6 +37,10 @@ impl Watch {
             .canonicalize()
             .unwrap_or_else(|_| shaders.to_path_buf());
         let root = shader_root.clone();
+        let canonical_folders = variant_folders
+            .iter()
+            .filter_map(|f| f.canonicalize().ok())
+            .collect();
         let mut watcher =
             notify::recommended_watcher(move |event: notify::Result<notify::Event>| {
                 let Ok(event) = event else { return };
@@ -69,6 +76,46 @@ impl Watch {
         Ok(Watch {
             _watcher: watcher,
             seen,
+            shader_root,
+            variant_folders: canonical_folders,
+        })
+    }
+
+    /// Why the viewer does not watch `file`, if it does not: it watches WESL and WGSL
+    /// modules under the shader folder and `.ron` files in the variant files' folders,
+    /// regular files only (a link could lead anywhere).
+    pub fn unwatched(&self, file: &Path) -> Option<String> {
+        let meta = match std::fs::symlink_metadata(file) {
+            Ok(meta) => meta,
+            Err(e) => return Some(crate::files::describe(&e)),
+        };
+        if !meta.file_type().is_file() {
+            return Some(format!(
+                "it is {}, not a regular file",
+                crate::files::write::what_is(&meta)
+            ));
+        }
+        let ext = file.extension().and_then(|e| e.to_str());
+        let canonical = file.canonicalize().ok();
+        let shader = canonical
+            .as_ref()
+            .is_some_and(|c| c.starts_with(&self.shader_root))
+            && matches!(ext, Some("wesl" | "wgsl"));
+        let variant = canonical
+            .as_ref()
+            .and_then(|c| c.parent())
+            .is_some_and(|p| self.variant_folders.iter().any(|f| f == p))
+            && ext == Some("ron");
+        (!shader && !variant).then(|| {
+            format!(
+                "the viewer watches only the shader modules under {} (.wesl, .wgsl) and the variant files (.ron) in {}, and edits nothing else",
+                self.shader_root.display(),
+                self.variant_folders
+                    .iter()
+                    .map(|f| f.display().to_string())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            )
         })
     }
 

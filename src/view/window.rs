@@ -957,6 +957,23 @@ enum Waiting {
     WindowShot(ShotSlot),
 }
 
+impl Waiting {
+    /// What has not come, in words.
+    fn what(&self) -> &'static str {
+        match self {
+            Waiting::Frames(_) => "the window drew no more frames (is it hidden or minimised?)",
+            Waiting::Reload(_) => {
+                "the file watcher reported no change to the edited file, or the reload is still composing (a file system without change events, or a very slow composition)"
+            }
+            Waiting::Job => "the screenshot or error measurement has not finished",
+            Waiting::Recording => {
+                "the recording has not taken all its frames (the window drew too few)"
+            }
+            Waiting::WindowShot(_) => "the window has not been drawn for its shot (is it hidden?)",
+        }
+    }
+}
+
 /// A script being played.
 struct Player {
     steps: Vec<Step>,
@@ -1010,9 +1027,10 @@ impl Player {
                 if !done {
                     if since.elapsed().as_secs_f64() > WAIT_LIMIT_S {
                         return Err(format!(
-                            "step {} ({:?}) still waits after {WAIT_LIMIT_S} s",
+                            "step {} ({:?}) still waits after {WAIT_LIMIT_S} s: {}",
                             self.next,
-                            self.steps[self.next - 1]
+                            self.steps[self.next - 1],
+                            waiting.what()
                         ));
                     }
                     return Ok(false);
@@ -1024,7 +1042,8 @@ impl Player {
             };
             self.next += 1;
             if let Step::Out(folder) = &step {
-                app.options.out = self.base.join(folder);
+                app.options.out = crate::files::inside(&self.base, folder, "Out folder")
+                    .map_err(|e| format!("step {}: {e}", self.next))?;
                 continue;
             }
             let waiting = run_step(step, app, &mut self.held)
@@ -1076,12 +1095,23 @@ fn run_step(
             find,
             replace,
         } => {
+            if let Some(why) = app.watch.unwatched(&file) {
+                return Err(format!("Edit `{}`: {why}", file.display()));
+            }
             let text = crate::files::read_text(&file, crate::files::read::VARIANT)
                 .map_err(|e| format!("{}: {}", file.display(), e.why))?;
             if !text.contains(&find) {
                 return Err(format!("{}: has no `{find}` to replace", file.display()));
             }
-            crate::files::write_file(&file, text.replacen(&find, &replace, 1).as_bytes())?;
+            let edited = text.replacen(&find, &replace, 1);
+            // The file would be written as it was: no reload would come to wait for.
+            if edited == text {
+                return Err(format!(
+                    "Edit `{}`: replacing `{find}` with `{replace}` changes nothing, so no reload would follow",
+                    file.display()
+                ));
+            }
+            crate::files::write_file(&file, edited.as_bytes())?;
             Some(Waiting::Reload(app.reloads))
         }
         Step::Screenshot => {
@@ -1097,19 +1127,28 @@ fn run_step(
             Some(Waiting::Recording)
         }
         Step::State(file) => {
-            let path = app.options.out.join(file);
             let text =
                 serde_json::to_string_pretty(&app.state_json()).map_err(|e| e.to_string())?;
-            crate::files::write::create_folder(&app.options.out)?;
+            let path = output_path(&app.options.out, &file, "State")?;
             crate::files::write_file(&path, text.as_bytes())?;
             None
         }
         Step::Out(_) => None,
         Step::WindowShot(file) => {
-            let path = app.options.out.join(file);
+            let path = output_path(&app.options.out, &file, "WindowShot")?;
             Some(Waiting::WindowShot(app.window_shot(path)))
         }
     })
+}
+
+/// Where a script's step writes `file`: inside the output folder (`files::inside`), its
+/// folders made.
+fn output_path(out: &Path, file: &Path, step: &str) -> Result<PathBuf, String> {
+    let path = crate::files::inside(out, file, &format!("{step} path"))?;
+    if let Some(parent) = path.parent() {
+        crate::files::write::create_folder(parent)?;
+    }
+    Ok(path)
 }
 
 /// A panel change from a script.
