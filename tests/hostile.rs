@@ -1131,13 +1131,18 @@ fn sequences_scripts_and_shards_keep_the_promises() {
                 r["cells"][0]["error"]["relative_mse"] = (-1.0).into()
             });
         }),
-        (merge("merge_rmse_over_its_largest_term"), |s| {
-            make_shard(s);
-            edit_results(s, |r| {
-                let largest = r["cells"][0]["error"]["max_abs_8bit"].as_f64().unwrap();
-                r["cells"][0]["error"]["rmse_8bit"] = (largest + 0.5).into();
-            });
-        }),
+        // The largest error differs from adapter to adapter: only the reason is checked.
+        (
+            merge("merge_rmse_over_its_largest_term")
+                .expect("a root mean square is at most its largest term"),
+            |s| {
+                make_shard(s);
+                edit_results(s, |r| {
+                    let largest = r["cells"][0]["error"]["max_abs_8bit"].as_f64().unwrap();
+                    r["cells"][0]["error"]["rmse_8bit"] = (largest + 0.5).into();
+                });
+            },
+        ),
         (merge("merge_checked_frames_over_frames"), |s| {
             let (code, text) = s.run("project", &tiny_sequence_matrix("shard"), &[]);
             assert_eq!(code, Some(0), "{text}");
