@@ -102,6 +102,18 @@ pub enum RunError {
     Io(String),
 }
 
+impl RunError {
+    /// The adapter, or the limits chosen for it, lacks what the frame needs: a capability
+    /// or a size, not a fault of the variant, the scene or the renderer.
+    pub fn refused(&self) -> bool {
+        matches!(
+            self,
+            RunError::Render(RenderError::Gpu(crate::gpu::GpuError::TooLarge(_)))
+                | RunError::Render(RenderError::Limits(_))
+        )
+    }
+}
+
 impl From<crate::gpu::GpuError> for RunError {
     fn from(e: crate::gpu::GpuError) -> Self {
         RunError::Render(RenderError::Gpu(e))

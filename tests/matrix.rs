@@ -194,13 +194,14 @@ fn speedups_and_pareto_front_follow_from_the_cells(r: &Results, printed: &str) {
 
 /// Run `matrix ARGS` on one_light (48x27, one frame) into `out` with `env` set: the exit
 /// code is 1, the cells `fails` picks fail with a message holding every one of `says`, and
-/// every other cell runs. Returns the results.
+/// every other cell runs; with `refused`, the adapter refused them instead: they do not
+/// count as failed and the exit code is 0. Returns the results.
 fn only_some_cells_fail(
     args: &[&str],
     out: &Path,
     env: (&str, &str),
     fails: impl Fn(&clusterlab::matrix::CellRecord) -> bool,
-    says: &[&str],
+    (says, refused): (&[&str], bool),
 ) -> Results {
     let mut all = vec!["matrix"];
     all.extend_from_slice(args);
@@ -217,7 +218,7 @@ fn only_some_cells_fail(
     ]);
     all.push(out.to_str().unwrap());
     let (code, text) = cli(&all).env(env.0, env.1).run().outcome();
-    assert_eq!(code, Some(1), "{text}");
+    assert_eq!(code, Some(if refused { 0 } else { 1 }), "{text}");
     let r = Results::load(out).expect("results.json");
     for c in &r.cells {
         if fails(c) {
@@ -226,6 +227,7 @@ fn only_some_cells_fail(
                 .as_deref()
                 .unwrap_or_else(|| panic!("{} fails", c.spec.id));
             assert!(says.iter().all(|w| why.contains(w)), "{why}");
+            assert_eq!(c.refused, refused, "{}: {why}", c.spec.id);
         } else {
             assert!(c.ok(), "{}: {:?}", c.spec.id, c.failure);
         }
@@ -234,7 +236,8 @@ fn only_some_cells_fail(
 }
 
 #[test]
-fn cells_that_fail_from_a_shader_error_or_an_adapter_limit_fail_alone() {
+fn a_cell_that_fails_from_a_shader_error_fails_alone_and_one_over_an_adapter_limit_is_refused_alone()
+ {
     let dir = scratch("failing");
     // A syntax error in the resolve pass, which only deferred variants compose.
     let shaders = dir.join("shaders");
@@ -247,7 +250,7 @@ fn cells_that_fail_from_a_shader_error_or_an_adapter_limit_fail_alone() {
         &dir.join("shader"),
         ("CLUSTERLAB_SHADERS", shaders.to_str().unwrap()),
         |c| c.spec.variant == "clustered_deferred_16x16x24",
-        &["pass `resolve`", "passes/resolve.wesl:"],
+        (&["pass `resolve`", "passes/resolve.wesl:"], false),
     );
     // A light buffer over the adapter's (lowered) buffer limit: only the cell with many
     // lights fails, naming the limit.
@@ -257,7 +260,7 @@ fn cells_that_fail_from_a_shader_error_or_an_adapter_limit_fail_alone() {
         &dir.join("limit"),
         cap,
         |c| c.spec.params.lights == 4096,
-        &["4096 lights take", "131072 bytes"],
+        (&["4096 lights take", "131072 bytes"], true),
     );
     assert_eq!(
         r.cells.len(),
@@ -275,7 +278,7 @@ fn cells_that_fail_from_a_shader_error_or_an_adapter_limit_fail_alone() {
         &dir.join("grid"),
         cap,
         |c| c.spec.id.contains("64x64x64"),
-        &["grid 64x64x64", "131072 bytes"],
+        (&["grid 64x64x64", "131072 bytes"], true),
     );
     // Rasterised binning's proxies over the limit (8192 proxies of 16 bytes): 64 lights on
     // 64 slices make at most 4096 and fit; 2000 lights, each over several slices, do not,
@@ -292,8 +295,35 @@ fn cells_that_fail_from_a_shader_error_or_an_adapter_limit_fail_alone() {
         &dir.join("proxies"),
         cap,
         |c| c.spec.variant == "forward_plus_rasterised" && c.spec.params.lights == 2000,
-        &["light proxies this frame take", "131072 bytes"],
+        (&["light proxies this frame take", "131072 bytes"], true),
     );
+    // A sample count the adapter lacks (2 on lavapipe, every count above 1 through OpenGL):
+    // refused where it would run, and the matrix exits 0.
+    let counts = common::gpu().multisample_counts();
+    match [2u32, 4, 8].into_iter().find(|n| !counts.contains(n)) {
+        Some(n) => {
+            let sweep = format!("msaa=1,{n}");
+            let point = format!("msaa={n}");
+            let r = only_some_cells_fail(
+                &["--variants", "forward_plus", "--sweep", &sweep],
+                &dir.join("samples"),
+                ("CLUSTERLAB_UNUSED", ""),
+                |c| c.spec.id.contains(&point),
+                (&[&format!("msaa.samples {n}")], true),
+            );
+            let picked = r
+                .cells
+                .iter()
+                .filter(|c| c.spec.id.contains(&point))
+                .count();
+            assert!(picked > 0 && r.refused() == picked, "{}", r.tally());
+            let tally = format!("0 failed, {picked} refused by the adapter");
+            assert!(r.tally().ends_with(&tally), "{}", r.tally());
+        }
+        None => {
+            eprintln!("skipped: this adapter renders every sample count (2, 4, 8): none to refuse")
+        }
+    }
     let _ = std::fs::remove_dir_all(&dir);
 }
 

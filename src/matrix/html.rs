@@ -51,12 +51,11 @@ pub fn page(results: &Results, plots: &[Plot]) -> String {
     );
     let _ = write!(
         h,
-        "<h1>clusterlab variant matrix</h1><p>{} cells, {} failed. Times are medians over \
+        "<h1>clusterlab variant matrix</h1><p>{}. Times are medians over \
          the timed frames; speed-up is naive forward's time over the cell's, on the same scene \
          and parameters; error is against the CPU f64 reference. Highlighted rows are on the \
          time-error (RMSE) Pareto front of their group.</p>",
-        results.cells.len(),
-        results.failed()
+        results.tally()
     );
     at_a_glance(&mut h, results);
     if !plots.is_empty() {
@@ -220,9 +219,14 @@ fn summary(h: &mut String, results: &Results) {
             let name = esc(&label(c));
             let failure = |h: &mut String| {
                 if let Some(why) = &c.failure {
+                    let verdict = if c.refused {
+                        "refused by the adapter: "
+                    } else {
+                        ""
+                    };
                     let _ = write!(
                         h,
-                        "<tr class=\"failed\"><td class=\"name\">{name}</td><td colspan=\"{}\" class=\"name\"><span class=\"failure\">{}</span></td></tr>",
+                        "<tr class=\"failed\"><td class=\"name\">{name}</td><td colspan=\"{}\" class=\"name\"><span class=\"failure\">{verdict}{}</span></td></tr>",
                         cols.len(),
                         esc(why)
                     );

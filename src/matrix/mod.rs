@@ -33,7 +33,7 @@ use crate::measure::Frames;
 use crate::metrics::ErrorMetrics;
 use crate::reference::ReferenceCache;
 use crate::render::FrameStats;
-use crate::run::{CellCost, CellOptions, run_cell, write_images, write_png};
+use crate::run::{CellCost, CellOptions, RunError, run_cell, write_images, write_png};
 use crate::scene::SCENES;
 use crate::sequence::SequenceSummary;
 use crate::variant::DebugView;
@@ -45,6 +45,10 @@ pub struct CellRecord {
     pub spec: CellSpec,
     /// Why the cell failed; absent when it ran.
     pub failure: Option<String>,
+    /// The adapter, or the limits `--limits` chose, lacks what the cell needs (`failure`
+    /// names what): the cell is counted as refused, not failed, and the run still succeeds.
+    #[serde(default)]
+    pub refused: bool,
     /// Median milliseconds per pass over the timed frames, with `total`.
     pub gpu_ms: Map<String, Value>,
     /// [min, max] milliseconds per pass over the timed frames.
@@ -120,10 +124,18 @@ impl CellRecord {
         self.gpu_ms.get("total").and_then(Value::as_f64)
     }
 
+    /// A cell that did not run: refused when the adapter cannot run it (`RunError::refused`).
+    fn not_run(spec: CellSpec, e: &RunError) -> Self {
+        let mut record = Self::failed(spec, e.to_string());
+        record.refused = e.refused();
+        record
+    }
+
     fn failed(spec: CellSpec, why: String) -> Self {
         Self {
             spec,
             failure: Some(why),
+            refused: false,
             gpu_ms: Map::new(),
             gpu_ms_spread: Map::new(),
             timing_source: None,
@@ -234,8 +246,26 @@ pub struct Results {
 }
 
 impl Results {
+    /// Cells that failed, leaving out those the adapter refused.
     pub fn failed(&self) -> usize {
-        self.cells.iter().filter(|c| !c.ok()).count()
+        self.cells.iter().filter(|c| !c.ok() && !c.refused).count()
+    }
+
+    pub fn refused(&self) -> usize {
+        self.cells.iter().filter(|c| c.refused).count()
+    }
+
+    /// "N cells, F failed" and, where the adapter refused some, "R refused by the adapter".
+    pub fn tally(&self) -> String {
+        let refused = match self.refused() {
+            0 => String::new(),
+            n => format!(", {n} refused by the adapter"),
+        };
+        format!(
+            "{} cells, {} failed{refused}",
+            self.cells.len(),
+            self.failed()
+        )
     }
 
     /// Read `results.json` (a file, or a folder holding one), and check every figure in it
@@ -484,7 +514,7 @@ fn run_one(
     );
     let mut c = match result {
         Ok(c) => c,
-        Err(e) => return CellRecord::failed(spec, e.to_string()),
+        Err(e) => return CellRecord::not_run(spec, &e),
     };
     let start = std::time::Instant::now();
     let stem = spec.file_stem();
@@ -515,6 +545,7 @@ fn run_one(
         spec,
         // A frame that means nothing fails with its figures kept beside the reason.
         failure: r.failure,
+        refused: false,
         gpu_ms: r.gpu_ms,
         gpu_ms_spread: r.gpu_ms_spread,
         timing_source: Some(r.timing_source.to_string()),
@@ -552,7 +583,7 @@ fn run_sequence(
     let frames = crate::sequence::scene_frames(&scene, spec.params.into());
     let run = match crate::sequence::run(gpu, composer, loaded, sequence, &frames, references) {
         Ok(run) => run,
-        Err(e) => return CellRecord::failed(spec, e.to_string()),
+        Err(e) => return CellRecord::not_run(spec, &e),
     };
     let images_started = std::time::Instant::now();
     let stem = spec.file_stem();
@@ -609,6 +640,7 @@ fn run_sequence(
     CellRecord {
         spec,
         failure: r.failure,
+        refused: false,
         gpu_ms,
         gpu_ms_spread,
         timing_source: Some(r.timing_source.to_string()),

@@ -96,7 +96,8 @@ pub fn table(results: &Results) -> String {
             if let Some(first) = failed
                 && c.total_ms().is_none()
             {
-                let _ = writeln!(out, "  {name:<name_width$} FAILED: {first}");
+                let verdict = if c.refused { "REFUSED" } else { "FAILED" };
+                let _ = writeln!(out, "  {name:<name_width$} {verdict}: {first}");
                 continue;
             }
             // A frame that rendered and means nothing: its figures, then why it failed.
@@ -111,12 +112,10 @@ pub fn table(results: &Results) -> String {
             let _ = writeln!(out);
         }
     }
-    let failed = results.failed();
     let _ = writeln!(
         out,
-        "\n{} cells, {} failed; * = on the time-error (RMSE) Pareto front of its group",
-        results.cells.len(),
-        failed
+        "\n{}; * = on the time-error (RMSE) Pareto front of its group",
+        results.tally()
     );
     out
 }

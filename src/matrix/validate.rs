@@ -66,6 +66,9 @@ fn check_cell(c: &CellRecord) -> Result<(), String> {
             time(field, Some(v))?;
         }
     }
+    if c.refused && c.ok() {
+        return Err("it is `refused` but has no `failure` saying why".into());
+    }
     if c.ok() {
         if !c.gpu_ms.contains_key("total") {
             return Err("it ran (no `failure`) but has no `gpu_ms.total`".into());
