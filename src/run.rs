@@ -389,7 +389,9 @@ pub const EXACT_LSB: u32 = 1;
 /// the stage); scissor deferred's blended sum only where the adapter adds without rounding
 /// (`gpu::expect`). Motion blur is not claimed either: each tap's texel is chosen from a
 /// velocity in single precision, and one that lands beside the reference's changes the
-/// pixel (6 LSB on one pixel of the atrium in the default matrix).
+/// pixel (6 LSB on one pixel of the atrium in the default matrix); nor toon post-processing
+/// where the HDR target is not 32-bit float: its bands cut a value the target rounded to
+/// 11 bits (48 and 57 LSB through OpenGL's 16-bit target).
 pub fn exact_claim(variant: &Variant, gpu: &Gpu) -> bool {
     use crate::gpu::expect;
     use crate::variant::{DebugView, GBufferLayout, LightLists, Pipeline, ShadingModel};
@@ -402,6 +404,8 @@ pub fn exact_claim(variant: &Variant, gpu: &Gpu) -> bool {
     let lossy_normals = deferred && v.normal_codec().bits() < 32;
     let rounded_sum = v.pipeline == Pipeline::DeferredScissor
         && expect::allowance(gpu, expect::Check::BlendedLightSum).is_some();
+    let toon_on_rounded =
+        v.post.toon.is_some() && gpu.hdr_format != wgpu::TextureFormat::Rgba32Float;
     v.shading.lights.sampling().is_none()
         && !capped
         && v.debug_view == DebugView::Off
@@ -409,6 +413,7 @@ pub fn exact_claim(variant: &Variant, gpu: &Gpu) -> bool {
         && v.post.motion_blur.is_none()
         && !lossy_normals
         && !rounded_sum
+        && !toon_on_rounded
 }
 
 /// Render the frames `policy` asks for; returns the timed ones. On a `software` adapter a

@@ -1268,6 +1268,10 @@ fn sequences_scripts_and_shards_keep_the_promises() {
 /// The viewer's scripts write only under `--out` and edit only the files the viewer watches.
 #[test]
 fn a_viewer_script_writes_only_under_out_and_edits_only_what_it_watches() {
+    if let Some(why) = common::windows_unavailable() {
+        eprintln!("skipped: {why}");
+        return;
+    }
     let play = |name| {
         case(
             name,

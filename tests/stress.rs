@@ -93,3 +93,60 @@ fn a_failed_check_names_the_case_and_where() {
     );
     assert!(stress::report(&[run]).contains("many_lights_at_one_point"));
 }
+
+/// The marking passes' depth margin holds a depth stored as another rasteriser may store it
+/// (`cpu::clusters::depth_margin`): with every depth marking reads moved 32 units in the last
+/// place (1.9e-6 of it, inside the 1e-5 Vulkan and OpenGL ES allow; an edited copy of the
+/// shaders, as `CLUSTERLAB_PERTURB_DEPTH_ULPS=32` does for the whole suite in CI), the case
+/// with 10 decades of standard depth passes every check on the methods whose live clusters
+/// the depth buffer decides; with the constant 1e-3 margin of before (which an NVIDIA H200
+/// broke) in its place, lights go missing there.
+#[test]
+fn a_depth_stored_otherwise_keeps_every_light_in_the_lists() {
+    let gpu = common::gpu();
+    let case = stress::cases()
+        .into_iter()
+        .find(|c| c.name == "near_1e-4_far_1e6")
+        .expect("case");
+    let nudge = (
+        "var d = textureLoad(depth_texture, p, 0).r;",
+        "var d = bitcast<f32>(bitcast<u32>(textureLoad(depth_texture, p, 0).r) + 32u);",
+    );
+    let without_margin = ("let m = depth_margin(view, z);", "let m = MARK_MARGIN;");
+    let nudged = common::EditedShaders::of("passes/mark_active.wesl", "nudged-depth", &[nudge]);
+    let broken = common::EditedShaders::of(
+        "passes/mark_active.wesl",
+        "nudged-depth-no-margin",
+        &[nudge, without_margin],
+    );
+    let references = clusterlab::reference::ReferenceCache::default();
+    let mut missed = Vec::new();
+    for name in [
+        "forward_plus_depthmask",
+        "forward_plus_active",
+        "forward_plus_sample_bounds",
+    ] {
+        let v = &case
+            .variants
+            .iter()
+            .find(|(n, _)| n == name)
+            .unwrap_or_else(|| panic!("{name} in the case"))
+            .1;
+        let run = stress::run_case(&gpu, &nudged.composer, &references, &case, name, v);
+        assert!(run.ok, "{}", stress::report(std::slice::from_ref(&run)));
+        let run = stress::run_case(&gpu, &broken.composer, &references, &case, name, v);
+        if !run.ok {
+            missed.push(name);
+        }
+    }
+    // The three the H200 failed, each for the same reason.
+    assert_eq!(
+        missed,
+        [
+            "forward_plus_depthmask",
+            "forward_plus_active",
+            "forward_plus_sample_bounds"
+        ],
+        "with the constant margin, the methods that should miss lights"
+    );
+}

@@ -49,6 +49,10 @@ fn render_as_recorded(record: &serde_json::Value, out: &Path) {
 
 #[test]
 fn a_screenshot_is_the_image_render_draws_for_the_same_state_byte_for_byte() {
+    if let Some(why) = crate::common::windows_unavailable() {
+        eprintln!("skipped: {why}");
+        return;
+    }
     for variant in ["forward_plus", "clustered_deferred_16x16x24"] {
         let out = scratch(&format!("view-{variant}"));
         // At the scene's own camera, then flown forward and turned.
@@ -125,6 +129,10 @@ fn a_screenshot_is_the_image_render_draws_for_the_same_state_byte_for_byte() {
 
 #[test]
 fn an_edit_shows_the_new_frame_and_a_broken_one_its_place_with_the_last_frame_kept() {
+    if let Some(why) = crate::common::windows_unavailable() {
+        eprintln!("skipped: {why}");
+        return;
+    }
     let out = scratch("view-reload");
     let shaders = out.join("shaders");
     copy_tree(Composer::default().shader_root(), &shaders);

@@ -90,6 +90,24 @@ pub fn features_with(v: &Variant, overrides: &[(&str, bool)]) -> Vec<(&'static s
 
 /// Every feature flag the shaders may test, with its value for `v`. All flags are always
 /// set (true or false): the composer treats an unset flag as an error.
+/// The test mode that shows what another rasteriser's depth would do: every marking pass
+/// reads the depth buffer moved by N units in the last place, up at pixels whose x + y is
+/// even and down at the others (`common/depth.wesl`, `perturbed`), as a GPU whose
+/// interpolation or rounding differs from lavapipe's may store it. Unset or 0: off.
+pub const PERTURB_DEPTH_VAR: &str = "CLUSTERLAB_PERTURB_DEPTH_ULPS";
+
+/// Most units in the last place the test mode may move a depth.
+pub const MAX_PERTURB_DEPTH_ULPS: u32 = 1 << 16;
+
+/// N of [`PERTURB_DEPTH_VAR`] (0 when unset or not a number: `check_environment` refuses
+/// such a value before anything runs).
+pub fn perturbed_depth_ulps() -> u32 {
+    std::env::var(PERTURB_DEPTH_VAR)
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(0)
+}
+
 pub fn feature_flags(v: &Variant) -> Vec<(&'static str, bool)> {
     let p = v.pipeline;
     let clusters = v.clusters();
@@ -152,6 +170,7 @@ pub fn feature_flags(v: &Variant) -> Vec<(&'static str, bool)> {
             v.msaa.on() && v.msaa.resolve == MsaaResolve::Tonemapped,
         ),
         ("reversed_z", v.depth.reversed_z),
+        ("perturbed_depth", perturbed_depth_ulps() > 0),
         ("depth_unorm24", v.depth.format == DepthFormat::Unorm24),
         // The device forces early depth tests (`Gpu::early_depth`; off for an instrumented
         // frame where it does not, whose passes then test depth themselves), and the pass is
@@ -296,12 +315,18 @@ pub fn constants_module(v: &Variant) -> String {
         ("CANDIDATES", candidates),
         ("KEPT", kept),
         ("HISTORY_FRAMES", history),
+        ("PERTURB_DEPTH_ULPS", perturbed_depth_ulps()),
     ]);
     // The CPU twins' slack and clamps, in single precision: the same numbers on both sides.
     let f32s = [
         ("BOUNDS_PADDING", twin::BOUNDS_PADDING as f32),
         ("PLANE_SLACK", twin::PLANE_SLACK as f32),
         ("MARK_MARGIN", twin::MARK_MARGIN as f32),
+        (
+            "INTERPOLATION_PRECISION",
+            twin::INTERPOLATION_PRECISION as f32,
+        ),
+        ("UNORM24_DEPTH_STEP", twin::UNORM24_DEPTH_STEP as f32),
         ("CONE_COS_SLACK", twin::CONE_COS_SLACK as f32),
         ("SPOT_SLACK", twin::SPOT_SLACK as f32),
         ("MIN_DISTANCE_SQUARED", shading::MIN_DISTANCE_SQUARED as f32),

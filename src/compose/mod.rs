@@ -110,8 +110,20 @@ impl Default for Composer {
     }
 }
 
-/// Refuse `CLUSTERLAB_SHADERS` when it does not name a folder.
+/// Refuse `CLUSTERLAB_SHADERS` when it does not name a folder, and a depth perturbation
+/// (`features::PERTURB_DEPTH_VAR`) that is not a number of steps.
 pub fn check_environment() -> Result<(), String> {
+    if let Ok(value) = std::env::var(features::PERTURB_DEPTH_VAR)
+        && !value
+            .parse::<u32>()
+            .is_ok_and(|n| n <= features::MAX_PERTURB_DEPTH_ULPS)
+    {
+        return Err(format!(
+            "{}=`{value}` is not a number of units in the last place: give 0 to {} (a test mode), or unset it",
+            features::PERTURB_DEPTH_VAR,
+            features::MAX_PERTURB_DEPTH_ULPS
+        ));
+    }
     let Some(dir) = std::env::var_os("CLUSTERLAB_SHADERS") else {
         return Ok(());
     };

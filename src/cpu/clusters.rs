@@ -385,10 +385,45 @@ pub fn light_touches_cluster(
 }
 
 /// Marking finds a sample's depth from the depth buffer, shading from its surface; the two
-/// may round to different sides of a slice boundary, so marking also marks the slices at
-/// z (1 -/+ MARK_MARGIN) and 2.5D cells span [z (1 - MARK_MARGIN), z (1 + MARK_MARGIN)]
-/// (the shaders' `MARK_MARGIN`, generated from this).
+/// may round to different sides of a slice boundary, so marking marks every slice of
+/// [z (1 - m), z (1 + m)] and 2.5D cells span it, m = [`depth_margin`]. MARK_MARGIN is
+/// the part of m that covers the f32 arithmetic on both sides (the depth rebuilt from the
+/// buffer, the surface's view depth: a few f32 steps, under 1e-6) and the surface's own
+/// interpolation (1 part in 1e5, [`INTERPOLATION_PRECISION`]), with room to spare (the
+/// shaders' `MARK_MARGIN`, generated from this).
 pub const MARK_MARGIN: f64 = 1e-3;
+
+/// The precision Vulkan and OpenGL ES require of interpolation at a fragment: 1 part in
+/// 1e5 of the value. A rasteriser may store a depth that far from the exact one (lavapipe
+/// stores it within an f32 step; other GPUs do not), and the view depth rebuilt from it
+/// moves by that much times the mapping's amplification (`depth_margin`).
+pub const INTERPOLATION_PRECISION: f64 = 1e-5;
+
+/// How far, relative to `z`, the view depth shading computes from a sample's surface may lie
+/// from `z`, the view depth rebuilt from the sample's stored depth `d` (near plane `near`):
+/// MARK_MARGIN, plus the stored depth's interpolation error (INTERPOLATION_PRECISION of d)
+/// carried through the mapping: |dz/dd| d / z is (z - near) / near with standard depth
+/// (d = f (z - n) / (z (f - n)), or 1 - n / z with an infinite far plane: a depth near 1
+/// holds the far view depths in few steps) and at most 1 with reversed depth (d = n / z,
+/// or n (f - z) / (z (f - n))). A 24-bit depth also rounds to steps of 1 / (2^24 - 1),
+/// which move z by up to a step times |dz/dd| <= z^2 / near, so z / near steps relative.
+/// The shaders' `depth_margin` is this, in f32.
+pub fn depth_margin(z: f64, near: f64, reversed: bool, unorm24: bool) -> f64 {
+    let amplification = if reversed {
+        1.0
+    } else {
+        (z - near).max(0.0) / near
+    };
+    let step = if unorm24 {
+        UNORM24_DEPTH_STEP * z / near
+    } else {
+        0.0
+    };
+    MARK_MARGIN + INTERPOLATION_PRECISION * amplification + step
+}
+
+/// One step of a 24-bit normalized depth buffer.
+pub const UNORM24_DEPTH_STEP: f64 = 1.0 / 16_777_215.0;
 
 /// Cells of a cluster's sample depth range in 2.5D culling: the bits of a u32 (the shaders'
 /// `DEPTH_CELLS`, generated from this).

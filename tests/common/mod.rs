@@ -227,6 +227,14 @@ impl Cli {
     }
 }
 
+/// Why the viewer cannot open a window here, if it cannot: no display and no `xvfb-run`
+/// (Debian's package xvfb). Its tests are then skipped, saying so; CI installs xvfb.
+pub fn windows_unavailable() -> Option<&'static str> {
+    let display = clusterlab::view::missing_display().is_none();
+    let xvfb = Command::new("xvfb-run").arg("--help").output().is_ok();
+    (!display && !xvfb).then_some("no display and no xvfb-run (apt-get install -y xvfb)")
+}
+
 /// `clusterlab view ARGS` on a display: the session's own, else a virtual one of its own
 /// through `xvfb-run` (Debian's package xvfb, which CI installs), each on its own server
 /// number so that tests running side by side do not race for one.
