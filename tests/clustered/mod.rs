@@ -384,7 +384,8 @@ fn every_shipped_clustered_variant_with_exact_lists_equals_naive() {
 
 /// The boxes the GPU builds are the CPU twin's: equal to f32 rounding (16 ULP of the
 /// corner's largest coordinate, far inside the 1e-4 padding both add), on exponential,
-/// Olsson and linear grids.
+/// Olsson and linear grids, and on the first two to what WGSL allows its `exp2` and `log2`
+/// (an NVIDIA H200 was 1.0e-6 off on an Olsson box, past the 16 ULP lavapipe keeps).
 #[test]
 fn gpu_cluster_boxes_are_the_twins() {
     let gpu = gpu();
@@ -401,6 +402,18 @@ fn gpu_cluster_boxes_are_the_twins() {
         ),
     ];
     for (name, v) in variants {
+        // A slice's depth is near exp2(x), x = k log2(b) for slice k of n (b: Olsson's ratio
+        // or (far / near)^(1 / n)), so |x| <= log2(far / near). WGSL allows exp2 3 + 2|x|
+        // ULP and log2 2^-21 absolute on [0.5, 2] (3 ULP elsewhere, less here), which k
+        // multiplies: a relative error of (3 + 2|x|) 2^-24 + ln 2 n 2^-21 at most.
+        let transcendental = match v.clusters().slicing {
+            ZSlicing::Linear => 0.0,
+            _ => {
+                let span = (scene.camera.far / scene.camera.near).log2();
+                let n = v.clusters().grid.2 as f64;
+                (3.0 + 2.0 * span) * 2f64.powi(-24) + std::f64::consts::LN_2 * n * 2f64.powi(-21)
+            }
+        };
         let mut r = Renderer::new(&gpu, &Composer::default(), &v, &scene).unwrap();
         r.render().unwrap();
         let boxes = r.cluster_bounds().unwrap().expect("clustered");
@@ -417,7 +430,7 @@ fn gpu_cluster_boxes_are_the_twins() {
                 for axis in 0..3 {
                     let (h, e) = (corner[axis] as f64, expected[axis]);
                     assert!(
-                        (h - e).abs() <= 16.0 * 2f64.powi(-24) * scale,
+                        (h - e).abs() <= (16.0 * 2f64.powi(-24) + transcendental) * scale,
                         "{name}: cluster {c} axis {axis}: GPU {h}, twin {e}"
                     );
                 }
