@@ -99,16 +99,65 @@ fn rank(info: &wgpu::AdapterInfo) -> (u8, bool) {
     (kind, info.backend != wgpu::Backend::Vulkan)
 }
 
-/// The adapter a run uses for `request`, or why there is none.
+/// The adapter a run uses for `request` (the best of those that can run clusterlab's
+/// pipelines), or why there is none.
 pub fn pick(request: &Request) -> Result<wgpu::Adapter, GpuError> {
     let tries = request.tries();
+    let mut unusable = Vec::new();
     for backends in &tries {
-        if let Some(adapter) = enumerate(*backends).into_iter().next() {
-            return Ok(adapter);
+        for adapter in enumerate(*backends) {
+            match missing_requirements(&adapter) {
+                None => return Ok(adapter),
+                Some(why) => unusable.push(format!("{}: {why}", adapter.get_info().name)),
+            }
         }
+    }
+    if !unusable.is_empty() {
+        unusable.dedup();
+        return Err(GpuError::Device(format!(
+            "no adapter here can run clusterlab's pipelines ({}); `clusterlab adapters` lists what each has",
+            unusable.join("; ")
+        )));
     }
     let backends = tries.last().map(|b| format!("{b:?}")).unwrap_or_default();
     Err(GpuError::NoAdapter { backends })
+}
+
+/// What `adapter` lacks of what every frame needs, if anything (an OpenGL 3.3 adapter has
+/// no storage buffers: wgpu refused its pipelines with a raw error). See [`lacks`].
+pub fn missing_requirements(adapter: &wgpu::Adapter) -> Option<String> {
+    lacks(
+        adapter.get_downlevel_capabilities().flags,
+        &adapter.limits(),
+    )
+}
+
+/// What an adapter with downlevel `flags` and `limits` lacks: compute shaders (cluster
+/// bounds, light assignment, post effects), storage writes in fragment shaders (the
+/// counters), indirect dispatch (bloom), and the storage buffers a stage binds (wgpu's
+/// downlevel default of 4, which the smallest pipeline needs: naive forward binds 3).
+pub fn lacks(flags: wgpu::DownlevelFlags, limits: &wgpu::Limits) -> Option<String> {
+    use wgpu::DownlevelFlags as F;
+    let needed = wgpu::Limits::downlevel_defaults().max_storage_buffers_per_shader_stage;
+    let mut missing: Vec<String> = [
+        (F::COMPUTE_SHADERS, "compute shaders"),
+        (
+            F::FRAGMENT_WRITABLE_STORAGE,
+            "storage writes in fragment shaders",
+        ),
+        (F::INDIRECT_EXECUTION, "indirect dispatch"),
+    ]
+    .into_iter()
+    .filter(|(f, _)| !flags.contains(*f))
+    .map(|(_, what)| what.to_string())
+    .collect();
+    if limits.max_storage_buffers_per_shader_stage < needed {
+        missing.push(format!(
+            "{} storage buffers a stage of the {needed} needed",
+            limits.max_storage_buffers_per_shader_stage
+        ));
+    }
+    (!missing.is_empty()).then(|| format!("unusable: no {}", missing.join(", no ")))
 }
 
 /// The variable that masks optional features from the device request, so a machine that
@@ -287,6 +336,8 @@ pub struct Capability {
 #[derive(Clone, Debug, Serialize)]
 pub struct AdapterReport {
     pub name: String,
+    /// Why clusterlab cannot run its pipelines here, when it cannot (`lacks`).
+    pub unusable: Option<String>,
     pub backend: String,
     pub device_type: String,
     pub driver: String,
@@ -400,6 +451,7 @@ fn report(adapter: &wgpu::Adapter, chosen: bool) -> AdapterReport {
         && timestamps_are_per_pass(info.device_type);
     AdapterReport {
         name: info.name.clone(),
+        unusable: missing_requirements(adapter),
         backend: info.backend.to_string(),
         device_type: format!("{:?}", info.device_type),
         driver: super::driver_string(&info),
@@ -532,6 +584,9 @@ impl Survey {
                 }
             );
             let _ = writeln!(s, "   driver: {}", a.driver);
+            if let Some(why) = &a.unusable {
+                let _ = writeln!(s, "   {why}");
+            }
             if a.name.starts_with("llvmpipe") {
                 let threads =
                     crate::gpu::software_gpu_threads().unwrap_or_else(|| "one per core".into());
@@ -646,5 +701,34 @@ impl DeviceRequest {
             limits: LimitSet::Adapter,
             without: masked_features().map_err(GpuError::Setting)?,
         })
+    }
+}
+
+#[cfg(test)]
+mod requirement_tests {
+    use super::*;
+
+    /// An OpenGL 3.3 adapter (WebGL 2's limits: no storage buffers, no compute) is named
+    /// unusable with what it lacks; one with everything (lavapipe's flags, downlevel limits)
+    /// is not.
+    #[test]
+    fn an_adapter_without_storage_buffers_is_unusable_and_says_why() {
+        let gl33 = lacks(
+            wgpu::DownlevelFlags::empty(),
+            &wgpu::Limits::downlevel_webgl2_defaults(),
+        )
+        .expect("unusable");
+        assert!(
+            gl33.contains("no compute shaders")
+                && gl33.contains("0 storage buffers a stage of the 4 needed"),
+            "{gl33}"
+        );
+        assert_eq!(
+            lacks(
+                wgpu::DownlevelFlags::all(),
+                &wgpu::Limits::downlevel_defaults()
+            ),
+            None
+        );
     }
 }
