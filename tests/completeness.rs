@@ -121,14 +121,25 @@ fn every_normal_codec_has_a_kernel_check_a_stress_run_and_a_study_row() {
                 missing.push(format!("{}: no row in `study codecs`", c.label()));
             }
             let n = [0.6f32, 0.0, 0.8, 0.0];
-            let want = normals::encode(c, glam::DVec3::new(0.6, 0.0, 0.8).normalize());
+            let unit = glam::DVec3::new(0.6, 0.0, 0.8).normalize();
+            let want = normals::encode(c, unit);
+            // The precise encoder picks the neighbouring code that decodes closest to the
+            // normal: two whose cosines to it differ by less than the f32 rounding of that
+            // comparison (a few steps of 2^-24; an NVIDIA H200 chose [46811, 32768] where
+            // the twin has [46810, 32767]) are equally right.
+            let as_close = |code: [u32; 2]| {
+                let cos = |q| normals::decode(c, q).map_or(-1.0, |d| d.normalize().dot(unit));
+                want.is_some_and(|w| cos(code) >= cos(w) - 8.0 * 2f64.powi(-24))
+            };
             match gpu_codecs(&gpu, &composer, c, &[n], &[[0, 0]]) {
                 Err(e) => missing.push(format!("{}: no twin kernel check: {e}", c.label())),
-                Ok(r) if Some(r.codes[0]) != want => missing.push(format!(
-                    "{}: GPU code {:?}, CPU twin {want:?}",
-                    c.label(),
-                    r.codes[0]
-                )),
+                Ok(r) if Some(r.codes[0]) != want && !as_close(r.codes[0]) => {
+                    missing.push(format!(
+                        "{}: GPU code {:?}, CPU twin {want:?}",
+                        c.label(),
+                        r.codes[0]
+                    ))
+                }
                 Ok(_) => {}
             }
         }
