@@ -213,11 +213,19 @@ impl Case {
         let args: Vec<&str> = self.args.iter().map(String::as_str).collect();
         let env: Vec<(&str, &str)> = self.env.iter().map(|(k, v)| (*k, v.as_str())).collect();
         let (code, text) = if self.in_viewer {
-            let (code, text) = common::viewer(&args)
-                .dir(s.path(self.cwd))
-                .envs(&env)
-                .run()
-                .outcome();
+            let play = || {
+                common::viewer(&args)
+                    .dir(s.path(self.cwd))
+                    .envs(&env)
+                    .run()
+                    .outcome()
+            };
+            // A virtual display that did not come up (seen once in a loaded full run) is
+            // the machine's, not the viewer's: tried once more.
+            let (mut code, mut text) = play();
+            if text.contains("Failed to open connection to X server") {
+                (code, text) = play();
+            }
             (code, text.replace(s.root.to_str().unwrap(), "SANDBOX"))
         } else {
             s.run(self.cwd, &args, &env)
@@ -1327,19 +1335,26 @@ fn a_viewer_script_writes_only_under_out_and_edits_only_what_it_watches() {
         &s,
         r#"Edit(file: "variants/forward_plus.ron", find: "description: \"", replace: "description: \"mine: ")"#,
     );
-    let (code, text) = common::viewer([
-        "--size",
-        "16x9",
-        "--lights",
-        "4",
-        "--out",
-        "out",
-        "--script",
-        "script.ron",
-    ])
-    .dir(s.path("project"))
-    .run()
-    .outcome();
+    let play = || {
+        common::viewer([
+            "--size",
+            "16x9",
+            "--lights",
+            "4",
+            "--out",
+            "out",
+            "--script",
+            "script.ron",
+        ])
+        .dir(s.path("project"))
+        .run()
+        .outcome()
+    };
+    // As in `Case::check_now`: a display that did not come up is tried once more.
+    let (mut code, mut text) = play();
+    if text.contains("Failed to open connection to X server") {
+        (code, text) = play();
+    }
     assert_eq!(code, Some(0), "{text}");
     let meta = std::fs::metadata(&variant).unwrap();
     assert_eq!(meta.permissions().mode() & 0o777, 0o600);
