@@ -213,19 +213,7 @@ impl Case {
         let args: Vec<&str> = self.args.iter().map(String::as_str).collect();
         let env: Vec<(&str, &str)> = self.env.iter().map(|(k, v)| (*k, v.as_str())).collect();
         let (code, text) = if self.in_viewer {
-            let play = || {
-                common::viewer(&args)
-                    .dir(s.path(self.cwd))
-                    .envs(&env)
-                    .run()
-                    .outcome()
-            };
-            // A virtual display that did not come up (seen once in a loaded full run) is
-            // the machine's, not the viewer's: tried once more.
-            let (mut code, mut text) = play();
-            if text.contains("Failed to open connection to X server") {
-                (code, text) = play();
-            }
+            let (code, text) = play_viewer(&s.path(self.cwd), &args, &env);
             (code, text.replace(s.root.to_str().unwrap(), "SANDBOX"))
         } else {
             s.run(self.cwd, &args, &env)
@@ -1335,26 +1323,17 @@ fn a_viewer_script_writes_only_under_out_and_edits_only_what_it_watches() {
         &s,
         r#"Edit(file: "variants/forward_plus.ron", find: "description: \"", replace: "description: \"mine: ")"#,
     );
-    let play = || {
-        common::viewer([
-            "--size",
-            "16x9",
-            "--lights",
-            "4",
-            "--out",
-            "out",
-            "--script",
-            "script.ron",
-        ])
-        .dir(s.path("project"))
-        .run()
-        .outcome()
-    };
-    // As in `Case::check_now`: a display that did not come up is tried once more.
-    let (mut code, mut text) = play();
-    if text.contains("Failed to open connection to X server") {
-        (code, text) = play();
-    }
+    let args = [
+        "--size",
+        "16x9",
+        "--lights",
+        "4",
+        "--out",
+        "out",
+        "--script",
+        "script.ron",
+    ];
+    let (code, text) = play_viewer(&s.path("project"), &args, &[]);
     assert_eq!(code, Some(0), "{text}");
     let meta = std::fs::metadata(&variant).unwrap();
     assert_eq!(meta.permissions().mode() & 0o777, 0o600);
@@ -1363,6 +1342,18 @@ fn a_viewer_script_writes_only_under_out_and_edits_only_what_it_watches() {
             .unwrap()
             .contains("mine: ")
     );
+}
+
+/// `clusterlab view ARGS` in `dir` on a display: its exit code and output. A virtual
+/// display that did not come up (seen once in a loaded full run) is the machine's fault,
+/// not the viewer's: it is tried once more.
+fn play_viewer(dir: &Path, args: &[&str], env: &[(&str, &str)]) -> (Option<i32>, String) {
+    let play = || common::viewer(args).dir(dir).envs(env).run().outcome();
+    let (code, text) = play();
+    if text.contains("Failed to open connection to X server") {
+        return play();
+    }
+    (code, text)
 }
 
 /// A script of one step after the first frame, as `project/script.ron`.

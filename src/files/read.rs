@@ -88,31 +88,9 @@ pub struct ReadError {
 /// The bytes of the regular file `path`, at most `kind.limit` of them. Devices, pipes and
 /// folders are refused without reading them (a pipe would block, a device never end).
 pub fn read(path: &Path, kind: Kind) -> Result<Vec<u8>, ReadError> {
-    let fail = |why: String, missing: bool| ReadError {
-        path: shown(path),
-        why,
-        missing,
-    };
-    let meta = std::fs::metadata(path).map_err(|e| {
-        fail(
-            format!("cannot read: {}", describe(&e)),
-            e.kind() == std::io::ErrorKind::NotFound,
-        )
-    })?;
-    let not_regular = || {
-        fail(
-            format!(
-                "not a regular file (a folder, device or pipe): {} must be one",
-                kind.what
-            ),
-            false,
-        )
-    };
-    if !meta.is_file() {
-        return Err(not_regular());
-    }
     let too_large = |bytes: String| {
-        fail(
+        failure(
+            path,
             format!(
                 "{bytes} bytes, over the {} bytes {} may have ({})",
                 kind.limit, kind.what, kind.why
@@ -120,18 +98,14 @@ pub fn read(path: &Path, kind: Kind) -> Result<Vec<u8>, ReadError> {
             false,
         )
     };
-    if meta.len() > kind.limit {
-        return Err(too_large(meta.len().to_string()));
+    let (file, length) = open_regular(path, kind)?;
+    if length > kind.limit {
+        return Err(too_large(length.to_string()));
     }
-    let file = open_without_blocking(path).map_err(|e| fail(describe(&e), false))?;
-    // The path may have been replaced between the two looks.
-    if !file.metadata().is_ok_and(|m| m.is_file()) {
-        return Err(not_regular());
-    }
-    let mut bytes = Vec::with_capacity(meta.len() as usize);
+    let mut bytes = Vec::with_capacity(length as usize);
     file.take(kind.limit + 1)
         .read_to_end(&mut bytes)
-        .map_err(|e| fail(format!("cannot read: {}", describe(&e)), false))?;
+        .map_err(|e| failure(path, format!("cannot read: {}", describe(&e)), false))?;
     if bytes.len() as u64 > kind.limit {
         return Err(too_large(format!("more than {}", kind.limit)));
     }
@@ -141,32 +115,50 @@ pub fn read(path: &Path, kind: Kind) -> Result<Vec<u8>, ReadError> {
 /// The first `n` bytes of the regular file `path` (fewer when it is shorter) and its
 /// length, under [`read`]'s rules: a header looked at before a large file is read whole.
 pub fn read_head(path: &Path, n: u64, kind: Kind) -> Result<(Vec<u8>, u64), ReadError> {
-    let fail = |why: String, missing: bool| ReadError {
+    let (file, length) = open_regular(path, kind)?;
+    let mut bytes = Vec::new();
+    file.take(n)
+        .read_to_end(&mut bytes)
+        .map_err(|e| failure(path, format!("cannot read: {}", describe(&e)), false))?;
+    Ok((bytes, length))
+}
+
+fn failure(path: &Path, why: String, missing: bool) -> ReadError {
+    ReadError {
         path: shown(path),
         why,
         missing,
-    };
+    }
+}
+
+/// `path` opened for reading, and its length, when it is a regular file (looked at before
+/// opening, without blocking, and again after: it may have been replaced between).
+fn open_regular(path: &Path, kind: Kind) -> Result<(std::fs::File, u64), ReadError> {
     let meta = std::fs::metadata(path).map_err(|e| {
-        fail(
+        failure(
+            path,
             format!("cannot read: {}", describe(&e)),
             e.kind() == std::io::ErrorKind::NotFound,
         )
     })?;
-    if !meta.is_file() {
-        return Err(fail(
+    let not_regular = || {
+        failure(
+            path,
             format!(
                 "not a regular file (a folder, device or pipe): {} must be one",
                 kind.what
             ),
             false,
-        ));
+        )
+    };
+    if !meta.is_file() {
+        return Err(not_regular());
     }
-    let file = open_without_blocking(path).map_err(|e| fail(describe(&e), false))?;
-    let mut bytes = Vec::new();
-    file.take(n)
-        .read_to_end(&mut bytes)
-        .map_err(|e| fail(format!("cannot read: {}", describe(&e)), false))?;
-    Ok((bytes, meta.len()))
+    let file = open_without_blocking(path).map_err(|e| failure(path, describe(&e), false))?;
+    if !file.metadata().is_ok_and(|m| m.is_file()) {
+        return Err(not_regular());
+    }
+    Ok((file, meta.len()))
 }
 
 /// The text of `path` (see [`read`] and [`text`]).
