@@ -1269,23 +1269,10 @@ fn a_viewer_script_writes_only_under_out_and_edits_only_what_it_watches() {
         return;
     }
     let play = |name| {
-        case(
-            name,
-            &[
-                "--size",
-                "16x9",
-                "--lights",
-                "4",
-                "--out",
-                "out",
-                "--script",
-                "script.ron",
-            ],
-            1,
-        )
-        .in_viewer()
-        .allow("project/out")
-        .allow("project/script.ron")
+        case(name, &SCRIPT_RUN, 1)
+            .in_viewer()
+            .allow("project/out")
+            .allow("project/script.ron")
     };
     run_all(vec![
         (play("script_state_absolute"), |s| {
@@ -1323,17 +1310,7 @@ fn a_viewer_script_writes_only_under_out_and_edits_only_what_it_watches() {
         &s,
         r#"Edit(file: "variants/forward_plus.ron", find: "description: \"", replace: "description: \"mine: ")"#,
     );
-    let args = [
-        "--size",
-        "16x9",
-        "--lights",
-        "4",
-        "--out",
-        "out",
-        "--script",
-        "script.ron",
-    ];
-    let (code, text) = play_viewer(&s.path("project"), &args, &[]);
+    let (code, text) = play_viewer(&s.path("project"), &SCRIPT_RUN, &[]);
     assert_eq!(code, Some(0), "{text}");
     let meta = std::fs::metadata(&variant).unwrap();
     assert_eq!(meta.permissions().mode() & 0o777, 0o600);
@@ -1343,6 +1320,19 @@ fn a_viewer_script_writes_only_under_out_and_edits_only_what_it_watches() {
             .contains("mine: ")
     );
 }
+
+/// `clusterlab view`'s arguments for a script case: a tiny frame, `project/script.ron`
+/// played, writing into `project/out`.
+const SCRIPT_RUN: [&str; 8] = [
+    "--size",
+    "16x9",
+    "--lights",
+    "4",
+    "--out",
+    "out",
+    "--script",
+    "script.ron",
+];
 
 /// `clusterlab view ARGS` in `dir` on a display: its exit code and output. A virtual
 /// display that did not come up (seen once in a loaded full run) is the machine's fault,
