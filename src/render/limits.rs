@@ -65,6 +65,7 @@ fn check_samples(gpu: &Gpu, variant: &Variant) -> Result<(), RenderError> {
     }
     if variant.depth_prepass {
         targets.push(("shading depth", super::resources::SHADING_DEPTH_FORMAT));
+        targets.push(("sample owner", super::resources::SHADING_DEPTH_FORMAT));
     }
     Ok(gpu.check_samples(samples, &targets)?)
 }

@@ -54,7 +54,11 @@ pub fn pipelines(
         RasterPass::DepthPrepass if variant.msaa.on() => {
             let target = color_target(super::resources::SHADING_DEPTH_FORMAT);
             let depth = d.state(d.compare(), true);
-            vec![build(Some("fs_shading_depth"), &[target], depth)?]
+            vec![build(
+                Some("fs_shading_depth"),
+                &[target.clone(), target],
+                depth,
+            )?]
         }
         // Masked materials need a fragment shader that discards.
         RasterPass::DepthPrepass => {
@@ -170,6 +174,7 @@ pub fn encode(
             targets
                 .shading_depth
                 .iter()
+                .chain(&targets.sample_owner)
                 .map(|t| clear_attachment(&t.view))
                 .collect(),
             depth(true),

@@ -223,7 +223,8 @@ fn upload_textures(
 /// Targets that hold f32 data exactly on every adapter: the f32 bits in rgba32uint
 /// (rgba32float is not renderable through wgpu's OpenGL backend).
 pub const F32_BITS_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Uint;
-/// The shading depth of multisampled forward frames: f32 bits.
+/// Multisampled forward frames' record of each sample's kept fragment: its shading depth as
+/// f32 bits, and its provoking vertex (`common/sample_owner.wesl`).
 pub const SHADING_DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Uint;
 /// The display format; sRGB encoding is done in the shader so the CPU can match it.
 pub const LDR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
@@ -332,8 +333,10 @@ pub struct Targets {
     pub hdr: Target,
     pub hdr_samples: Option<Target>,
     /// Multisampled forward frames with a pre-pass: the depth each sample is shaded at
-    /// (`clustering/shading_depth.wesl`), as f32 bits.
+    /// (`clustering/shading_depth.wesl`), as f32 bits, and the provoking vertex of the
+    /// fragment kept there (`common/sample_owner.wesl`).
     pub shading_depth: Option<Target>,
+    pub sample_owner: Option<Target>,
     pub ldr: Target,
     pub gbuffer: Vec<(&'static str, Target)>,
     /// StaticDynamic's still image (`compose::keeps_still_image`): each pixel's still
@@ -471,6 +474,9 @@ impl FrameResources {
             shading_depth: (variant.msaa.on() && variant.depth_prepass).then(|| {
                 Target::multisampled(gpu, "shading depth", (w, h), SHADING_DEPTH_FORMAT, samples)
             }),
+            sample_owner: (variant.msaa.on() && variant.depth_prepass).then(|| {
+                Target::multisampled(gpu, "sample owner", (w, h), SHADING_DEPTH_FORMAT, samples)
+            }),
             ldr: Target::new(gpu, "ldr", w, h, LDR_FORMAT),
             gbuffer: if variant.pipeline.is_deferred() {
                 super::gbuffer::targets(gpu, variant, w, h)
@@ -573,6 +579,7 @@ impl FrameResources {
         match name {
             "depth_texture" => Some(texture(&self.targets.depth)),
             "shading_depth" => self.targets.shading_depth.as_ref().map(texture),
+            "sample_owner" => self.targets.sample_owner.as_ref().map(texture),
             "transparent_depths" => self
                 .transparent_depths
                 .as_ref()

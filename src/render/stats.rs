@@ -289,6 +289,7 @@ impl<'g> Renderer<'g> {
             .into_iter()
             .chain(&t.hdr_samples)
             .chain(&t.shading_depth)
+            .chain(&t.sample_owner)
             .chain(t.gbuffer.iter().map(|(_, t)| t))
             .map(size)
             .sum::<u32>()

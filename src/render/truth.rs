@@ -4,14 +4,16 @@
 //!
 //! The pre-pass matters: with it, shading keeps every fragment whose depth *equals* the
 //! nearest, so where two surfaces tie exactly (along a shared edge) the last one drawn
-//! wins, where a plain `Less` test keeps the first.
+//! wins, where a plain `Less` test keeps the first. Multisampled, the pre-pass also records
+//! each sample's kept fragment and the truth writes only its own samples, as the variant's
+//! shading pass does (`common/sample_owner.wesl`).
 
 use super::RenderError;
 use super::passes::{
     ComputePipelines, clear_attachment, color_target, render_pipeline, set_compute_groups,
 };
 use super::reflect::{PassLayout, Slot};
-use super::resources::{DepthSetup, SceneBuffers, multisampled_target};
+use super::resources::{DepthSetup, SHADING_DEPTH_FORMAT, SceneBuffers, multisampled_target};
 use crate::common::Vertex;
 use crate::compose::Composer;
 use crate::cpu::truth::{BlendedFragment, MAX_BLENDED_FRAGMENTS, RasterTruth};
@@ -67,7 +69,26 @@ pub fn raster_truth(
     let (textures, blended, blended_offsets) =
         gpu.scoped("raster truth", || -> Result<_, RenderError> {
             let buffers = SceneBuffers::upload(gpu, scene, depth.mapping);
-            let frame = |slot: &Slot| buffers.frame_binding(slot.name);
+            let samples = variant.msaa.samples;
+            // Multisampled after a pre-pass, the pre-pass decides which fragment each sample
+            // shows, as in the variant (`common/sample_owner.wesl`).
+            let kept = |label| {
+                (variant.msaa.on() && prepass.is_some()).then(|| {
+                    multisampled_target(gpu, label, (w, h), SHADING_DEPTH_FORMAT, samples)
+                        .create_view(&Default::default())
+                })
+            };
+            let (shading_depth, sample_owner) =
+                (kept("truth shading depth"), kept("truth sample owner"));
+            let frame = |slot: &Slot| match slot.name {
+                "shading_depth" => shading_depth
+                    .as_ref()
+                    .map(wgpu::BindingResource::TextureView),
+                "sample_owner" => sample_owner
+                    .as_ref()
+                    .map(wgpu::BindingResource::TextureView),
+                name => buffers.frame_binding(name),
+            };
             let layout = PassLayout::of(gpu, &pass)?;
             let groups = layout.bind_groups(gpu, "truth", frame)?;
             let vertex = [Some(SceneBuffers::vertex_layout())];
@@ -106,22 +127,27 @@ pub fn raster_truth(
                 Some(p) => {
                     let layout = PassLayout::of(gpu, p)?;
                     let groups = layout.bind_groups(gpu, "truth depth pre-pass", frame)?;
+                    // Masked materials discard in the pre-pass too.
+                    let (fs, targets) = if shading_depth.is_some() {
+                        let target = color_target(SHADING_DEPTH_FORMAT);
+                        (Some("fs_shading_depth"), vec![target.clone(), target])
+                    } else {
+                        (scene.has_masks().then_some("fs_mask"), Vec::new())
+                    };
                     let pipeline = render_pipeline(
                         gpu,
                         p,
                         &layout.pipeline,
-                        // Masked materials discard in the pre-pass too.
-                        ("vs_main", scene.has_masks().then_some("fs_mask")),
+                        ("vs_main", fs),
                         &vertex,
-                        &[],
+                        &targets,
                         Some(depth.state(depth.compare(), true)),
-                        variant.msaa.samples,
+                        samples,
                     )?;
                     Some((pipeline, groups))
                 }
                 None => None,
             };
-            let samples = variant.msaa.samples;
             let textures: Vec<wgpu::Texture> = ["truth position", "truth normal", "truth albedo"]
                 .iter()
                 .map(|label| multisampled_target(gpu, label, (w, h), TRUTH_FORMAT, samples))
@@ -152,7 +178,11 @@ pub fn raster_truth(
                             })
                             .collect()
                     } else {
-                        Vec::new()
+                        shading_depth
+                            .iter()
+                            .chain(&sample_owner)
+                            .map(clear_attachment)
+                            .collect()
                     };
                     let mut rp = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                         label: Some("truth"),

@@ -1394,6 +1394,36 @@ fn spot_cases(cases: &mut Vec<Case>) {
             multisampled(),
         ));
     }
+    cases.push(case(
+        TIES_CASE,
+        "4 samples, two floors in one plane cut along other diagonals: samples where they tie",
+        coplanar_ties(),
+        multisampled(),
+    ));
+}
+
+/// The name of the case whose samples tie between two surfaces (`coplanar_ties`).
+pub const TIES_CASE: &str = "msaa_coplanar_ties";
+
+/// The room with a second floor in the floor's plane, of another colour, cut along the other
+/// diagonal and over other corners: at many samples the two interpolate the same depth and
+/// at their pixels' centres different ones, so a pass that keeps whatever ties the nearest
+/// fragment shades (and counts) fragments the depth pre-pass did not keep.
+pub fn coplanar_ties() -> Scene {
+    let mut m = room();
+    let corner = |x: f64, z: f64| DVec3::new(x, 0.0, z);
+    m.quad(
+        [
+            corner(-5.0, 5.5),
+            corner(5.5, 5.5),
+            corner(5.5, -5.0),
+            corner(-5.0, -5.0),
+        ],
+        DVec3::Y,
+        RED,
+    );
+    let cam = default_camera(&m);
+    scene(TIES_CASE, SIZE, m, lattice(27, 3.0), cam)
 }
 
 /// Every pipeline at 4 samples.

@@ -5,7 +5,9 @@
 
 mod cases;
 
-pub use cases::{Case, SIZE, all as cases, codec_case_name, slicing_case_name};
+pub use cases::{
+    Case, SIZE, TIES_CASE, all as cases, codec_case_name, coplanar_ties, slicing_case_name,
+};
 
 use std::collections::HashMap;
 
