@@ -248,6 +248,11 @@ struct MatrixArgs {
     /// An earlier results.json (or its folder): show each cell's change against it.
     #[arg(long)]
     baseline: Option<PathBuf>,
+    /// An earlier matrix's result folder (it may be --out itself): take each cell whose
+    /// variant file, composed WGSL, scene, parameters, adapter and clusterlab build are all
+    /// unchanged from there, images and all, and run only the others.
+    #[arg(long)]
+    reuse: Option<PathBuf>,
     /// Run every cell as a sequence of N frames (1 to 3600) instead of one frame rendered
     /// again: a fraction of the lights moving (`--moving`, or a `moving=` sweep), the
     /// camera on its path or still; each cell's times are of the frames after the first.
@@ -1085,6 +1090,12 @@ fn matrix(args: &MatrixArgs) -> Result<bool, String> {
         .as_deref()
         .map(matrix::Results::load)
         .transpose()?;
+    let previous = args
+        .reuse
+        .as_deref()
+        .map(matrix::Previous::load)
+        .transpose()?
+        .map(std::sync::Arc::new);
     let mut cells = matrix::expand(&groups)?;
     let variant_files = matrix::variant_files(&cells);
     if let Some(shard) = args.shard {
@@ -1137,6 +1148,7 @@ fn matrix(args: &MatrixArgs) -> Result<bool, String> {
         command: std::env::args().collect(),
         variant_files,
         before_cell: None,
+        reuse: previous.clone(),
     };
     let start = Instant::now();
     let mut results = matrix::run(&mut gpu, &Composer::default(), &cells, &options);
@@ -1146,6 +1158,9 @@ fn matrix(args: &MatrixArgs) -> Result<bool, String> {
     matrix::write_report(&folder.staging, &results)?;
     folder.commit()?;
     report(&results, args.json, &args.out)?;
+    if let Some(previous) = &previous {
+        eprintln!("{}", matrix::reuse_summary(&results, &previous.dir));
+    }
     if let Some(old) = &baseline {
         eprint!("{}", matrix::compare_runs(&results, old));
     }

@@ -541,3 +541,98 @@ fn frames_by_budget_are_the_default_and_every_cell_says_how_many_it_took() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `--reuse`: a rerun on an unchanged tree runs no cell and writes the same results and
+/// images; after an edit of the GGX term (in a copy of `shaders/`, which only the GGX
+/// variants' composed WGSL holds) exactly the GGX cell runs again; after an edit of the
+/// Lambert term exactly the two that shade with it.
+#[test]
+fn a_rerun_reuses_exactly_the_cells_no_change_touched() {
+    let dir = scratch("reuse");
+    let run = |shaders: &Path, out: &Path, reuse: Option<&Path>| {
+        let mut args = vec![
+            "matrix",
+            "--variants",
+            "forward_plus",
+            "forward_plus_ggx",
+            "--scenes",
+            "atrium",
+            "--size",
+            "64x36",
+            "--frames",
+            "1",
+            "--warmup",
+            "0",
+            "--out",
+            out.to_str().unwrap(),
+        ];
+        if let Some(previous) = reuse {
+            args.extend(["--reuse", previous.to_str().unwrap()]);
+        }
+        let (ok, text) = cli(&args)
+            .env("CLUSTERLAB_SHADERS", shaders)
+            .run()
+            .succeeded();
+        assert!(ok, "{text}");
+        text
+    };
+    let shipped = common::EditedShaders::of("shading/brdf.wesl", "reuse-shipped", &[]);
+    let first = dir.join("first");
+    run(shipped.root(), &first, None);
+    let again = dir.join("again");
+    let text = run(shipped.root(), &again, Some(&first));
+    let previous = first.display();
+    assert!(
+        text.contains(&format!("reused 3 of 3 cells from {previous}; ran 0")),
+        "{text}"
+    );
+    let (a, b) = (
+        Results::load(&first).unwrap(),
+        Results::load(&again).unwrap(),
+    );
+    assert_eq!(
+        serde_json::to_value(&a.cells).unwrap(),
+        serde_json::to_value(&b.cells).unwrap()
+    );
+    for file in walk(&first.join("images")) {
+        let copy = again.join(file.strip_prefix(&first).unwrap());
+        assert!(
+            std::fs::read(&file).unwrap() == std::fs::read(&copy).unwrap(),
+            "{} differs",
+            copy.display()
+        );
+    }
+    // An edit the GGX term's WGSL keeps: only the variant that shades with it runs.
+    let ggx = common::EditedShaders::of(
+        "shading/brdf.wesl",
+        "reuse-ggx",
+        &[(
+            "let f0 = mix(vec3<f32>(0.04), base, metallic);",
+            "let f0 = mix(vec3<f32>(0.04), base, metallic) * 1.0;",
+        )],
+    );
+    let text = run(ggx.root(), &dir.join("ggx"), Some(&first));
+    assert!(
+        text.contains(&format!(
+            "reused 2 of 3 cells from {previous}; ran 1: forward_plus_ggx@atrium"
+        )),
+        "{text}"
+    );
+    // Lambert's term: the Blinn-Phong variants (the naive baseline too), not GGX.
+    let lambert = common::EditedShaders::of(
+        "shading/brdf.wesl",
+        "reuse-lambert",
+        &[(
+            "return max(dot(n, l), 0.0);",
+            "return max(dot(n, l) * 1.0, 0.0);",
+        )],
+    );
+    let text = run(lambert.root(), &dir.join("lambert"), Some(&first));
+    assert!(
+        text.contains(&format!(
+            "reused 1 of 3 cells from {previous}; ran 2: forward_plus@atrium, naive_forward@atrium"
+        )),
+        "{text}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

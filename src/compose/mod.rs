@@ -97,7 +97,35 @@ pub struct Composer {
     display_base: PathBuf,
     /// Passes composed so far, by name, root, features and constants: a matrix composes
     /// the same pass for many cells, and composing and validating it once is enough.
-    composed: Arc<Mutex<HashMap<String, ComposedPass>>>,
+    composed: Arc<Mutex<HashMap<String, Composed>>>,
+    /// Every composition asked for, in order, once `record` turned it on (`matrix --reuse`
+    /// reads which shaders a cell used from it).
+    log: Arc<Mutex<Option<Vec<Arc<Composition>>>>>,
+}
+
+/// A composed pass and how it was composed.
+type Composed = (ComposedPass, Arc<Composition>);
+
+/// How to compose a pass again: its root, features and constants.
+#[derive(Clone, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
+pub struct Recipe {
+    pub name: String,
+    pub root: String,
+    pub features: Vec<(String, bool)>,
+    pub constants: String,
+}
+
+/// A composition: its recipe and the SHA-256 of the WGSL it gave.
+#[derive(Clone, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub struct Composition {
+    pub recipe: Recipe,
+    pub wgsl_sha256: String,
+}
+
+/// SHA-256 of a text, in hex.
+pub fn sha256_hex(text: &str) -> String {
+    use sha2::Digest;
+    format!("{:x}", sha2::Sha256::digest(text.as_bytes()))
 }
 
 impl Default for Composer {
@@ -151,7 +179,47 @@ impl Composer {
             shader_root: cwd.join(shader_root),
             display_base: cwd,
             composed: Default::default(),
+            log: Default::default(),
         }
+    }
+
+    /// Log every composition from now on (`logged_since`).
+    pub fn record(&self) {
+        let mut log = self.log.lock().unwrap_or_else(|p| p.into_inner());
+        log.get_or_insert_with(Vec::new);
+    }
+
+    /// Where the log stands: what `logged_since` counts from.
+    pub fn log_mark(&self) -> usize {
+        let log = self.log.lock().unwrap_or_else(|p| p.into_inner());
+        log.as_ref().map_or(0, Vec::len)
+    }
+
+    /// The compositions asked for since `mark` (none when not recording).
+    pub fn logged_since(&self, mark: usize) -> Vec<Arc<Composition>> {
+        let log = self.log.lock().unwrap_or_else(|p| p.into_inner());
+        log.as_ref()
+            .map_or_else(Vec::new, |l| l.get(mark..).unwrap_or_default().to_vec())
+    }
+
+    /// Log compositions made earlier again: a cell that takes a cached result (a reference
+    /// frame) used the shaders that made it.
+    pub fn relog(&self, compositions: &[Arc<Composition>]) {
+        let mut log = self.log.lock().unwrap_or_else(|p| p.into_inner());
+        if let Some(l) = log.as_mut() {
+            l.extend(compositions.iter().cloned());
+        }
+    }
+
+    /// The SHA-256 of what `recipe` composes to with the shaders of now.
+    pub fn recompose(&self, recipe: &Recipe) -> Result<String, ShaderError> {
+        let features: Vec<(&str, bool)> = recipe
+            .features
+            .iter()
+            .map(|(k, v)| (k.as_str(), *v))
+            .collect();
+        let pass = self.compose_root(&recipe.name, &recipe.root, &features, &recipe.constants)?;
+        Ok(sha256_hex(&pass.wgsl))
     }
 
     pub fn shader_root(&self) -> &Path {
@@ -204,11 +272,25 @@ impl Composer {
     ) -> Result<ComposedPass, ShaderError> {
         let key = format!("{name}\0{root}\0{features:?}\0{constants}");
         let cache = || self.composed.lock().unwrap_or_else(|p| p.into_inner());
-        if let Some(hit) = cache().get(&key) {
-            return Ok(hit.clone());
-        }
-        let pass = self.compose_uncached(name, root, features, constants)?;
-        cache().insert(key, pass.clone());
+        let hit = cache().get(&key).cloned();
+        let (pass, composition) = match hit {
+            Some(hit) => hit,
+            None => {
+                let pass = self.compose_uncached(name, root, features, constants)?;
+                let composition = Arc::new(Composition {
+                    recipe: Recipe {
+                        name: name.to_string(),
+                        root: root.to_string(),
+                        features: features.iter().map(|&(k, v)| (k.to_string(), v)).collect(),
+                        constants: constants.to_string(),
+                    },
+                    wgsl_sha256: sha256_hex(&pass.wgsl),
+                });
+                cache().insert(key, (pass.clone(), composition.clone()));
+                (pass, composition)
+            }
+        };
+        self.relog(&[composition]);
         Ok(pass)
     }
 

@@ -100,7 +100,7 @@ fn owner(dir: &Path) -> Result<Owner, String> {
                 None => results = true,
                 Some(why) => return foreign(format!("its results.json {why}")),
             },
-            "results.csv" | "index.html" if kind.is_file() => {}
+            "results.csv" | "index.html" | crate::matrix::REUSE_FILE if kind.is_file() => {}
             "images" | "plots" if kind.is_dir() => {
                 let exts: &[&str] = if name == "images" {
                     &[".png", ".gif"]

@@ -68,6 +68,12 @@ pub const RESULT_IMAGE: Kind = Kind {
     limit: 256 * MIB,
     why: "a 16384 x 16384 image in PNG is under 1 GiB only when it compresses",
 };
+/// clusterlab's own executable, hashed as its build's identity (`matrix --reuse`).
+pub const EXECUTABLE: Kind = Kind {
+    what: "clusterlab's executable",
+    limit: GIB,
+    why: "a debug build is under 200 MiB",
+};
 /// A marker or lock file the tool writes.
 pub const MARKER: Kind = Kind {
     what: "a clusterlab marker",

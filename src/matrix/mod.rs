@@ -8,6 +8,7 @@ mod html;
 mod plan;
 mod plots;
 mod report;
+mod reuse;
 mod validate;
 
 pub use baseline::{RunComparison, compare_runs};
@@ -18,6 +19,7 @@ pub use plan::{
     parse_sweep, shard,
 };
 pub use report::{table, write_report};
+pub use reuse::{FILE as REUSE_FILE, Previous, ReuseIndex, reuse_summary};
 
 use std::collections::BTreeMap;
 use std::panic::{AssertUnwindSafe, catch_unwind};
@@ -205,6 +207,9 @@ pub struct RunCost {
     pub reference_frames: usize,
     #[serde(default)]
     pub reference_shadings: usize,
+    /// Cells taken unchanged from an earlier run (`--reuse`); their costs are not counted.
+    #[serde(default)]
+    pub reused_cells: usize,
 }
 
 impl RunCost {
@@ -212,8 +217,12 @@ impl RunCost {
     pub fn line(&self) -> String {
         let c = &self.cells_ms;
         let s = |ms: f64| format!("{:.0} s", ms / 1e3);
+        let reused = match self.reused_cells {
+            0 => String::new(),
+            n => format!(" ({n} cells reused from an earlier run)"),
+        };
         format!(
-            "{:.0} s over the cells: frames {} ({} timed, {} untimed), counters {}, reference {} ({} frames from {} shadings), images {}, set-up {}; {} pipelines compiled, {} reused ({:.1} s compiling)",
+            "{:.0} s over the cells{reused}: frames {} ({} timed, {} untimed), counters {}, reference {} ({} frames from {} shadings), images {}, set-up {}; {} pipelines compiled, {} reused ({:.1} s compiling)",
             self.wall_s,
             s(c.frames),
             self.timed_frames,
@@ -243,6 +252,9 @@ pub struct Results {
     /// One per run that contributed cells (several after `merge`).
     pub provenance: Vec<Provenance>,
     pub cells: Vec<CellRecord>,
+    /// The cells this run took unchanged from an earlier one (`--reuse`), by id.
+    #[serde(skip)]
+    pub reused: Vec<String>,
 }
 
 impl Results {
@@ -317,6 +329,8 @@ pub struct MatrixOptions {
     /// Called before each cell runs (tests use it to break the device on purpose).
     #[doc(hidden)]
     pub before_cell: Option<fn(&Gpu, &CellSpec)>,
+    /// An earlier run whose unchanged cells are taken rather than run (`--reuse`).
+    pub reuse: Option<std::sync::Arc<Previous>>,
 }
 
 /// Run every cell, one at a time, and return the results with speed-ups and the Pareto
@@ -331,6 +345,12 @@ pub fn run(
 ) -> Results {
     let images = options.out.join("images");
     let references = ReferenceCache::default();
+    // Folders a reused cell's images are copied into before any cell writes its own.
+    for folder in [&images, &options.out.join("plots")] {
+        if let Err(e) = crate::files::write::create_folder(folder) {
+            eprintln!("warning: {e}");
+        }
+    }
     let bar = if options.progress {
         indicatif::ProgressBar::new(cells.len() as u64)
     } else {
@@ -349,8 +369,37 @@ pub fn run(
     let mut records = Vec::with_capacity(cells.len());
     // Why there is no usable device (the last one broke and no new one could be opened).
     let mut no_device: Option<String> = None;
+    // What each cell depended on, for a later `--reuse` (none when clusterlab's build cannot
+    // be read to identify it).
+    composer.record();
+    let run_inputs = reuse::run_inputs(gpu, &options.frames)
+        .map_err(|e| bar.println(format!("warning: no {REUSE_FILE} for a later --reuse: {e}")))
+        .ok();
+    let mut index = ReuseIndex::default();
+    let mut recomposed = std::collections::HashMap::new();
+    let mut reused = std::collections::HashSet::new();
     for cell in cells {
         bar.set_message(cell.spec.id.clone());
+        let inputs = run_inputs.as_deref().map(|run| {
+            let variant = options.variant_files.get(&cell.spec.variant);
+            reuse::cell_inputs(run, &cell.spec, variant.map(|f| f.sha256.as_str()))
+        });
+        if let (Some(previous), Some(inputs)) = (&options.reuse, &inputs)
+            && let Some((record, used)) =
+                previous.unchanged(&cell.spec.id, inputs, composer, &mut recomposed)
+        {
+            match copy_images(&previous.dir, record, &options.out) {
+                Ok(()) => {
+                    index.add(&cell.spec.id, inputs.clone(), &used);
+                    reused.insert(cell.spec.id.clone());
+                    records.push(record.clone());
+                    bar.inc(1);
+                    continue;
+                }
+                Err(e) => bar.suspend(|| eprintln!("{}: not reused, run again: {e}", cell.spec.id)),
+            }
+        }
+        let mark = composer.log_mark();
         if no_device.is_some() {
             let before = gpu.pipeline_stats();
             no_device = gpu
@@ -385,6 +434,9 @@ pub fn run(
                 why.lines().next().unwrap_or("")
             ));
         }
+        if let Some(inputs) = inputs {
+            index.add(&cell.spec.id, inputs, &composer.logged_since(mark));
+        }
         records.push(record);
         bar.inc(1);
     }
@@ -395,9 +447,15 @@ pub fn run(
         pipelines: add_pipelines(replaced, gpu.pipeline_stats()),
         reference_frames,
         reference_shadings,
+        reused_cells: reused.len(),
         ..Default::default()
     };
-    for r in &records {
+    if run_inputs.is_some()
+        && let Err(e) = index.write(&options.out)
+    {
+        eprintln!("warning: no {REUSE_FILE} for a later --reuse: {e}");
+    }
+    for r in records.iter().filter(|r| !reused.contains(&r.spec.id)) {
         if let Some(c) = &r.cost_ms {
             let t = &mut cost.cells_ms;
             t.setup += c.setup;
@@ -413,6 +471,11 @@ pub fn run(
     provenance.cost = Some(cost);
     let mut results = Results {
         provenance: vec![provenance],
+        reused: records
+            .iter()
+            .filter(|r| reused.contains(&r.spec.id))
+            .map(|r| r.spec.id.clone())
+            .collect(),
         cells: records,
     };
     derive(&mut results.cells, None);
@@ -767,25 +830,32 @@ pub fn merge(
     let mut merged = Results {
         provenance: Vec::new(),
         cells: Vec::new(),
+        reused: Vec::new(),
     };
     crate::files::write::create_folder(&out.join("images"))?;
     crate::files::write::create_folder(&out.join("plots"))?;
     for (dir, r) in loaded {
         merged.provenance.extend(r.provenance);
         for cell in r.cells {
-            let i = &cell.images;
-            for file in [&i.image, &i.heat, &i.debug, &i.animation, &i.frames_plot]
-                .into_iter()
-                .flatten()
-            {
-                copy_image(dir, file, out).map_err(|e| format!("cell `{}`: {e}", cell.spec.id))?;
-            }
+            copy_images(dir, &cell, out)?;
             merged.cells.retain(|c| c.spec.id != cell.spec.id);
             merged.cells.push(cell);
         }
     }
     derive(&mut merged.cells, None);
     Ok(merged)
+}
+
+/// Copy every image of `cell` in result folder `dir` into `out`.
+fn copy_images(dir: &Path, cell: &CellRecord, out: &Path) -> Result<(), String> {
+    let i = &cell.images;
+    for file in [&i.image, &i.heat, &i.debug, &i.animation, &i.frames_plot]
+        .into_iter()
+        .flatten()
+    {
+        copy_image(dir, file, out).map_err(|e| format!("cell `{}`: {e}", cell.spec.id))?;
+    }
+    Ok(())
 }
 
 /// Copy image `file` (`images/NAME.png`, a sequence's `images/NAME.gif` or

@@ -30,10 +30,18 @@ pub const EXPOSURE: f64 = 1.0;
 /// nothing in the raster truth).
 #[derive(Default)]
 pub struct ReferenceCache {
-    frames: Mutex<HashMap<String, (Arc<ReferenceFrame>, f64)>>,
+    /// Frames by what they depend on, with the time they took and the compositions their
+    /// raster truth used (logged again for each cell that takes the frame).
+    frames: Mutex<HashMap<String, Kept>>,
     /// Shadings before post effects, by scene (name, file and parameters).
     shadings: Mutex<HashMap<String, Vec<Shading>>>,
 }
+
+type Kept = (
+    Arc<ReferenceFrame>,
+    f64,
+    Vec<Arc<crate::compose::Composition>>,
+);
 
 /// One raster truth shaded in f64, before post effects.
 struct Shading {
@@ -85,10 +93,13 @@ impl ReferenceCache {
             "{scene_key}|{shading:?}|{post_params:?}|{:?}|{}|{:?}",
             v.depth, v.depth_prepass, v.msaa
         );
-        if let Some(hit) = self.frames.lock().expect("cache lock").get(&key) {
-            return Ok(hit.clone());
+        if let Some((frame, ms, used)) = self.frames.lock().expect("cache lock").get(&key) {
+            composer.relog(used);
+            return Ok((frame.clone(), *ms));
         }
+        let mark = composer.log_mark();
         let truth = raster_truth(gpu, composer, v, scene)?;
+        let used = composer.logged_since(mark);
         let (shaded, shading_ms) = self.shading(scene_key, truth, shading, scene);
         let start = Instant::now();
         // Without post effects the frame is the shading itself, held once.
@@ -103,7 +114,7 @@ impl ReferenceCache {
         self.frames
             .lock()
             .expect("cache lock")
-            .insert(key, entry.clone());
+            .insert(key, (entry.0.clone(), entry.1, used));
         Ok(entry)
     }
 

@@ -1,0 +1,193 @@
+//! `matrix --reuse PREVIOUS`: a cell runs again only when something it depends on changed.
+//!
+//! A cell depends on its spec (scene, parameters, sweep), its variant file, the WGSL of
+//! every pass it composed (its reference's raster truth included), the adapter and the
+//! device asked of it, how frames are chosen, and clusterlab's own build. All but the WGSL
+//! hash into the cell's `inputs`. The compositions are kept as recipes (root, features,
+//! constants) in the run's `reuse.json`, and a later run composes them again from the
+//! shaders of now: an edited module reruns exactly the cells whose WGSL it changed.
+
+use std::collections::{BTreeMap, HashMap};
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use serde::{Deserialize, Serialize};
+
+use super::{CellRecord, CellSpec, Results};
+use crate::compose::{Composer, Composition, Recipe, sha256_hex};
+use crate::gpu::Gpu;
+use crate::measure::Frames;
+
+/// The file of a result folder that says what each cell depended on.
+pub const FILE: &str = "reuse.json";
+
+/// What every cell of a run depended on, for a later run to compare with.
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+pub struct ReuseIndex {
+    /// Recipes by the SHA-256 of their JSON (cells share most of them).
+    recipes: BTreeMap<String, Recipe>,
+    /// By cell id.
+    cells: BTreeMap<String, CellShaders>,
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize)]
+struct CellShaders {
+    /// SHA-256 of everything but the WGSL (`cell_inputs`).
+    inputs: String,
+    /// (recipe, WGSL) hashes, each once, in the order first composed.
+    compositions: Vec<(String, String)>,
+}
+
+/// An earlier run to take unchanged cells from.
+#[derive(Debug)]
+pub struct Previous {
+    pub dir: PathBuf,
+    results: Results,
+    index: ReuseIndex,
+}
+
+impl Previous {
+    /// The result folder `dir` (written by a matrix run with its `reuse.json`).
+    pub fn load(dir: &Path) -> Result<Self, String> {
+        let results = Results::load(dir)?;
+        let path = dir.join(FILE);
+        let text = crate::files::read_text(&path, crate::files::read::RESULTS).map_err(|e| {
+            if e.missing {
+                format!(
+                    "--reuse {}: no {FILE} there (a run before clusterlab recorded what its cells depend on): run the matrix once without --reuse",
+                    dir.display()
+                )
+            } else {
+                e.to_string()
+            }
+        })?;
+        let index = serde_json::from_str(&text).map_err(|e| {
+            format!(
+                "{}:{}:{}: not a clusterlab {FILE}: {e}",
+                path.display(),
+                e.line(),
+                e.column()
+            )
+        })?;
+        Ok(Self {
+            dir: dir.to_path_buf(),
+            results,
+            index,
+        })
+    }
+
+    /// The earlier record of cell `id` when it ran with the same `inputs` and every shader
+    /// it composed still composes to the same WGSL (`wgsl` remembers recipes composed
+    /// before); None when anything differs, or the cell failed there.
+    pub fn unchanged(
+        &self,
+        id: &str,
+        inputs: &str,
+        composer: &Composer,
+        wgsl: &mut HashMap<String, Option<String>>,
+    ) -> Option<(&CellRecord, Vec<Arc<Composition>>)> {
+        let shaders = self.index.cells.get(id)?;
+        if shaders.inputs != inputs {
+            return None;
+        }
+        let record = self.results.cells.iter().find(|c| c.spec.id == id)?;
+        if !record.ok() {
+            return None;
+        }
+        let mut used = Vec::with_capacity(shaders.compositions.len());
+        for (recipe_hash, wgsl_hash) in &shaders.compositions {
+            let recipe = self.index.recipes.get(recipe_hash)?;
+            let now = wgsl
+                .entry(recipe_hash.clone())
+                .or_insert_with(|| composer.recompose(recipe).ok())
+                .as_ref()?;
+            if now != wgsl_hash {
+                return None;
+            }
+            used.push(Arc::new(Composition {
+                recipe: recipe.clone(),
+                wgsl_sha256: now.clone(),
+            }));
+        }
+        Some((record, used))
+    }
+}
+
+impl ReuseIndex {
+    /// Record that cell `id` ran with `inputs` and these compositions.
+    pub fn add(&mut self, id: &str, inputs: String, compositions: &[Arc<Composition>]) {
+        let mut seen = Vec::new();
+        for c in compositions {
+            let recipe = serde_json::to_string(&c.recipe).expect("a recipe serialises");
+            let key = (sha256_hex(&recipe), c.wgsl_sha256.clone());
+            if !seen.contains(&key) {
+                self.recipes
+                    .entry(key.0.clone())
+                    .or_insert_with(|| c.recipe.clone());
+                seen.push(key);
+            }
+        }
+        self.cells.insert(
+            id.to_string(),
+            CellShaders {
+                inputs,
+                compositions: seen,
+            },
+        );
+    }
+
+    /// Write `reuse.json` into the result folder being made.
+    pub fn write(&self, dir: &Path) -> Result<(), String> {
+        let json = serde_json::to_string(self).map_err(|e| e.to_string())?;
+        crate::files::write_file(&dir.join(FILE), json.as_bytes())
+    }
+}
+
+/// "reused R of N cells from DIR; ran M: ID, ID, ..." (the first ten of those it ran).
+pub fn reuse_summary(results: &Results, dir: &Path) -> String {
+    const SHOWN: usize = 10;
+    let ran: Vec<&str> = results
+        .cells
+        .iter()
+        .map(|c| c.spec.id.as_str())
+        .filter(|id| !results.reused.iter().any(|r| r == id))
+        .collect();
+    let mut names = ran[..ran.len().min(SHOWN)].join(", ");
+    if ran.len() > SHOWN {
+        names.push_str(&format!(" and {} more", ran.len() - SHOWN));
+    }
+    format!(
+        "reused {} of {} cells from {}; ran {}{}{names}",
+        results.reused.len(),
+        results.cells.len(),
+        dir.display(),
+        ran.len(),
+        if ran.is_empty() { "" } else { ": " }
+    )
+}
+
+/// What every cell of a run on `gpu` depends on alike: clusterlab's build (the SHA-256 of
+/// its executable), the adapter and the device asked of it, the threads a software GPU
+/// splits its work among, and how frames are chosen.
+pub fn run_inputs(gpu: &Gpu, frames: &Frames) -> Result<String, String> {
+    let exe =
+        std::env::current_exe().map_err(|e| format!("finding clusterlab's executable: {e}"))?;
+    let bytes =
+        crate::files::read(&exe, crate::files::read::EXECUTABLE).map_err(|e| e.to_string())?;
+    let build = {
+        use sha2::Digest;
+        format!("{:x}", sha2::Sha256::digest(&bytes))
+    };
+    Ok(sha256_hex(&format!(
+        "{build}|{:?}|{:?}|{:?}|{frames:?}",
+        gpu.adapter,
+        gpu.request,
+        std::env::var("LP_NUM_THREADS").ok()
+    )))
+}
+
+/// The inputs of one cell: the run's, its spec and its variant file's SHA-256.
+pub fn cell_inputs(run: &str, spec: &CellSpec, variant_sha256: Option<&str>) -> String {
+    let spec = serde_json::to_string(spec).expect("a cell spec serialises");
+    sha256_hex(&format!("{run}|{spec}|{variant_sha256:?}"))
+}
