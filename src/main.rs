@@ -1119,6 +1119,9 @@ fn matrix(args: &MatrixArgs) -> Result<bool, String> {
         gpu.adapter.driver,
         args.out.display()
     );
+    if let Some(folder) = clusterlab::gpu::disk_cache::folder() {
+        eprintln!("{}", gpu.attach_disk_cache(&folder));
+    }
     if let Some(old) = &baseline
         && let Some(other) = old.provenance.iter().find(|p| p.adapter != gpu.adapter)
     {
@@ -1152,6 +1155,9 @@ fn matrix(args: &MatrixArgs) -> Result<bool, String> {
     };
     let start = Instant::now();
     let mut results = matrix::run(&mut gpu, &Composer::default(), &cells, &options);
+    if let Err(e) = gpu.save_disk_cache() {
+        eprintln!("warning: the pipeline cache was not saved: {e}");
+    }
     if let Some(old) = &baseline {
         matrix::derive(&mut results.cells, Some(old));
     }

@@ -636,3 +636,84 @@ fn a_rerun_reuses_exactly_the_cells_no_change_touched() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// The pipeline cache on disk: a run saves one for its adapter in `CLUSTERLAB_CACHE`; a file
+/// there whose header names another adapter or another clusterlab version is ignored with
+/// a note naming what wrote it, never loaded, and replaced by this run's.
+#[test]
+fn a_pipeline_cache_of_another_adapter_or_version_is_ignored() {
+    let dir = scratch("pipeline-cache");
+    let cache = dir.join("cache");
+    let run = |out: &str| {
+        let (ok, text) = cli([
+            "matrix",
+            "--variants",
+            "forward_plus",
+            "--scenes",
+            "one_light",
+            "--size",
+            "32x18",
+            "--frames",
+            "1",
+            "--warmup",
+            "0",
+            "--out",
+            dir.join(out).to_str().unwrap(),
+        ])
+        .env("CLUSTERLAB_CACHE", &cache)
+        .run()
+        .succeeded();
+        assert!(ok, "{text}");
+        text
+    };
+    let text = run("first");
+    if text.contains("pipeline cache: none on") {
+        eprintln!(
+            "skipped: {}",
+            text.lines().find(|l| l.contains("none on")).unwrap()
+        );
+        return;
+    }
+    let files = walk(&cache);
+    assert_eq!(files.len(), 1, "{files:?}");
+    let file = &files[0];
+    let ours = std::fs::read(file).unwrap();
+    // The header is three lines: what the file is, the version, the adapter.
+    let newlines = ours.iter().enumerate().filter(|&(_, &b)| b == b'\n');
+    let header_end = newlines.map(|(i, _)| i + 1).nth(2).unwrap();
+    let header = String::from_utf8(ours[..header_end].to_vec()).unwrap();
+    let text = run("second");
+    assert!(
+        text.contains(&format!("pipeline cache: {}\n", file.display())),
+        "{text}"
+    );
+    let lines: Vec<&str> = header.lines().collect();
+    for (forged, named) in [
+        (
+            format!("{}\nclusterlab 0.0.1\n{}\n", lines[0], lines[2]),
+            format!("clusterlab 0.0.1 on {}", lines[2]),
+        ),
+        (
+            format!(
+                "{}\n{}\nSome GPU (vulkan, vendor 0x1, device 0x2, 1.0)\n",
+                lines[0], lines[1]
+            ),
+            format!(
+                "{} on Some GPU (vulkan, vendor 0x1, device 0x2, 1.0)",
+                lines[1]
+            ),
+        ),
+    ] {
+        let mut bytes = forged.into_bytes();
+        bytes.extend_from_slice(&ours[header_end..]);
+        std::fs::write(file, &bytes).unwrap();
+        let text = run("forged");
+        assert!(
+            text.contains(&format!("was written by {named}; ignored")),
+            "{text}"
+        );
+        // Replaced by this run's, under this run's header.
+        assert!(std::fs::read(file).unwrap().starts_with(header.as_bytes()));
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -215,9 +215,10 @@ pub fn masked_features() -> Result<wgpu::Features, String> {
 pub fn wanted_features(without: wgpu::Features) -> wgpu::Features {
     // Adapter-specific format features: OpenGL reports rgba32float as renderable only here.
     // Forced early depth tests let instrumented passes count what early-Z shades.
+    // A pipeline cache keeps compiled pipelines between runs (`gpu::disk_cache`).
     let all = OPTIONAL_FEATURES
         .iter()
-        .fold(wgpu::Features::empty(), |a, (_, f, _)| a | *f);
+        .fold(wgpu::Features::PIPELINE_CACHE, |a, (_, f, _)| a | *f);
     all - without
 }
 

@@ -4,6 +4,7 @@
 
 pub mod adapters;
 mod cache;
+pub mod disk_cache;
 pub mod expect;
 mod readback;
 mod timing;
@@ -123,6 +124,11 @@ pub struct Gpu {
     cell_started: Mutex<Option<Instant>>,
     /// Shader modules, layouts and pipelines made on this device, by what determines them.
     pipelines: cache::PipelineCache,
+    /// Who the adapter is, for the pipeline cache on disk: wgpu's key (None where wgpu
+    /// keeps no cache, all but Vulkan) and what names it (`disk_cache`).
+    cache_identity: (Option<String>, String),
+    /// Compiled pipelines kept on disk between runs (`disk_cache`), once attached.
+    disk_cache: Option<disk_cache::DiskCache>,
 }
 
 impl Gpu {
@@ -211,6 +217,21 @@ impl Gpu {
             cell_timeout_ns: AtomicU64::new(DEFAULT_CELL_TIMEOUT.as_nanos() as u64),
             cell_started: Mutex::new(None),
             pipelines: Default::default(),
+            cache_identity: (
+                features
+                    .contains(wgpu::Features::PIPELINE_CACHE)
+                    .then(|| wgpu::util::pipeline_cache_key(&info))
+                    .flatten(),
+                format!(
+                    "{} ({}, vendor {:#x}, device {:#x}, {})",
+                    info.name,
+                    info.backend,
+                    info.vendor,
+                    info.device,
+                    driver_string(&info)
+                ),
+            ),
+            disk_cache: None,
         })
     }
 

@@ -107,7 +107,7 @@ pub fn render_pipeline(
                     targets,
                 }),
                 multiview_mask: None,
-                cache: None,
+                cache: gpu.pipeline_cache(),
             })
     })
 }
@@ -138,7 +138,7 @@ impl ComputePipelines {
                             module: &module,
                             entry_point: Some(entry),
                             compilation_options: Default::default(),
-                            cache: None,
+                            cache: gpu.pipeline_cache(),
                         })
                 })?;
                 Ok((entry.to_string(), size, pipeline))

@@ -130,10 +130,14 @@ impl Ran {
     }
 }
 
-/// `clusterlab ARGS`, in the current folder, standard input closed.
+/// `clusterlab ARGS`, in the current folder, standard input closed, keeping no pipeline
+/// cache in the user's cache folder (a test that wants one names a folder).
 pub fn cli<S: AsRef<OsStr>>(args: impl IntoIterator<Item = S>) -> Cli {
     let mut command = Command::new(binary());
-    command.args(args).stdin(Stdio::null());
+    command
+        .args(args)
+        .stdin(Stdio::null())
+        .env(clusterlab::gpu::disk_cache::CACHE_VAR, "off");
     Cli(command)
 }
 

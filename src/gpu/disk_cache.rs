@@ -1,0 +1,131 @@
+//! Compiled pipelines kept on disk between runs, where wgpu offers it (`wgpu::PipelineCache`
+//! on Vulkan): one file per adapter in the user's cache folder, never inside the project.
+//! The file opens with a header naming the clusterlab version and the adapter (name,
+//! backend, vendor, device, driver) that wrote it; one written by another is ignored, with
+//! a note, and replaced when the run saves its own. wgpu checks its own header behind ours
+//! (its version, the adapter, the driver's cache key) and the driver checks the shaders'.
+
+use std::path::{Path, PathBuf};
+
+use super::Gpu;
+
+/// The variable naming the cache folder, or `off`.
+pub const CACHE_VAR: &str = "CLUSTERLAB_CACHE";
+
+/// The first line of every cache file.
+const MAGIC: &str = "clusterlab pipeline cache";
+
+/// A cache file is read whole; larger ones are left alone (a driver's cache of the
+/// default matrix is a few MiB).
+const READ: crate::files::Kind = crate::files::Kind {
+    what: "a pipeline cache",
+    limit: 1 << 30,
+    why: "the default matrix's is a few MiB",
+};
+
+/// The cache attached to a device, and where it is saved.
+pub struct DiskCache {
+    pub cache: wgpu::PipelineCache,
+    path: PathBuf,
+    header: String,
+}
+
+/// The folder caches live in: `CLUSTERLAB_CACHE` (`off`: none), else the user's cache
+/// folder (`$XDG_CACHE_HOME/clusterlab`, `~/.cache/clusterlab`); None when there is none.
+pub fn folder() -> Option<PathBuf> {
+    let var = |name| std::env::var_os(name).filter(|v| !v.is_empty());
+    match var(CACHE_VAR) {
+        Some(v) if v == "off" => None,
+        Some(v) => Some(PathBuf::from(v)),
+        None => var("XDG_CACHE_HOME")
+            .map(PathBuf::from)
+            .or_else(|| var("HOME").map(|h| Path::new(&h).join(".cache")))
+            .map(|base| base.join("clusterlab")),
+    }
+}
+
+impl Gpu {
+    /// Attach the pipeline cache of this adapter in `folder`, loading what an earlier run
+    /// of this clusterlab version on this adapter saved there. Returns a note for the user:
+    /// where the cache is, or why it was not loaded or is not kept.
+    pub fn attach_disk_cache(&mut self, folder: &Path) -> String {
+        let (Some(key), identity) = &self.cache_identity else {
+            return format!(
+                "pipeline cache: none on {} (wgpu keeps one on Vulkan only)",
+                self.adapter.backend
+            );
+        };
+        let path = folder.join(format!("{key}.bin"));
+        let header = format!(
+            "{MAGIC}\nclusterlab {}\n{identity}\n",
+            env!("CARGO_PKG_VERSION")
+        );
+        let (data, note) = match crate::files::read(&path, READ) {
+            Ok(bytes) => match bytes.strip_prefix(header.as_bytes()) {
+                Some(data) => (
+                    Some(data.to_vec()),
+                    format!("pipeline cache: {}", path.display()),
+                ),
+                None => (
+                    None,
+                    format!(
+                        "pipeline cache: {} was written by {}; ignored (this run is clusterlab {} on {identity}) and replaced at the end",
+                        path.display(),
+                        written_by(&bytes),
+                        env!("CARGO_PKG_VERSION")
+                    ),
+                ),
+            },
+            Err(e) if e.missing => (None, format!("pipeline cache: {} (new)", path.display())),
+            Err(e) => return format!("pipeline cache: not used: {e}"),
+        };
+        // SAFETY: the data is what `PipelineCache::get_data` returned on an adapter with
+        // this identity (our header says so), and wgpu validates its own header behind it
+        // (`fallback: true` starts empty where that fails).
+        let cache = unsafe {
+            self.device
+                .create_pipeline_cache(&wgpu::PipelineCacheDescriptor {
+                    label: Some("clusterlab pipelines"),
+                    data: data.as_deref(),
+                    fallback: true,
+                })
+        };
+        self.disk_cache = Some(DiskCache {
+            cache,
+            path,
+            header,
+        });
+        note
+    }
+
+    /// The attached pipeline cache, for pipeline descriptors.
+    pub fn pipeline_cache(&self) -> Option<&wgpu::PipelineCache> {
+        self.disk_cache.as_ref().map(|d| &d.cache)
+    }
+
+    /// Save the attached cache (nothing when none is attached or the driver gives no data).
+    pub fn save_disk_cache(&self) -> Result<(), String> {
+        let Some(d) = &self.disk_cache else {
+            return Ok(());
+        };
+        let Some(data) = d.cache.get_data() else {
+            return Ok(());
+        };
+        if let Some(parent) = d.path.parent() {
+            crate::files::write::create_folder(parent)?;
+        }
+        let mut bytes = d.header.clone().into_bytes();
+        bytes.extend_from_slice(&data);
+        crate::files::write_file(&d.path, &bytes)
+    }
+}
+
+/// Who wrote a cache file, from its header: its clusterlab version and adapter lines.
+fn written_by(bytes: &[u8]) -> String {
+    let head = String::from_utf8_lossy(&bytes[..bytes.len().min(512)]).into_owned();
+    let mut lines = head.lines();
+    match (lines.next(), lines.next(), lines.next()) {
+        (Some(MAGIC), Some(version), Some(adapter)) => format!("{version} on {adapter}"),
+        _ => "something else (no clusterlab header)".into(),
+    }
+}
