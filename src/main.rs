@@ -253,6 +253,11 @@ struct MatrixArgs {
     /// unchanged from there, images and all, and run only the others.
     #[arg(long)]
     reuse: Option<PathBuf>,
+    /// Run each cell's CPU work (the f64 reference, error figures, images) on a thread of
+    /// its own while the next cells render: `auto` does so on a hardware GPU and not on a
+    /// software one, whose frames are the CPU's own work and would be slowed.
+    #[arg(long, value_enum, default_value_t = Overlap::Auto)]
+    overlap: Overlap,
     /// Run every cell as a sequence of N frames (1 to 3600) instead of one frame rendered
     /// again: a fraction of the lights moving (`--moving`, or a `moving=` sweep), the
     /// camera on its path or still; each cell's times are of the frames after the first.
@@ -271,6 +276,13 @@ struct MatrixArgs {
     check_every: u32,
     #[command(flatten)]
     gpu: GpuArgs,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+enum Overlap {
+    Auto,
+    On,
+    Off,
 }
 
 /// A variant and the scene it renders, with the scene's parameters (`render`, `sequence`).
@@ -1152,6 +1164,11 @@ fn matrix(args: &MatrixArgs) -> Result<bool, String> {
         variant_files,
         before_cell: None,
         reuse: previous.clone(),
+        overlap: match args.overlap {
+            Overlap::Auto => !gpu.software,
+            Overlap::On => true,
+            Overlap::Off => false,
+        },
     };
     let start = Instant::now();
     let mut results = matrix::run(&mut gpu, &Composer::default(), &cells, &options);

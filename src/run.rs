@@ -16,7 +16,7 @@ use crate::measure::{
     CpuClock, DISTURBED_RETRIES, DISTURBED_SHARE, FrameCount, Frames, JUDGED_FRAME_MS,
 };
 use crate::metrics::{self, ErrorMetrics};
-use crate::reference::{ReferenceCache, reference_frame};
+use crate::reference::{ReferenceCache, ReferenceJob};
 use crate::render::{FrameOutput, FrameStats, RenderError, Renderer};
 use crate::scene::{Scene, SceneError, SceneParams};
 use crate::variant::{LoadedVariant, Variant};
@@ -193,7 +193,37 @@ pub fn run_scene_keeping_renderer<'g>(
     scene: &Scene,
     options: CellOptions<'_>,
 ) -> Result<(CellResult, Renderer<'g>), RunError> {
-    let out = options.out;
+    let own_cache = ReferenceCache::default();
+    let references = options.references.unwrap_or(&own_cache);
+    let (half, renderer) = gpu_half(gpu, composer, variant, scene, options, references)?;
+    let cell = finish_cell(half, references, variant, scene, options.out)?;
+    Ok((cell, renderer))
+}
+
+/// A cell whose GPU work is done: its frames timed and counted, its reference's raster
+/// truth read back. What remains (`finish_cell`) needs only the CPU, so a matrix runs it
+/// beside the next cell's GPU work.
+pub struct GpuHalf {
+    /// Everything but the error, the judgement and the images.
+    report: RenderReport,
+    frame: FrameOutput,
+    debug: Option<Vec<[u8; 4]>>,
+    reference: ReferenceJob,
+    /// The variant claims to be exact on this adapter (`exact_claim`).
+    exact: bool,
+}
+
+/// The GPU half of a cell: set-up, timed frames, the debug view, the counters and the
+/// reference's raster truth. `references` must finish this cell's job (`finish_cell`)
+/// before any job begun after it.
+pub fn gpu_half<'g>(
+    gpu: &'g Gpu,
+    composer: &Composer,
+    variant: &LoadedVariant,
+    scene: &Scene,
+    options: CellOptions<'_>,
+    references: &ReferenceCache,
+) -> Result<(GpuHalf, Renderer<'g>), RunError> {
     let params = scene.params;
     gpu.check_size(params.width, params.height)?;
     scene.check()?;
@@ -223,46 +253,16 @@ pub fn run_scene_keeping_renderer<'g>(
     if let Some(ms) = frame.cpu_assign_ms {
         cpu_ms.insert("light_assign".into(), round3(ms).into());
     }
-    let (reference, reference_ms) = match options.references {
-        Some(cache) => cache.get_or_compute(gpu, composer, variant, scene)?,
-        None => {
-            let (r, ms) = reference_frame(gpu, composer, variant, scene)?;
-            (Arc::new(r), ms)
-        }
-    };
+    let reference = references.begin(gpu, composer, variant, scene)?;
     cost.reference = lap();
-    // The error metrics (FLIP most of them, about 90 ms at 640x360) need only the CPU: they
-    // run on a thread of their own beside the instrumented frame, which hides about 40% of
-    // them on a 2-core machine whose software GPU uses both cores (measured: 6.1 s of
-    // counters and metrics became 5.2 s over 24 cells).
-    let shaded = variant.variant.debug_view == crate::variant::DebugView::Off;
-    let (stats, error) = std::thread::scope(|s| {
-        let compare = s.spawn(|| shaded.then(|| metrics::compare(&frame, &reference)));
-        let stats = options
-            .stats
-            .then(|| {
-                renderer.prepare_counting(composer, scene);
-                renderer.stats()
-            })
-            .transpose();
-        let error = compare.join().expect("error metrics do not panic");
-        (stats, error)
-    });
-    let stats = stats?;
+    let stats = options
+        .stats
+        .then(|| {
+            renderer.prepare_counting(composer, scene);
+            renderer.stats()
+        })
+        .transpose()?;
     cost.counters = lap();
-    let failure = meaningless(&reference, Some(&frame), stats.as_ref(), error.as_ref())
-        .or_else(|| inexact(&variant.variant, gpu, error.as_ref()));
-    let images = match out {
-        Some(dir) => write_images(
-            dir,
-            &safe_file_name(&format!("{}@{}", variant.name, scene.name)),
-            &frame,
-            &reference,
-        )?,
-        None => Vec::new(),
-    };
-    cost.images = lap();
-
     let mut gpu_ms = Map::new();
     // The median of the frames' totals, not the sum of the passes' medians: a sum of medians
     // of different frames can lie outside every frame's total (it did: 6.9 ms against frames
@@ -297,23 +297,67 @@ pub fn run_scene_keeping_renderer<'g>(
         frame_count,
         hdr_format: format!("{:?}", gpu.hdr_format).to_lowercase(),
         wall_ms: round3(wall_ms),
-        reference_ms: round3(reference_ms),
-        error,
+        reference_ms: 0.0,
+        error: None,
         stats,
         efficiency,
         cpu_ms,
         skipped_passes: frame.skipped.clone(),
-        images,
+        images: Vec::new(),
         cost_ms: cost,
-        failure,
+        failure: None,
     };
-    let cell = CellResult {
+    let half = GpuHalf {
+        report,
+        frame,
+        debug,
+        reference,
+        exact: exact_claim(&variant.variant, gpu),
+    };
+    Ok((half, renderer))
+}
+
+/// The CPU half of a cell: its reference shaded in f64 (or taken from the cell that
+/// shaded it), the error against it, the judgement and, with `out`, its images.
+pub fn finish_cell(
+    half: GpuHalf,
+    references: &ReferenceCache,
+    variant: &LoadedVariant,
+    scene: &Scene,
+    out: Option<&Path>,
+) -> Result<CellResult, RunError> {
+    let GpuHalf {
+        mut report,
+        frame,
+        debug,
+        reference,
+        exact,
+    } = half;
+    let start = Instant::now();
+    let (reference, reference_ms) = references.finish(reference, variant, scene)?;
+    report.reference_ms = round3(reference_ms);
+    report.cost_ms.reference += round3(start.elapsed().as_secs_f64() * 1e3);
+    let start = Instant::now();
+    let shaded = variant.variant.debug_view == crate::variant::DebugView::Off;
+    report.error = shaded.then(|| metrics::compare(&frame, &reference));
+    let error = report.error.as_ref();
+    report.failure = meaningless(&reference, Some(&frame), report.stats.as_ref(), error)
+        .or_else(|| inexact_figures(exact, error));
+    if let Some(dir) = out {
+        report.images = write_images(
+            dir,
+            &safe_file_name(&format!("{}@{}", variant.name, scene.name)),
+            &frame,
+            &reference,
+        )?;
+    }
+    report.cost_ms.images = round3(start.elapsed().as_secs_f64() * 1e3);
+    Ok(CellResult {
         report,
         frame,
         reference,
         debug,
-    };
-    Ok((cell, renderer))
+    })
 }
 
 /// Why a frame measures nothing, if it does not: a score for it would look perfect or
@@ -368,8 +412,13 @@ pub fn meaningless(
 /// Why an exact variant's frame is not exact, if it is not: an 8-bit error over the 1 LSB
 /// that single-precision shading and rounding allow (`exact_claim`).
 pub fn inexact(variant: &Variant, gpu: &Gpu, error: Option<&ErrorMetrics>) -> Option<String> {
+    inexact_figures(exact_claim(variant, gpu), error)
+}
+
+/// [`inexact`] for a variant whose claim is known.
+fn inexact_figures(exact: bool, error: Option<&ErrorMetrics>) -> Option<String> {
     let e = error?;
-    (exact_claim(variant, gpu) && e.max_abs_8bit > EXACT_LSB).then(|| {
+    (exact && e.max_abs_8bit > EXACT_LSB).then(|| {
         format!(
             "max {} LSB against the reference, {} pixels over {EXACT_LSB} LSB: an exact variant is within {EXACT_LSB} LSB",
             e.max_abs_8bit, e.pixels_over_1lsb

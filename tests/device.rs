@@ -50,6 +50,7 @@ fn a_cell_that_breaks_the_device_fails_alone_and_later_cells_get_a_new_one() {
         variant_files: matrix::variant_files(&cells),
         before_cell: Some(destroy_device_in_chosen_cell),
         reuse: None,
+        overlap: false,
     };
     let results = matrix::run(&mut gpu, &Composer::default(), &cells, &options);
     let _ = std::fs::remove_dir_all(&dir);

@@ -717,3 +717,74 @@ fn a_pipeline_cache_of_another_adapter_or_version_is_ignored() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// The overlap moves a cell's CPU half (reference shading, error figures, images) beside the
+/// next cells' GPU work; it changes when that runs, not what it computes. With it and
+/// without, every cell's record but its times (and what follows from them: speed-ups, the
+/// Pareto front, efficiency) and every image are the same byte for byte. The cells include
+/// two that share one reference frame (the second waits for the first's) and one whose
+/// reference is shaded with GGX.
+#[test]
+fn cells_are_the_same_with_and_without_the_overlap() {
+    let dir = scratch("overlap");
+    let run = |overlap: &str| {
+        let out = dir.join(overlap);
+        let (ok, text) = cli([
+            "matrix",
+            "--variants",
+            "forward_plus",
+            "forward_plus_one_level",
+            "forward_plus_ggx",
+            "--scenes",
+            "atrium",
+            "--size",
+            "64x36",
+            "--frames",
+            "1",
+            "--warmup",
+            "0",
+            "--overlap",
+            overlap,
+            "--out",
+            out.to_str().unwrap(),
+        ])
+        .run()
+        .succeeded();
+        assert!(ok, "{text}");
+        out
+    };
+    let (on, off) = (run("on"), run("off"));
+    let figures = |dir: &Path| {
+        let results = Results::load(dir).unwrap();
+        let mut cells = serde_json::to_value(&results.cells).unwrap();
+        for cell in cells.as_array_mut().unwrap() {
+            let cell = cell.as_object_mut().unwrap();
+            for timed in [
+                "gpu_ms",
+                "gpu_ms_spread",
+                "wall_ms",
+                "reference_ms",
+                "cost_ms",
+                "speedup_vs_naive",
+                "pareto",
+                "efficiency",
+                "disturbed_frames",
+            ] {
+                cell.remove(timed);
+            }
+        }
+        cells
+    };
+    assert_eq!(figures(&on), figures(&off));
+    let images = walk(&on.join("images"));
+    assert_eq!(images.len(), walk(&off.join("images")).len());
+    for file in images {
+        let other = off.join(file.strip_prefix(&on).unwrap());
+        assert!(
+            std::fs::read(&file).unwrap() == std::fs::read(&other).unwrap(),
+            "{} differs",
+            other.display()
+        );
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -35,7 +35,9 @@ use crate::measure::Frames;
 use crate::metrics::ErrorMetrics;
 use crate::reference::ReferenceCache;
 use crate::render::FrameStats;
-use crate::run::{CellCost, CellOptions, RunError, run_cell, write_images, write_png};
+use crate::run::{
+    CellCost, CellOptions, GpuHalf, RunError, finish_cell, gpu_half, write_images, write_png,
+};
 use crate::scene::SCENES;
 use crate::sequence::SequenceSummary;
 use crate::variant::DebugView;
@@ -222,9 +224,10 @@ impl RunCost {
             n => format!(" ({n} cells reused from an earlier run)"),
         };
         format!(
-            "{:.0} s over the cells{reused}: frames {} ({} timed, {} untimed), counters {}, reference {} ({} frames from {} shadings), images {}, set-up {}; {} pipelines compiled, {} reused ({:.1} s compiling)",
+            "{:.0} s over the cells{reused}: frames {} ({:.0}% of the run; {} timed, {} untimed), counters {}, reference {} ({} frames from {} shadings), images {}, set-up {}; {} pipelines compiled, {} reused ({:.1} s compiling)",
             self.wall_s,
             s(c.frames),
+            100.0 * c.frames / (self.wall_s * 1e3).max(1e-9),
             self.timed_frames,
             self.warmup_frames,
             s(c.counters),
@@ -331,6 +334,9 @@ pub struct MatrixOptions {
     pub before_cell: Option<fn(&Gpu, &CellSpec)>,
     /// An earlier run whose unchanged cells are taken rather than run (`--reuse`).
     pub reuse: Option<std::sync::Arc<Previous>>,
+    /// Run each cell's CPU half (reference shading, error figures, images) on a thread of
+    /// its own beside the next cells' GPU work (`--overlap`).
+    pub overlap: bool,
 }
 
 /// Run every cell, one at a time, and return the results with speed-ups and the Pareto
@@ -366,7 +372,6 @@ pub fn run(
     let start = std::time::Instant::now();
     // Pipeline counts of devices replaced during the run.
     let mut replaced = PipelineStats::default();
-    let mut records = Vec::with_capacity(cells.len());
     // Why there is no usable device (the last one broke and no new one could be opened).
     let mut no_device: Option<String> = None;
     // What each cell depended on, for a later `--reuse` (none when clusterlab's build cannot
@@ -378,67 +383,112 @@ pub fn run(
     let mut index = ReuseIndex::default();
     let mut recomposed = std::collections::HashMap::new();
     let mut reused = std::collections::HashSet::new();
-    for cell in cells {
-        bar.set_message(cell.spec.id.clone());
-        let inputs = run_inputs.as_deref().map(|run| {
-            let variant = options.variant_files.get(&cell.spec.variant);
-            reuse::cell_inputs(run, &cell.spec, variant.map(|f| f.sha256.as_str()))
+    let mut records: Vec<Option<CellRecord>> = vec![None; cells.len()];
+    std::thread::scope(|scope| {
+        // With overlap, the cells' CPU halves run on one thread of their own, in order, while
+        // the next cells' GPU halves run here; a bounded queue keeps at most two waiting.
+        let (to_worker, jobs) = std::sync::mpsc::sync_channel::<(usize, Box<Pending>)>(1);
+        let (to_main, finished) = std::sync::mpsc::channel::<(usize, CellRecord)>();
+        let references = &references;
+        let worker = options.overlap.then(|| {
+            scope.spawn(move || {
+                for (i, pending) in jobs {
+                    let _ = to_main.send((i, finish_guarded(*pending, options, references)));
+                }
+            })
         });
-        if let (Some(previous), Some(inputs)) = (&options.reuse, &inputs)
-            && let Some((record, used)) =
-                previous.unchanged(&cell.spec.id, inputs, composer, &mut recomposed)
-        {
-            match copy_images(&previous.dir, record, &options.out) {
-                Ok(()) => {
-                    index.add(&cell.spec.id, inputs.clone(), &used);
-                    reused.insert(cell.spec.id.clone());
-                    records.push(record.clone());
+        for (i, cell) in cells.iter().enumerate() {
+            bar.set_message(cell.spec.id.clone());
+            let inputs = run_inputs.as_deref().map(|run| {
+                let variant = options.variant_files.get(&cell.spec.variant);
+                reuse::cell_inputs(run, &cell.spec, variant.map(|f| f.sha256.as_str()))
+            });
+            if let (Some(previous), Some(inputs)) = (&options.reuse, &inputs)
+                && let Some((record, used)) =
+                    previous.unchanged(&cell.spec.id, inputs, composer, &mut recomposed)
+            {
+                match copy_images(&previous.dir, record, &options.out) {
+                    Ok(()) => {
+                        index.add(&cell.spec.id, inputs.clone(), &used);
+                        reused.insert(cell.spec.id.clone());
+                        records[i] = Some(record.clone());
+                        bar.inc(1);
+                        continue;
+                    }
+                    Err(e) => {
+                        bar.suspend(|| eprintln!("{}: not reused, run again: {e}", cell.spec.id))
+                    }
+                }
+            }
+            let mark = composer.log_mark();
+            if no_device.is_some() {
+                let before = gpu.pipeline_stats();
+                no_device = gpu
+                    .reopen()
+                    .map(|fresh| {
+                        replaced = add_pipelines(replaced, before);
+                        *gpu = fresh
+                    })
+                    .err()
+                    .map(no_usable_device);
+            }
+            let ran = match &no_device {
+                Some(why) => Ran::done(CellRecord::failed(cell.spec.clone(), why.clone())),
+                None => run_guarded(gpu, composer, cell, options, references),
+            };
+            if let Some(inputs) = inputs {
+                index.add(&cell.spec.id, inputs, &composer.logged_since(mark));
+            }
+            let mut record = match ran {
+                Ran::Pending(pending) if worker.is_some() => {
+                    // The worker only ends when the queue closes.
+                    let _ = to_worker.send((i, pending));
                     bar.inc(1);
                     continue;
                 }
-                Err(e) => bar.suspend(|| eprintln!("{}: not reused, run again: {e}", cell.spec.id)),
-            }
-        }
-        let mark = composer.log_mark();
-        if no_device.is_some() {
+                Ran::Pending(pending) => finish_guarded(*pending, options, references),
+                Ran::Done(record) => *record,
+            };
             let before = gpu.pipeline_stats();
-            no_device = gpu
-                .reopen()
-                .map(|fresh| {
+            if let Some(why) = &mut record.failure
+                && no_device.is_none()
+                && let Some(note) = renew_if_unusable(gpu, &mut no_device)
+            {
+                if no_device.is_none() {
+                    // Replaced by a new device: keep what the old one compiled in the count.
                     replaced = add_pipelines(replaced, before);
-                    *gpu = fresh
-                })
-                .err()
-                .map(no_usable_device);
-        }
-        let mut record = match &no_device {
-            Some(why) => CellRecord::failed(cell.spec.clone(), why.clone()),
-            None => run_guarded(gpu, composer, cell, options, &images, &references),
-        };
-        let before = gpu.pipeline_stats();
-        if let Some(why) = &mut record.failure
-            && no_device.is_none()
-            && let Some(note) = renew_if_unusable(gpu, &mut no_device)
-        {
-            if no_device.is_none() {
-                // Replaced by a new device: keep what the old one compiled in the count.
-                replaced = add_pipelines(replaced, before);
+                }
+                bar.println(format!("{}: {note}", cell.spec.id));
+                why.push_str(&format!(" [{note}]"));
             }
-            bar.println(format!("{}: {note}", cell.spec.id));
-            why.push_str(&format!(" [{note}]"));
+            records[i] = Some(record);
+            bar.inc(1);
         }
-        if let Some(why) = &record.failure {
+        drop(to_worker);
+        if let Some(worker) = worker {
+            let _ = worker.join();
+        }
+        for (i, record) in finished.try_iter() {
+            records[i] = Some(record);
+        }
+    });
+    let records: Vec<CellRecord> = records
+        .into_iter()
+        .zip(cells)
+        .map(|(r, cell)| {
+            r.unwrap_or_else(|| {
+                CellRecord::failed(cell.spec.clone(), "its CPU half did not finish".into())
+            })
+        })
+        .collect();
+    for r in &records {
+        if let Some(why) = &r.failure {
             bar.println(format!(
                 "FAILED {}: {}",
-                cell.spec.id,
+                r.spec.id,
                 why.lines().next().unwrap_or("")
             ));
         }
-        if let Some(inputs) = inputs {
-            index.add(&cell.spec.id, inputs, &composer.logged_since(mark));
-        }
-        records.push(record);
-        bar.inc(1);
     }
     bar.finish_and_clear();
     let (reference_frames, reference_shadings) = references.counts();
@@ -482,26 +532,48 @@ pub fn run(
     results
 }
 
-/// Run one cell with its time limit started, turning a panic into a failed cell.
 fn run_guarded(
     gpu: &Gpu,
     composer: &Composer,
     cell: &PlannedCell,
     options: &MatrixOptions,
-    images: &Path,
     references: &ReferenceCache,
-) -> CellRecord {
+) -> Ran {
     gpu.begin_cell();
     if let Some(hook) = options.before_cell {
         hook(gpu, &cell.spec);
     }
     catch_unwind(AssertUnwindSafe(|| {
-        run_one(gpu, composer, cell, options, images, references)
+        run_one(gpu, composer, cell, options, references)
     }))
     .unwrap_or_else(|panic| {
         let why = crate::common::panic_message(panic.as_ref());
-        CellRecord::failed(cell.spec.clone(), format!("panicked: {why}"))
+        Ran::done(CellRecord::failed(
+            cell.spec.clone(),
+            format!("panicked: {why}"),
+        ))
     })
+}
+
+/// A cell after its GPU half: done (failed, refused, a sequence), or waiting for its CPU
+/// half (`finish_guarded`).
+enum Ran {
+    Done(Box<CellRecord>),
+    Pending(Box<Pending>),
+}
+
+impl Ran {
+    fn done(record: CellRecord) -> Self {
+        Ran::Done(Box::new(record))
+    }
+}
+
+/// What a cell's CPU half needs.
+struct Pending {
+    spec: CellSpec,
+    loaded: crate::variant::LoadedVariant,
+    scene: crate::scene::Scene,
+    half: GpuHalf,
 }
 
 /// After a failed cell: keep the device if it still works, else open a new one (or record in
@@ -537,16 +609,15 @@ fn run_one(
     composer: &Composer,
     cell: &PlannedCell,
     options: &MatrixOptions,
-    images: &Path,
     references: &ReferenceCache,
-) -> CellRecord {
+) -> Ran {
     let spec = cell.spec.clone();
     let loaded = match &cell.variant {
         Ok(v) => v,
-        Err(why) => return CellRecord::failed(spec, why.clone()),
+        Err(why) => return Ran::done(CellRecord::failed(spec, why.clone())),
     };
     if let Some(spec) = spec.sequence {
-        return run_sequence(
+        return Ran::done(run_sequence(
             gpu,
             composer,
             loaded,
@@ -554,31 +625,67 @@ fn run_one(
             cell.spec.clone(),
             options,
             references,
-        );
+        ));
     }
     let v = &loaded.variant;
     // The lights-per-cluster view shows where a clustered variant spends its time.
     let debug_view =
         (v.pipeline.is_clustered() && spec.sweep.is_empty() && v.debug_view == DebugView::Off)
             .then_some(DebugView::LightsPerCluster);
-    let result = run_cell(
-        gpu,
-        composer,
-        loaded,
-        &spec.scene,
-        spec.params.into(),
-        CellOptions {
-            frames: options.frames,
-            stats: true,
-            out: None,
-            references: Some(references),
-            debug_view,
+    let params = spec.params.into();
+    let half = gpu
+        .check_size(spec.params.width, spec.params.height)
+        .map_err(RunError::from)
+        .and_then(|()| crate::scene::generate(&spec.scene, params).map_err(RunError::Scene))
+        .and_then(|scene| {
+            let options = CellOptions {
+                frames: options.frames,
+                stats: true,
+                out: None,
+                references: Some(references),
+                debug_view,
+            };
+            let (half, _) = gpu_half(gpu, composer, loaded, &scene, options, references)?;
+            Ok((scene, half))
+        });
+    match half {
+        Ok((scene, half)) => Ran::Pending(Box::new(Pending {
+            spec,
+            loaded: loaded.clone(),
+            scene,
+            half,
+        })),
+        Err(e) => Ran::done(CellRecord::not_run(spec, &e)),
+    }
+}
+
+/// A cell's CPU half (`run::finish_cell`) and its images; a panic fails the cell alone.
+fn finish_guarded(
+    pending: Pending,
+    options: &MatrixOptions,
+    references: &ReferenceCache,
+) -> CellRecord {
+    let spec = pending.spec.clone();
+    catch_unwind(AssertUnwindSafe(|| finish(pending, options, references))).unwrap_or_else(
+        |panic| {
+            let why = crate::common::panic_message(panic.as_ref());
+            CellRecord::failed(spec, format!("panicked: {why}"))
         },
-    );
-    let mut c = match result {
+    )
+}
+
+fn finish(pending: Pending, options: &MatrixOptions, references: &ReferenceCache) -> CellRecord {
+    let Pending {
+        spec,
+        loaded,
+        scene,
+        half,
+    } = pending;
+    let mut c = match finish_cell(half, references, &loaded, &scene, None) {
         Ok(c) => c,
         Err(e) => return CellRecord::not_run(spec, &e),
     };
+    let images = options.out.join("images");
     let start = std::time::Instant::now();
     let stem = spec.file_stem();
     let relative = |p: &Path| {
@@ -588,7 +695,7 @@ fn run_one(
             .into_owned()
     };
     let mut files = Images::default();
-    match write_images(images, &stem, &c.frame, &c.reference) {
+    match write_images(&images, &stem, &c.frame, &c.reference) {
         Ok(paths) => {
             files.image = paths.first().map(|p| relative(p));
             files.heat = paths.get(1).map(|p| relative(p));

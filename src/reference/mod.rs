@@ -5,7 +5,7 @@
 mod inputs;
 
 use std::collections::HashMap;
-use std::sync::{Arc, Mutex};
+use std::sync::{Arc, Mutex, OnceLock};
 use std::time::Instant;
 
 use crate::compose::Composer;
@@ -30,18 +30,30 @@ pub const EXPOSURE: f64 = 1.0;
 /// nothing in the raster truth).
 #[derive(Default)]
 pub struct ReferenceCache {
-    /// Frames by what they depend on, with the time they took and the compositions their
-    /// raster truth used (logged again for each cell that takes the frame).
+    /// Frames by what they depend on: the compositions their raster truth used (logged
+    /// again for each cell that takes the frame) and the frame with the time it took, once
+    /// shaded.
     frames: Mutex<HashMap<String, Kept>>,
     /// Shadings before post effects, by scene (name, file and parameters).
     shadings: Mutex<HashMap<String, Vec<Shading>>>,
 }
 
-type Kept = (
-    Arc<ReferenceFrame>,
-    f64,
-    Vec<Arc<crate::compose::Composition>>,
-);
+type Kept = (Vec<Arc<crate::compose::Composition>>, Arc<OnceLock<Shaded>>);
+
+/// A reference frame and the milliseconds it took.
+type Shaded = (Arc<ReferenceFrame>, f64);
+
+/// A reference frame begun on the GPU (`ReferenceCache::begin`), to finish on the CPU.
+pub enum ReferenceJob {
+    /// Shade this raster truth, and keep the frame for the cells that wait for it.
+    Shade {
+        truth: RasterTruth,
+        scene_key: String,
+        slot: Arc<OnceLock<Shaded>>,
+    },
+    /// Take the frame an earlier job shades.
+    Wait(Arc<OnceLock<Shaded>>),
+}
 
 /// One raster truth shaded in f64, before post effects.
 struct Shading {
@@ -70,8 +82,8 @@ impl ReferenceCache {
         (frames, shadings)
     }
 
-    /// The reference of `variant` on `scene`, computed on first use. The time returned is
-    /// what its shading and post effects took when they were computed.
+    /// The reference frame of `variant` on `scene`, computed once per distinct frame, and
+    /// the milliseconds it took when computed (the same figure for every cell sharing it).
     pub fn get_or_compute(
         &self,
         gpu: &Gpu,
@@ -79,9 +91,21 @@ impl ReferenceCache {
         variant: &LoadedVariant,
         scene: &Scene,
     ) -> Result<(Arc<ReferenceFrame>, f64), RunError> {
+        let job = self.begin(gpu, composer, variant, scene)?;
+        self.finish(job, variant, scene)
+    }
+
+    /// The GPU half of a reference: its raster truth, unless a cell before asked for the
+    /// same frame (then the job waits for that cell's). Jobs must then be finished in the
+    /// order they were begun: a frame is shaded by the job that began it.
+    pub fn begin(
+        &self,
+        gpu: &Gpu,
+        composer: &Composer,
+        variant: &LoadedVariant,
+        scene: &Scene,
+    ) -> Result<ReferenceJob, RunError> {
         let v = &variant.variant;
-        let shading = ShadingParams::of(v);
-        let post_params = PostParams::of(v);
         let scene_key = format!(
             "{}|{:?}|{:?}",
             scene.name,
@@ -90,17 +114,56 @@ impl ReferenceCache {
         );
         // Everything the raster truth, the shading and the post chain depend on.
         let key = format!(
-            "{scene_key}|{shading:?}|{post_params:?}|{:?}|{}|{:?}",
-            v.depth, v.depth_prepass, v.msaa
+            "{scene_key}|{:?}|{:?}|{:?}|{}|{:?}",
+            ShadingParams::of(v),
+            PostParams::of(v),
+            v.depth,
+            v.depth_prepass,
+            v.msaa
         );
-        if let Some((frame, ms, used)) = self.frames.lock().expect("cache lock").get(&key) {
+        if let Some((used, slot)) = self.frames.lock().expect("cache lock").get(&key) {
             composer.relog(used);
-            return Ok((frame.clone(), *ms));
+            return Ok(ReferenceJob::Wait(slot.clone()));
         }
         let mark = composer.log_mark();
         let truth = raster_truth(gpu, composer, v, scene)?;
-        let used = composer.logged_since(mark);
-        let (shaded, shading_ms) = self.shading(scene_key, truth, shading, scene);
+        let slot = Arc::new(OnceLock::new());
+        self.frames
+            .lock()
+            .expect("cache lock")
+            .insert(key, (composer.logged_since(mark), slot.clone()));
+        Ok(ReferenceJob::Shade {
+            truth,
+            scene_key,
+            slot,
+        })
+    }
+
+    /// The CPU half: shade and post-process the truth in f64 (sharing a shading another
+    /// variant made from the same truth), or take the frame the job waits for.
+    pub fn finish(
+        &self,
+        job: ReferenceJob,
+        variant: &LoadedVariant,
+        scene: &Scene,
+    ) -> Result<(Arc<ReferenceFrame>, f64), RunError> {
+        let (truth, scene_key, slot) = match job {
+            ReferenceJob::Wait(slot) => {
+                return slot.get().cloned().ok_or_else(|| {
+                    RunError::Io(
+                        "the reference frame this cell shares failed in an earlier cell".into(),
+                    )
+                });
+            }
+            ReferenceJob::Shade {
+                truth,
+                scene_key,
+                slot,
+            } => (truth, scene_key, slot),
+        };
+        let v = &variant.variant;
+        let post_params = PostParams::of(v);
+        let (shaded, shading_ms) = self.shading(scene_key, truth, ShadingParams::of(v), scene);
         let start = Instant::now();
         // Without post effects the frame is the shading itself, held once.
         let frame = if post_params.any() {
@@ -111,10 +174,7 @@ impl ReferenceCache {
             shaded.frame
         };
         let entry = (frame, shading_ms + start.elapsed().as_secs_f64() * 1e3);
-        self.frames
-            .lock()
-            .expect("cache lock")
-            .insert(key, (entry.0.clone(), entry.1, used));
+        let _ = slot.set(entry.clone());
         Ok(entry)
     }
 
