@@ -176,6 +176,15 @@ pub struct DepthMapping {
     pub infinite_far: bool,
 }
 
+/// Depth buffer formats.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
+pub enum DepthFormat {
+    /// 24-bit unsigned normalised depth.
+    Unorm24,
+    /// 32-bit float depth.
+    Float32,
+}
+
 /// How view depth between the camera's near and far planes is cut into slices.
 #[derive(
     Clone, Copy, Debug, PartialEq, Serialize, Deserialize, JsonSchema, EnumIter, IntoStaticStr,
@@ -370,4 +379,13 @@ pub fn panic_message(payload: &(dyn std::any::Any + Send)) -> String {
         .cloned()
         .or_else(|| payload.downcast_ref::<&str>().map(|s| s.to_string()))
         .unwrap_or_else(|| "unknown panic".into())
+}
+
+/// The sRGB transfer function (IEC 61966-2-1).
+pub fn srgb_encode(linear: f64) -> f64 {
+    if linear <= 0.0031308 {
+        linear * 12.92
+    } else {
+        1.055 * linear.powf(1.0 / 2.4) - 0.055
+    }
 }

@@ -8,7 +8,7 @@ use serde_json::{Map, Value};
 
 /// The JSON schema of a variant file.
 pub fn schema() -> Value {
-    serde_json::to_value(schemars::schema_for!(crate::variant::Variant)).unwrap_or(Value::Null)
+    crate::variant::schema()
 }
 
 /// The whole schema, explained.
@@ -93,37 +93,6 @@ fn explain_variants(variants: &[Value], indent: &str, defs: &Map<String, Value>,
             write_doc(out, &format!("{indent}      "), doc);
         }
     }
-}
-
-/// The whole numbers field `name` (a field name, anywhere in the schema) takes, for a
-/// message about a number out of range: `0..=4294967295 (u32)`.
-pub fn integer_range(name: &str) -> Option<String> {
-    fn find<'a>(v: &'a Value, name: &str) -> Option<&'a Value> {
-        match v {
-            Value::Object(map) => map
-                .get("properties")
-                .and_then(|p| p.get(name))
-                .or_else(|| map.values().find_map(|inner| find(inner, name))),
-            Value::Array(items) => items.iter().find_map(|inner| find(inner, name)),
-            _ => None,
-        }
-    }
-    fn format(v: &Value) -> Option<&str> {
-        v["format"].as_str().or_else(|| {
-            let items = v["prefixItems"].as_array().or(v["anyOf"].as_array())?;
-            items.iter().find_map(format)
-        })
-    }
-    let schema = schema();
-    let range = match format(find(&schema, name)?)? {
-        "uint8" => "0..=255 (u8)",
-        "uint16" => "0..=65535 (u16)",
-        "uint32" => "0..=4294967295 (u32)",
-        "uint64" => "0..=18446744073709551615 (u64)",
-        "int32" => "-2147483648..=2147483647 (i32)",
-        _ => return None,
-    };
-    Some(range.to_string())
 }
 
 /// The definition a property refers to (through `$ref`, or an optional's `anyOf`).

@@ -16,8 +16,8 @@ pub enum KernelInput<'a> {
     Depth(&'a wgpu::Texture),
 }
 
-/// `run_kernel` with the flags and constants of `variant` (kernels that call the variant's
-/// own functions, such as `encode_normal`), and inputs that may be depth textures.
+/// Run a test kernel with the flags and constants of `variant` (kernels that call the
+/// variant's own functions, such as `encode_normal`), on inputs that may be depth textures.
 #[allow(clippy::too_many_arguments)]
 pub fn run_kernel_for(
     gpu: &Gpu,

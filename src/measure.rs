@@ -94,7 +94,7 @@ impl Budget {
 pub fn relative_half_range(times: &[f64]) -> f64 {
     let min = times.iter().copied().fold(f64::INFINITY, f64::min);
     let max = times.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-    let median = crate::run::median(times.to_vec());
+    let median = median(times.to_vec());
     if times.len() < 2 || median <= 0.0 {
         0.0
     } else {
@@ -189,6 +189,17 @@ impl CpuClock {
         let total = later.machine_total_s - self.machine_total_s;
         let others = (later.machine_busy_s - self.machine_busy_s) - (later.own_s - self.own_s);
         (total > 0.0).then(|| (others / total).clamp(0.0, 1.0))
+    }
+}
+
+/// The median of `v` (the mean of the middle two of an even count; 0 for none).
+pub fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    match n {
+        0 => 0.0,
+        _ if n % 2 == 1 => v[n / 2],
+        _ => (v[n / 2 - 1] + v[n / 2]) / 2.0,
     }
 }
 

@@ -13,10 +13,10 @@ use crate::cpu::frame::ReferenceFrame;
 use crate::efficiency::Efficiency;
 use crate::gpu::{AdapterSummary, Gpu, Timings};
 use crate::measure::{
-    CpuClock, DISTURBED_RETRIES, DISTURBED_SHARE, FrameCount, Frames, JUDGED_FRAME_MS,
+    CpuClock, DISTURBED_RETRIES, DISTURBED_SHARE, FrameCount, Frames, JUDGED_FRAME_MS, median,
 };
 use crate::metrics::{self, ErrorMetrics};
-use crate::reference::{ReferenceCache, ReferenceJob};
+use crate::reference::{ReferenceCache, ReferenceError, ReferenceJob};
 use crate::render::{FrameOutput, FrameStats, RenderError, Renderer};
 use crate::scene::{Scene, SceneError, SceneParams};
 use crate::variant::{LoadedVariant, Variant};
@@ -100,6 +100,18 @@ pub enum RunError {
     Render(#[from] RenderError),
     #[error("{0}")]
     Io(String),
+    #[error("{0}")]
+    Reference(ReferenceError),
+}
+
+impl From<ReferenceError> for RunError {
+    /// A raster truth that could not be rendered fails (or is refused) as a frame does.
+    fn from(e: ReferenceError) -> Self {
+        match e {
+            ReferenceError::Truth(e) => RunError::Render(e),
+            shared => RunError::Reference(shared),
+        }
+    }
 }
 
 impl RunError {
@@ -561,17 +573,6 @@ pub fn safe_file_name(text: &str) -> String {
 
 pub fn round3(x: f64) -> f64 {
     (x * 1000.0).round() / 1000.0
-}
-
-/// The median of `v` (the mean of the middle two of an even count; 0 for none).
-pub fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    let n = v.len();
-    match n {
-        0 => 0.0,
-        _ if n % 2 == 1 => v[n / 2],
-        _ => (v[n / 2 - 1] + v[n / 2]) / 2.0,
-    }
 }
 
 /// [min, max] of each pass of `medians` (and of the total) over the frames.

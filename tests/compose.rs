@@ -17,11 +17,12 @@ fn snapshot_settings(folder: &str) -> insta::Settings {
 }
 
 /// One snapshot per distinct composed shader: every pass of every variant in variants/ is
-/// composed (a shading pass also instrumented, as `<pass>.counting`), and equal WGSL is one snapshot, named after its pass and a hash of its text
-/// (`shader_name`), whose header lists every variant that shares it. A new variant file then
-/// joins existing snapshots or adds its own with no code change, and renames none; a change
-/// to a module shows as each shader it reaches, under its new name, with the old ones
-/// listed here to delete.
+/// composed (a shading pass also instrumented, as `<pass>.counting`), and equal WGSL is one
+/// snapshot, named after its pass and a hash of its text (`shader_name`); `USERS` lists the
+/// variants that share each. A new variant file then joins existing snapshots (changing
+/// only that index) or adds its own with no code change, and renames none; a change to a
+/// module shows as each shader it reaches, under its new name, with the old ones listed
+/// here to delete.
 #[test]
 fn composed_wgsl_of_every_distinct_pass() {
     let composer = Composer::default();
@@ -80,47 +81,33 @@ fn composed_wgsl_of_every_distinct_pass() {
         }
     }
     let mut names: Vec<String> = Vec::new();
-    let mut stale_headers = Vec::new();
+    // Which variants compose each shader: one index, so that a new variant sharing a shader
+    // changes this file and not the snapshot's header.
+    let mut index = Vec::new();
     for ((pass, wgsl), users) in &shaders {
         let name = shader_name(pass, wgsl);
         let mut settings = snapshot_settings("wgsl");
-        settings.set_description(format!(
-            "pass `{pass}` as {} variant(s) compose it: {}",
-            users.len(),
-            users.join(", ")
-        ));
+        settings.set_description(format!("pass `{pass}`"));
         settings.bind(|| insta::assert_snapshot!(name.clone(), wgsl));
-        // insta compares the body only: check the header still names every user.
-        let file = format!("snapshots/wgsl/{name}.snap");
-        let header = std::fs::read_to_string(&file)
-            .ok()
-            .and_then(|t| {
-                t.lines()
-                    .find(|l| l.starts_with("description:"))
-                    .map(String::from)
-            })
-            .unwrap_or_default();
-        let listed: Vec<&str> = header
-            .split(": ")
-            .nth(2)
-            .unwrap_or("")
-            .trim_end_matches('"')
-            .split(", ")
-            .collect();
-        if listed != users.iter().map(String::as_str).collect::<Vec<_>>() {
-            stale_headers.push(file);
-        }
         let file_name = format!("{name}.snap");
         assert!(
             !names.contains(&file_name),
             "two shaders of pass `{pass}` hash alike: lengthen `shader_name`'s hash"
         );
+        index.push(format!("{file_name}: {}\n", users.join(", ")));
         names.push(file_name);
     }
+    index.sort();
+    let index = index.concat();
+    let updating = std::env::var("INSTA_UPDATE").is_ok_and(|v| v == "always")
+        || std::env::var_os("INSTA_FORCE_UPDATE").is_some();
+    if updating {
+        std::fs::write(USERS, &index).expect("the snapshots' index");
+    }
     assert!(
-        stale_headers.is_empty(),
-        "snapshot headers that do not list the variants sharing the shader (rewrite them \
-         with `INSTA_FORCE_UPDATE=1 INSTA_UPDATE=always cargo test compose::`): {stale_headers:?}"
+        std::fs::read_to_string(USERS).is_ok_and(|t| t.replace("\r\n", "\n") == index),
+        "{USERS} does not list the variants composing each shader (rewrite it with \
+         `INSTA_UPDATE=always cargo test compose::`)"
     );
     // No snapshot is left that no shader produces.
     let stale: Vec<String> = std::fs::read_dir("snapshots/wgsl")
@@ -133,6 +120,9 @@ fn composed_wgsl_of_every_distinct_pass() {
         "snapshots of no composed shader (delete them): {stale:?}"
     );
 }
+
+/// The variants composing each WGSL snapshot, one line a snapshot.
+const USERS: &str = "snapshots/wgsl/users.txt";
 
 /// A shader's snapshot name: its pass and the first 32 bits of the SHA-256 of its text (line
 /// ends made `\n`, so a checkout's line ends do not rename it).

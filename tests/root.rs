@@ -19,6 +19,7 @@ mod hostile;
 mod images;
 mod inputs;
 mod kernels;
+mod layers;
 mod matrix;
 mod measure;
 mod naive;

@@ -8,14 +8,8 @@ pub fn tonemap_reinhard(hdr: [f64; 3], exposure: f64) -> [f64; 3] {
     })
 }
 
-/// The sRGB transfer function (IEC 61966-2-1).
-pub fn srgb_encode(linear: f64) -> f64 {
-    if linear <= 0.0031308 {
-        linear * 12.92
-    } else {
-        1.055 * linear.powf(1.0 / 2.4) - 0.055
-    }
-}
+/// Scenes' textures use it too, so it lives with the plain shared types.
+pub use crate::common::srgb_encode;
 
 /// Round a display value in [0, 1] to 8 bits.
 pub fn to_unorm8(x: f64) -> u8 {

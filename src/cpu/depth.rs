@@ -47,15 +47,15 @@ impl DepthMapping {
     /// d(z), divided by the slope dd/dz; relative to z.
     pub fn stored_relative_error(
         self,
-        format: crate::variant::DepthFormat,
+        format: crate::common::DepthFormat,
         z: f64,
         near: f64,
         far: f64,
     ) -> f64 {
         let d = self.device_depth(z, near, far);
         let step = match format {
-            crate::variant::DepthFormat::Unorm24 => 1.0 / ((1u32 << 24) - 1) as f64,
-            crate::variant::DepthFormat::Float32 => f32_spacing(d),
+            crate::common::DepthFormat::Unorm24 => 1.0 / ((1u32 << 24) - 1) as f64,
+            crate::common::DepthFormat::Float32 => f32_spacing(d),
         };
         0.5 * step / (self.slope(z, near, far) * z)
     }

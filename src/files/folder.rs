@@ -28,6 +28,8 @@ use super::{describe, shown};
 
 /// The marker file every result folder holds.
 pub const MARKER_NAME: &str = ".clusterlab-results";
+/// What each cell of a matrix run depended on (`matrix::reuse`).
+pub const REUSE_FILE: &str = "reuse.json";
 const MARKER_HEADER: &str = "clusterlab results";
 const LOCK_HEADER: &str = "clusterlab lock";
 
@@ -100,7 +102,7 @@ fn owner(dir: &Path) -> Result<Owner, String> {
                 None => results = true,
                 Some(why) => return foreign(format!("its results.json {why}")),
             },
-            "results.csv" | "index.html" | crate::matrix::REUSE_FILE if kind.is_file() => {}
+            "results.csv" | "index.html" | REUSE_FILE if kind.is_file() => {}
             "images" | "plots" if kind.is_dir() => {
                 let exts: &[&str] = if name == "images" {
                     &[".png", ".gif"]

@@ -238,7 +238,7 @@ pub const TRANSPARENCY_GROUP: [&str; 14] = [
 /// scene (`TRANSPARENCY_GROUP`, at a quarter of its pixels), the sampled light loops beside
 /// exact ones where lists are long (`SAMPLING_EXACT`), and the list strategies in sequences.
 pub fn default_groups() -> Result<Vec<Group>, String> {
-    let glass = crate::study::transparency::SCENE;
+    let glass = crate::scene::TRANSPARENCY_SCENE;
     let scenes = crate::scene::SCENES
         .iter()
         .filter(|s| s.name != glass)

@@ -19,7 +19,7 @@ use crate::gpu::Gpu;
 use crate::measure::Frames;
 
 /// The file of a result folder that says what each cell depended on.
-pub const FILE: &str = "reuse.json";
+pub use crate::files::folder::REUSE_FILE as FILE;
 
 /// What every cell of a run depended on, for a later run to compare with.
 #[derive(Clone, Debug, Default, Serialize, Deserialize)]

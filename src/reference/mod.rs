@@ -14,8 +14,8 @@ use crate::cpu::post::{CameraPair, Geometry, PostParams};
 use crate::cpu::shading::ShadingParams;
 use crate::cpu::truth::RasterTruth;
 use crate::gpu::Gpu;
+use crate::render::RenderError;
 use crate::render::raster_truth;
-use crate::run::RunError;
 use crate::scene::Scene;
 use crate::variant::LoadedVariant;
 
@@ -42,6 +42,17 @@ type Kept = (Vec<Arc<crate::compose::Composition>>, Arc<OnceLock<Shaded>>);
 
 /// A reference frame and the milliseconds it took.
 type Shaded = (Arc<ReferenceFrame>, f64);
+
+/// Why a reference frame was not made.
+#[derive(Debug, thiserror::Error)]
+pub enum ReferenceError {
+    /// Its raster truth could not be rendered.
+    #[error("{0}")]
+    Truth(#[from] RenderError),
+    /// The cell that began the frame this one shares failed before shading it.
+    #[error("the reference frame this cell shares failed in an earlier cell")]
+    Shared,
+}
 
 /// A reference frame begun on the GPU (`ReferenceCache::begin`), to finish on the CPU.
 pub enum ReferenceJob {
@@ -90,7 +101,7 @@ impl ReferenceCache {
         composer: &Composer,
         variant: &LoadedVariant,
         scene: &Scene,
-    ) -> Result<(Arc<ReferenceFrame>, f64), RunError> {
+    ) -> Result<(Arc<ReferenceFrame>, f64), ReferenceError> {
         let job = self.begin(gpu, composer, variant, scene)?;
         self.finish(job, variant, scene)
     }
@@ -104,7 +115,7 @@ impl ReferenceCache {
         composer: &Composer,
         variant: &LoadedVariant,
         scene: &Scene,
-    ) -> Result<ReferenceJob, RunError> {
+    ) -> Result<ReferenceJob, ReferenceError> {
         let v = &variant.variant;
         let scene_key = format!(
             "{}|{:?}|{:?}",
@@ -146,14 +157,10 @@ impl ReferenceCache {
         job: ReferenceJob,
         variant: &LoadedVariant,
         scene: &Scene,
-    ) -> Result<(Arc<ReferenceFrame>, f64), RunError> {
+    ) -> Result<(Arc<ReferenceFrame>, f64), ReferenceError> {
         let (truth, scene_key, slot) = match job {
             ReferenceJob::Wait(slot) => {
-                return slot.get().cloned().ok_or_else(|| {
-                    RunError::Io(
-                        "the reference frame this cell shares failed in an earlier cell".into(),
-                    )
-                });
+                return slot.get().cloned().ok_or(ReferenceError::Shared);
             }
             ReferenceJob::Shade {
                 truth,
@@ -251,7 +258,7 @@ pub fn reference_frame(
     composer: &Composer,
     variant: &LoadedVariant,
     scene: &Scene,
-) -> Result<(ReferenceFrame, f64), RunError> {
+) -> Result<(ReferenceFrame, f64), ReferenceError> {
     let truth = raster_truth(gpu, composer, &variant.variant, scene)?;
     let start = Instant::now();
     let mut reference = shade_reference(

@@ -181,11 +181,6 @@ impl Motion {
         still_at: 0.0,
     };
 
-    /// Whether everything moves (`still_at` then means nothing).
-    pub fn is_all(&self) -> bool {
-        self.lights >= 1.0 && self.camera
-    }
-
     /// The time at which a part that moves (`moves`) is posed in a frame at `time`.
     pub fn pose_time(&self, moves: bool, time: f64) -> f64 {
         if moves { time } else { self.still_at }
@@ -194,6 +189,9 @@ impl Motion {
 
 /// Time between the previous frame and this one (motion vectors, previous-frame depth).
 pub const FRAME_DT: f64 = 1.0 / 30.0;
+/// The built-in scene with blended panes and masked cut-outs: the transparency study and
+/// the default matrix's transparency group run it.
+pub const TRANSPARENCY_SCENE: &str = "glass";
 /// Most lights a scene may have.
 pub const MAX_LIGHTS: u32 = 1 << 20;
 /// Latest time of a frame, seconds: the built-in cameras have long left their scenes by then.

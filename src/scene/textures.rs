@@ -8,7 +8,7 @@
 //! mip levels below are 2x2 box filters in linear space. Sampling is trilinear with
 //! repeat, glTF's default sampler.
 
-use crate::cpu::color::srgb_encode;
+use crate::common::srgb_encode;
 
 /// The largest side a layer may have: 1024 keeps Sponza's 25 textures at about 140 MB with
 /// their mips, which a software rasteriser samples at a usable speed.

@@ -20,10 +20,11 @@ use serde_json::{Map, Value};
 use crate::compose::Composer;
 use crate::cpu::frame::ReferenceFrame;
 use crate::gpu::{AdapterSummary, Gpu};
+use crate::measure::median;
 use crate::metrics::{self, ErrorMetrics, TemporalError};
 use crate::reference::ReferenceCache;
 use crate::render::{FrameChange, FrameOutput, FrameStats, RenderError, Renderer};
-use crate::run::{RunError, median, round3};
+use crate::run::{RunError, round3};
 use crate::scene::{FRAME_DT, Scene, SceneError};
 use crate::variant::{ListUpdate, LoadedVariant, Variant};
 

@@ -67,7 +67,7 @@ fn measure(
     }
     let stats = r.stats().map_err(|e| e.to_string())?;
     let (missed, _) = crate::stress::missing_lights_of(&r, v, scene)?;
-    Ok((stats, crate::run::median(shading), missed))
+    Ok((stats, crate::measure::median(shading), missed))
 }
 
 /// Run both spot tests at each fraction on each scene (at `size`, with `lights` or the

@@ -64,9 +64,9 @@ pub(crate) fn measure(
     }
     Ok(Measured {
         stats: renderer.stats()?,
-        frame_ms: crate::run::median(frame),
-        shading_ms: crate::run::median(shading),
-        assignment_ms: crate::run::median(assignment),
+        frame_ms: crate::measure::median(frame),
+        shading_ms: crate::measure::median(shading),
+        assignment_ms: crate::measure::median(assignment),
         timing_source: if timestamps {
             "timestamps"
         } else {

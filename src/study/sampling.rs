@@ -293,9 +293,9 @@ fn measure(
         let stats = renderer.stats()?;
         row.frame_min_ms = totals.iter().copied().fold(f64::INFINITY, f64::min);
         row.frame_max_ms = totals.iter().copied().fold(0.0, f64::max);
-        row.frame_ms = crate::run::median(totals);
-        row.lists_ms = crate::run::median(lists);
-        row.shading_ms = crate::run::median(shading);
+        row.frame_ms = crate::measure::median(totals);
+        row.lists_ms = crate::measure::median(lists);
+        row.shading_ms = crate::measure::median(shading);
         row.max_abs_8bit = e.max_abs_8bit;
         row.rmse_8bit = e.rmse_8bit;
         row.relative_mse = e.relative_mse;
@@ -359,7 +359,7 @@ fn temporal_point(
         row.useful = stats.useful_light_evals;
         row.frame_min_ms = totals.iter().copied().fold(f64::INFINITY, f64::min);
         row.frame_max_ms = totals.iter().copied().fold(0.0, f64::max);
-        row.frame_ms = crate::run::median(totals);
+        row.frame_ms = crate::measure::median(totals);
         Ok(())
     })();
     if let Err(e) = result {

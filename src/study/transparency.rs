@@ -15,8 +15,7 @@ use crate::run::{CellOptions, run_scene};
 use crate::scene::{Scene, SceneParams};
 use crate::variant::LoadedVariant;
 
-/// The scene the study and the default matrix's transparency group run.
-pub const SCENE: &str = "glass";
+use crate::scene::TRANSPARENCY_SCENE as SCENE;
 
 /// One variant on the scene with its panes or without.
 #[derive(Clone, Debug, Serialize)]

@@ -99,7 +99,7 @@ pub fn parse(path: &Path, text: &str) -> Result<Variant, VariantError> {
         let mut message = e.code.to_string();
         if e.code == ron::Error::IntegerOutOfBounds
             && let Some(field) = field_before(text, pos.line, pos.col)
-            && let Some(range) = crate::explain::integer_range(&field)
+            && let Some(range) = integer_range(&field)
         {
             message = format!("{message}: field `{field}` takes whole numbers in {range}");
         }
@@ -246,4 +246,40 @@ fn find_key(text: &str, key: &str) -> Option<usize> {
         }
     }
     None
+}
+
+/// The variant file's JSON schema (`explain` prints it field by field).
+pub fn schema() -> serde_json::Value {
+    serde_json::to_value(schemars::schema_for!(Variant)).unwrap_or(serde_json::Value::Null)
+}
+
+/// The whole numbers field `name` (a field name, anywhere in the schema) takes, for a
+/// message about a number out of range: `0..=4294967295 (u32)`.
+pub fn integer_range(name: &str) -> Option<String> {
+    fn find<'a>(v: &'a serde_json::Value, name: &str) -> Option<&'a serde_json::Value> {
+        match v {
+            serde_json::Value::Object(map) => map
+                .get("properties")
+                .and_then(|p| p.get(name))
+                .or_else(|| map.values().find_map(|inner| find(inner, name))),
+            serde_json::Value::Array(items) => items.iter().find_map(|inner| find(inner, name)),
+            _ => None,
+        }
+    }
+    fn format(v: &serde_json::Value) -> Option<&str> {
+        v["format"].as_str().or_else(|| {
+            let items = v["prefixItems"].as_array().or(v["anyOf"].as_array())?;
+            items.iter().find_map(format)
+        })
+    }
+    let schema = schema();
+    let range = match format(find(&schema, name)?)? {
+        "uint8" => "0..=255 (u8)",
+        "uint16" => "0..=65535 (u16)",
+        "uint32" => "0..=4294967295 (u32)",
+        "uint64" => "0..=18446744073709551615 (u64)",
+        "int32" => "-2147483648..=2147483647 (i32)",
+        _ => return None,
+    };
+    Some(range.to_string())
 }

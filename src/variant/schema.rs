@@ -6,7 +6,7 @@
 
 use crate::common::DepthMapping;
 pub use crate::common::{
-    DepthRangeSource, MsaaResolve, NormalCodec, PostEffect, SpotTest, ZSlicing,
+    DepthFormat, DepthRangeSource, MsaaResolve, NormalCodec, PostEffect, SpotTest, ZSlicing,
 };
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
@@ -464,15 +464,6 @@ impl Msaa {
     pub fn on(&self) -> bool {
         self.samples > 1
     }
-}
-
-/// Depth buffer formats.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
-pub enum DepthFormat {
-    /// 24-bit unsigned normalised depth.
-    Unorm24,
-    /// 32-bit float depth.
-    Float32,
 }
 
 /// The surface shading model.
