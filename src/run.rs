@@ -265,8 +265,6 @@ pub fn gpu_half<'g>(
     if let Some(ms) = frame.cpu_assign_ms {
         cpu_ms.insert("light_assign".into(), round3(ms).into());
     }
-    let reference = references.begin(gpu, composer, variant, scene)?;
-    cost.reference = lap();
     let stats = options
         .stats
         .then(|| {
@@ -275,6 +273,9 @@ pub fn gpu_half<'g>(
         })
         .transpose()?;
     cost.counters = lap();
+    // Last: nothing after it may fail, so the job it begins is always finished.
+    let reference = references.begin(gpu, composer, variant, scene)?;
+    cost.reference = lap();
     let mut gpu_ms = Map::new();
     // The median of the frames' totals, not the sum of the passes' medians: a sum of medians
     // of different frames can lie outside every frame's total (it did: 6.9 ms against frames

@@ -532,6 +532,7 @@ pub fn run(
     results
 }
 
+/// Run one cell's GPU half with its time limit started, turning a panic into a failed cell.
 fn run_guarded(
     gpu: &Gpu,
     composer: &Composer,

@@ -38,10 +38,23 @@ pub struct ReferenceCache {
     shadings: Mutex<HashMap<String, Vec<Shading>>>,
 }
 
-type Kept = (Vec<Arc<crate::compose::Composition>>, Arc<OnceLock<Shaded>>);
+type Kept = (Vec<Arc<crate::compose::Composition>>, Slot);
 
 /// A reference frame and the milliseconds it took.
 type Shaded = (Arc<ReferenceFrame>, f64);
+
+/// Where a begun frame lands once shaded: the frame, or word that it never will be.
+type Slot = Arc<OnceLock<Result<Shaded, ()>>>;
+
+/// A job's hold on its slot: a job dropped unfinished (its shading panicked, the thread
+/// meant to finish it is gone) marks the slot failed, so no cell waits on it forever.
+pub struct Fill(Slot);
+
+impl Drop for Fill {
+    fn drop(&mut self) {
+        let _ = self.0.set(Err(()));
+    }
+}
 
 /// Why a reference frame was not made.
 #[derive(Debug, thiserror::Error)]
@@ -60,10 +73,10 @@ pub enum ReferenceJob {
     Shade {
         truth: RasterTruth,
         scene_key: String,
-        slot: Arc<OnceLock<Shaded>>,
+        slot: Fill,
     },
-    /// Take the frame an earlier job shades.
-    Wait(Arc<OnceLock<Shaded>>),
+    /// Take the frame an earlier job shades (waiting until it has).
+    Wait(Slot),
 }
 
 /// One raster truth shaded in f64, before post effects.
@@ -107,8 +120,9 @@ impl ReferenceCache {
     }
 
     /// The GPU half of a reference: its raster truth, unless a cell before asked for the
-    /// same frame (then the job waits for that cell's). Jobs must then be finished in the
-    /// order they were begun: a frame is shaded by the job that began it.
+    /// same frame (then the job waits for that cell's to be finished, on whichever thread).
+    /// A frame is shaded by the job that began it: begin only where the job will be
+    /// finished (a job dropped unfinished fails the cells that share its frame).
     pub fn begin(
         &self,
         gpu: &Gpu,
@@ -146,7 +160,7 @@ impl ReferenceCache {
         Ok(ReferenceJob::Shade {
             truth,
             scene_key,
-            slot,
+            slot: Fill(slot),
         })
     }
 
@@ -160,7 +174,7 @@ impl ReferenceCache {
     ) -> Result<(Arc<ReferenceFrame>, f64), ReferenceError> {
         let (truth, scene_key, slot) = match job {
             ReferenceJob::Wait(slot) => {
-                return slot.get().cloned().ok_or(ReferenceError::Shared);
+                return slot.wait().clone().map_err(|()| ReferenceError::Shared);
             }
             ReferenceJob::Shade {
                 truth,
@@ -181,7 +195,7 @@ impl ReferenceCache {
             shaded.frame
         };
         let entry = (frame, shading_ms + start.elapsed().as_secs_f64() * 1e3);
-        let _ = slot.set(entry.clone());
+        let _ = slot.0.set(Ok(entry.clone()));
         Ok(entry)
     }
 
