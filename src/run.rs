@@ -280,12 +280,15 @@ pub fn gpu_half<'g>(
     // The median of the frames' totals, not the sum of the passes' medians: a sum of medians
     // of different frames can lie outside every frame's total (it did: 6.9 ms against frames
     // of 7.6-13.2 ms), and the spread beside it is of the totals.
+    let fastest = runs_total_ms.iter().copied().fold(f64::INFINITY, f64::min);
+    let slowest = runs_total_ms.iter().copied().fold(0.0, f64::max);
     let total = median(runs_total_ms);
     gpu_ms.insert("total".into(), round3(total).into());
     let efficiency = stats.as_ref().and_then(|s| {
         let shading = renderer.shading_pass_names();
         let counts = (s.light_evals, s.useful_light_evals);
-        Efficiency::of(total, &timings, &without_lights, &shading, counts)
+        let frames = (total, fastest, slowest);
+        Efficiency::of(frames, &timings, &without_lights, &shading, counts)
     });
     for (name, ms) in &timings.passes {
         gpu_ms.insert(name.clone(), round3(*ms).into());

@@ -788,3 +788,45 @@ fn cells_are_the_same_with_and_without_the_overlap() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// No cell is ever shown beating its perfect-culling bound: on `one_light`, where a frame is
+/// barely longer than its frame without lights, the two timed apart put many bounds past
+/// their frames; each is 100% and within noise, never more, in results.json and the CSV.
+#[test]
+fn no_efficiency_is_above_100_percent() {
+    let dir = scratch("efficiency");
+    let (ok, text) = cli([
+        "matrix",
+        "--variants",
+        "forward_plus",
+        "forward_plus_two_level",
+        "clustered_deferred_16x16x24",
+        "--scenes",
+        "one_light",
+        "--size",
+        "64x36",
+        "--out",
+        dir.to_str().unwrap(),
+    ])
+    .run()
+    .succeeded();
+    assert!(ok, "{text}");
+    let results = Results::load(&dir).unwrap();
+    let efficiencies: Vec<_> = results.cells.iter().filter_map(|c| c.efficiency).collect();
+    assert!(!efficiencies.is_empty(), "no cell has an efficiency");
+    for e in &efficiencies {
+        assert!(e.efficiency <= 1.0, "{e:?}");
+        assert!(!e.within_noise || e.efficiency == 1.0, "{e:?}");
+    }
+    let csv = std::fs::read_to_string(dir.join("results.csv")).unwrap();
+    let mut rows = csv.lines();
+    let header: Vec<&str> = rows.next().unwrap().split(',').collect();
+    let column = header.iter().position(|h| *h == "efficiency").unwrap();
+    for row in rows {
+        let value = row.split(',').nth(column).unwrap_or("");
+        if let Ok(v) = value.parse::<f64>() {
+            assert!(v <= 1.0, "{row}");
+        }
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -251,7 +251,12 @@ pub const COLUMNS: &[Column] = &[
         heading: "efficiency",
         shown: CSV_AND_HTML,
         value: |m| m.efficiency.map(|e| e.efficiency).into(),
-        text: |m| or_dash(m.efficiency, |e| format!("{:.0}%", e.efficiency * 100.0)),
+        text: |m| {
+            or_dash(m.efficiency, |e| match e.within_noise {
+                true => "100% (within noise)".into(),
+                false => format!("{:.0}%", e.efficiency * 100.0),
+            })
+        },
     },
     Column {
         key: "ns_per_useful_evaluation",

@@ -164,7 +164,8 @@ fn at_a_glance(h: &mut String, results: &Results) {
         let efficient = cells
             .iter()
             .filter(|c| shown(c) && exact(c))
-            .filter_map(|c| Some((c.efficiency?, c)))
+            // A cell at its bound within noise says nothing about which culls best.
+            .filter_map(|c| Some((c.efficiency.filter(|e| !e.within_noise)?, c)))
             .max_by(|a, b| a.0.efficiency.total_cmp(&b.0.efficiency))
             .map_or("-".into(), |(e, c)| {
                 format!(

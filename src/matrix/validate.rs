@@ -193,6 +193,7 @@ fn check_cell(c: &CellRecord) -> Result<(), String> {
                 "efficiency.ns_per_useful_evaluation",
                 e.ns_per_useful_evaluation,
             ),
+            // Results written before the bound was capped hold ratios above 1.
             ("efficiency.efficiency", e.efficiency),
         ] {
             if !(v.is_finite() && v >= 0.0) {
