@@ -97,6 +97,11 @@ impl Previous {
         let mut used = Vec::with_capacity(shaders.compositions.len());
         for (recipe_hash, wgsl_hash) in &shaders.compositions {
             let recipe = self.index.recipes.get(recipe_hash)?;
+            // A recipe is read from a file: compose only a pass root (`passes::NAME`).
+            let name = recipe.root.strip_prefix("passes::")?;
+            if name.is_empty() || !name.chars().all(|c| c.is_ascii_lowercase() || c == '_') {
+                return None;
+            }
             let now = wgsl
                 .entry(recipe_hash.clone())
                 .or_insert_with(|| composer.recompose(recipe).ok())
