@@ -103,8 +103,8 @@ enum Command {
     /// CPU), depth (view depth rebuilt from the depth buffer), slicing (culling efficiency of
     /// each z-slicing scheme and grid), cones (spot lights culled by sphere or cone), culling
     /// (every culling method, and which did best on each scene and light count), msaa,
-    /// transparency, temporal (list strategies for moving lights) and sampling (sampled
-    /// light loops against the exact ones).
+    /// transparency, temporal (list strategies for moving lights), sampling (sampled
+    /// light loops against the exact ones) and scale (4096 lights to a million).
     Study {
         /// Which study.
         name: clusterlab::study::StudyName,
@@ -117,16 +117,18 @@ enum Command {
         /// Codecs: uniform unit vectors to sample (1 to 67108864).
         #[arg(long, default_value_t = 1 << 20, value_parser = parse_samples)]
         samples: usize,
-        /// Slicing, cones and culling: image size, WIDTHxHEIGHT.
-        #[arg(long, default_value = "640x360", value_parser = parse_size)]
-        size: (u32, u32),
+        /// Slicing, cones, culling and scale: image size, WIDTHxHEIGHT (default 640x360;
+        /// scale: 1920x1080 on a GPU, 640x360 on a software adapter).
+        #[arg(long, value_parser = parse_size)]
+        size: Option<(u32, u32)>,
         /// Slicing, cones and culling: comma-separated scenes, built-in names or glTF files (default:
         /// every built-in scene).
         #[arg(long, value_delimiter = ',')]
         scenes: Vec<String>,
         /// Slicing, cones, culling, msaa, transparency, temporal and sampling: lights in every
         /// scene (default: each scene's own; culling: 64, 1024, 4096 and 16384; temporal:
-        /// 1024 and 16384; sampling: 1024, 4096 and 16384).
+        /// 1024 and 16384; sampling: 1024, 4096 and 16384; scale: 4096 to 1048576 on a GPU,
+        /// to 262144 on a software adapter).
         #[arg(long)]
         lights: Option<u32>,
         /// Slicing, cones and culling: timed frames per run, at least 1 (the median is reported).
@@ -613,7 +615,8 @@ fn main() -> ExitCode {
         } => {
             let mut options = clusterlab::study::StudyOptions {
                 samples,
-                size,
+                size: size.unwrap_or(clusterlab::study::StudyOptions::default().size),
+                explicit_size: size,
                 lights,
                 frames,
                 ..Default::default()

@@ -599,3 +599,32 @@ fn the_sampling_study_measures_every_sampler_against_the_exact_variants() {
     assert!(table.notes.iter().any(|n| n.contains("Bitterli")));
     assert!(sampling::plot(&rows).is_some());
 }
+
+/// The scale study runs every method exactly at each count it is given, and every method
+/// finds the same useful evaluations on the same frame (each is exact: one that left out a
+/// light would find fewer); the radius shrinks with the count as its rule says.
+#[test]
+fn the_scale_study_runs_every_method_exactly() {
+    use clusterlab::study::{StudyOptions, scale};
+    let gpu = common::gpu();
+    let mut rows = Vec::new();
+    for lights in [256, 2048] {
+        let options = StudyOptions {
+            explicit_size: Some((64, 36)),
+            lights: Some(lights),
+            frames: 1,
+            ..Default::default()
+        };
+        rows.extend(scale::run(&gpu, &Composer::default(), &options).expect("scale study"));
+    }
+    assert_eq!(rows.len(), 2 * scale::METHODS.len());
+    assert!(scale::all_exact(&rows), "{rows:#?}");
+    for r in &rows {
+        let first = rows.iter().find(|o| o.lights == r.lights).unwrap();
+        assert_eq!(r.useful_evaluations, first.useful_evaluations, "{r:#?}");
+        assert!(r.useful_evaluations > 0 && r.evaluations >= r.useful_evaluations);
+        assert!(r.max_abs_8bit <= clusterlab::run::EXACT_LSB, "{r:#?}");
+        assert_eq!((r.radius_min, r.radius_max), scale::radius_range(r.lights));
+    }
+    assert!(scale::plot(&rows).is_some());
+}

@@ -8,6 +8,7 @@ pub mod culling;
 pub mod depth;
 pub mod msaa;
 pub mod sampling;
+pub mod scale;
 pub mod slicing;
 pub mod table;
 pub mod temporal;
@@ -109,6 +110,10 @@ pub enum StudyName {
     /// 16384 lights (or `--lights`), radius 2..4 and 4..8: each sampler's error, the
     /// candidates each needs for 2 LSB RMSE, and the frames temporal reuse needs.
     Sampling,
+    /// The exact culling methods from 4096 lights to a million on the atrium (radius scaled
+    /// with the count): frame, assignment and shading time, evaluations per useful one,
+    /// list bytes and exactness; 640x360 and up to 262144 lights on a software adapter.
+    Scale,
 }
 
 impl StudyName {
@@ -123,6 +128,7 @@ impl StudyName {
             StudyName::Transparency => "transparency",
             StudyName::Temporal => "temporal",
             StudyName::Sampling => "sampling",
+            StudyName::Scale => "scale",
         }
     }
 }
@@ -152,6 +158,8 @@ pub struct StudyOptions {
     /// Slicing: scenes and image size, timed frames per run.
     pub scenes: Vec<String>,
     pub size: (u32, u32),
+    /// The size given on the command line, if one was (scale chooses its own otherwise).
+    pub explicit_size: Option<(u32, u32)>,
     /// Slicing: lights in every scene instead of each scene's default.
     pub lights: Option<u32>,
     pub frames: u32,
@@ -170,6 +178,7 @@ impl Default for StudyOptions {
                 .map(|s| s.name.to_string())
                 .collect(),
             size: (640, 360),
+            explicit_size: None,
             lights: None,
             frames: 3,
             depth_columns: 1000,
@@ -342,6 +351,11 @@ pub fn run(
                 sampling::plot(&rows),
                 ok,
             )
+        }
+        StudyName::Scale => {
+            let rows = scale::run(gpu, composer, options)?;
+            let ok = scale::all_exact(&rows);
+            output(name, scale::table(&rows), &rows, scale::plot(&rows), ok)
         }
     }
 }
