@@ -45,8 +45,9 @@ pub struct Efficiency {
 impl Efficiency {
     /// From the frame's median total and the [fastest, slowest] timed frame's, its passes'
     /// medians, the frame without lights, the names of the shading passes and the
-    /// counters; None where a ratio would mean nothing (no evaluation, no useful one, a frame
-    /// no longer than its frame without lights).
+    /// counters; None where a ratio would mean nothing (no evaluation, no useful one). A
+    /// frame no longer than its frame without lights, or shading passes no slower, is within
+    /// noise: its lights cost less than the timings can tell.
     pub fn of(
         (frame_ms, fastest_ms, slowest_ms): (f64, f64, f64),
         frame: &Timings,
@@ -59,23 +60,27 @@ impl Efficiency {
             .iter()
             .map(|p| frame.get(p) - without_lights.get(p))
             .sum();
-        if evaluations == 0 || useful == 0 || frame_ms <= empty_ms || shading_ms <= 0.0 {
+        if evaluations == 0 || useful == 0 || frame_ms <= 0.0 {
             return None;
         }
-        let per_evaluation_ms = shading_ms / evaluations as f64;
+        let per_evaluation_ms = shading_ms.max(0.0) / evaluations as f64;
         let bound_ms = empty_ms + useful as f64 * per_evaluation_ms;
         let ratio = bound_ms / frame_ms;
+        let within_noise = ratio >= 1.0 || shading_ms <= 0.0;
         Some(Efficiency {
             frame_without_lights_ms: round(empty_ms, 1e3),
             ns_per_evaluation: round(per_evaluation_ms * 1e6, 1e3),
-            ns_per_useful_evaluation: round((frame_ms - empty_ms) * 1e6 / useful as f64, 1e3),
+            ns_per_useful_evaluation: round(
+                (frame_ms - empty_ms).max(0.0) * 1e6 / useful as f64,
+                1e3,
+            ),
             bound_ms: round(bound_ms, 1e3),
-            efficiency: round(ratio.min(1.0), 1e4),
+            efficiency: if within_noise { 1.0 } else { round(ratio, 1e4) },
             spread: [
                 round(bound_ms / slowest_ms.max(frame_ms), 1e4),
                 round(bound_ms / fastest_ms.min(frame_ms), 1e4),
             ],
-            within_noise: ratio >= 1.0,
+            within_noise,
         })
     }
 }
@@ -127,13 +132,13 @@ mod tests {
         assert!((wrong.efficiency - e.efficiency).abs() > 0.1);
     }
 
+    /// No useful evaluation: no ratio. A frame timed no longer than its frame without
+    /// lights: within noise, at 100%.
     #[test]
     fn a_frame_without_work_on_lights_has_no_efficiency() {
         let t = timings(&[("resolve", 5.0)]);
-        assert_eq!(
-            Efficiency::of((5.0, 5.0, 5.0), &t, &t, &["resolve"], (10, 5)),
-            None
-        );
+        let same = Efficiency::of((5.0, 5.0, 5.0), &t, &t, &["resolve"], (10, 5)).unwrap();
+        assert!(same.within_noise && same.efficiency == 1.0, "{same:?}");
         assert_eq!(
             Efficiency::of(
                 (9.0, 9.0, 9.0),

@@ -155,6 +155,29 @@ fn readme_lists_every_shipped_variant_as_its_file_says() {
     );
 }
 
+/// ARCHITECTURE is a map: the layers, the data flow, the conventions and how to add each
+/// kind of unit; how each feature works lives in `docs/design.md`.
+#[test]
+fn architecture_is_a_map() {
+    let map = std::fs::read_to_string("docs/ARCHITECTURE.md").expect("docs/ARCHITECTURE.md");
+    let lines = map.lines().count();
+    assert!(
+        lines <= 400,
+        "docs/ARCHITECTURE.md is {lines} lines: move a feature's narrative to docs/design.md"
+    );
+    for section in [
+        "## Data flow",
+        "## Layout",
+        "## Conventions",
+        "## How to add",
+    ] {
+        assert!(
+            map.contains(section),
+            "docs/ARCHITECTURE.md has no `{section}`"
+        );
+    }
+}
+
 #[test]
 fn readme_is_a_front_page() {
     let readme = std::fs::read_to_string("README.md").expect("README.md");

@@ -1,7 +1,7 @@
 //! Twin of the cluster modules of `shaders/clustering/`: `bounds.wesl` (cluster boxes in view
 //! space), `assign.wesl` (the light tests and lists), `depth_mask.wesl`
 //! (2.5D masks), `two_level.wesl` (the coarse test and big tiles) and `raster_bin.wesl`
-//! (light proxies), in f64, from the definitions in docs/ARCHITECTURE.md. Also the CPU light
+//! (light proxies), in f64, from the definitions in docs/design.md. Also the CPU light
 //! assignment of variants with `assignment: Cpu`.
 
 use glam::{DMat4, DVec2, DVec3};

@@ -1,4 +1,4 @@
-//! CPU twins of the GPU modules, in f64, written from the math (see docs/ARCHITECTURE.md).
+//! CPU twins of the GPU modules, in f64, written from the math (see docs/design.md).
 //! They are the oracles that the WGSL is tested against, and `frame` shades whole frames
 //! with them. They import only `common`: never the variant schema or the scenes.
 

@@ -1,5 +1,5 @@
 //! Twin of `shaders/shading/` and `shaders/common/lights.wesl`: one light's contribution to
-//! one surface point, from the formulas in docs/ARCHITECTURE.md.
+//! one surface point, from the formulas in docs/design.md.
 
 use glam::DVec3;
 

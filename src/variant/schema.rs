@@ -523,7 +523,7 @@ impl Default for Sampling {
     }
 }
 
-/// Stochastic light loops (`docs/ARCHITECTURE.md`, "Sampled lights", has the estimators).
+/// Stochastic light loops (`docs/design.md`, "Sampled lights", has the estimators).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
 pub enum Sampler {
     /// Plain Monte Carlo, what RIS resamples from: `candidates` lights drawn uniformly from
