@@ -138,3 +138,48 @@ pub fn number_label<C>(i: usize, at: C) -> Text<'static, C, String> {
         (FONT, 10).into_font().color(&RGBColor(40, 40, 40)),
     )
 }
+
+/// One panel of [`against_lights`]: its label, the values that set its range, and one line
+/// of (lights, value) points per named series.
+pub struct Panel<'a> {
+    pub label: &'a str,
+    pub values: Vec<f64>,
+    pub series: Vec<(&'a str, Vec<(f64, f64)>)>,
+}
+
+/// Panels side by side, each log-log against the light count from `lights` (its first and
+/// last, widened), one coloured line per series with its legend.
+pub fn against_lights(
+    file: &str,
+    title: &str,
+    lights: (u32, u32),
+    panels: &[Panel<'_>],
+) -> Option<Plot> {
+    let x = (lights.0 as f64 * 0.8)..(lights.1 as f64 * 1.25);
+    svg(file, title, (1100, 480), |area| {
+        let parts = area.split_evenly((1, panels.len()));
+        for (panel, part) in panels.iter().zip(parts.iter()) {
+            let positive = panel.values.iter().copied().filter(|&v| v > 0.0);
+            let lo = positive.clone().fold(f64::MAX, f64::min) * 0.8;
+            let hi = positive.fold(0.0, f64::max) * 1.25;
+            let mut chart = ChartBuilder::on(part)
+                .caption(panel.label, (FONT, 18))
+                .margin(12)
+                .x_label_area_size(40)
+                .y_label_area_size(70)
+                .build_cartesian_2d(x.clone().log_scale(), (lo..hi).log_scale())
+                .ok()?;
+            chart
+                .configure_mesh()
+                .x_desc("lights")
+                .y_desc(panel.label)
+                .draw()
+                .ok()?;
+            for (i, (name, points)) in panel.series.iter().enumerate() {
+                line_with_points(&mut chart, points.clone(), series_color(i), name)?;
+            }
+            legend(&mut chart, SeriesLabelPosition::UpperLeft)?;
+        }
+        Some(())
+    })
+}

@@ -468,7 +468,6 @@ type Measure = fn(&CullingRow) -> f64;
 /// Evaluations performed (left) and shading time (right) against light count, log-log, one
 /// line per method (the mean over scenes and spot fractions).
 pub fn plot(rows: &[CullingRow]) -> Option<Plot> {
-    use plotters::prelude::*;
     let ok: Vec<&CullingRow> = rows
         .iter()
         .filter(|r| r.error.is_none() && r.evaluations > 0)
@@ -494,49 +493,25 @@ pub fn plot(rows: &[CullingRow]) -> Option<Plot> {
             })
             .collect()
     };
-    let panels: [(&str, Measure); 2] = [
-        ("light evaluations per frame", |r| r.evaluations as f64),
-        ("shading + assignment, ms", |r| {
-            r.shading_ms + r.assignment_ms
-        }),
-    ];
-    let x = (counts[0] as f64 * 0.8)..(*counts.last()? as f64 * 1.25);
-    crate::plot::svg(
+    let methods = methods();
+    let panel = |label, value: Measure| crate::plot::Panel {
+        label,
+        values: ok.iter().map(|r| value(r)).collect(),
+        series: methods
+            .iter()
+            .map(|m| (m.name, series(m.name, value)))
+            .collect(),
+    };
+    crate::plot::against_lights(
         "culling.svg",
         "Culling: evaluations and time against light count",
-        (1100, 480),
-        |area| {
-            let halves = area.split_evenly((1, 2));
-            for ((label, value), half) in panels.iter().zip(halves.iter()) {
-                let all: Vec<f64> = ok.iter().map(|r| value(r)).filter(|&v| v > 0.0).collect();
-                let lo = all.iter().copied().fold(f64::MAX, f64::min) * 0.8;
-                let hi = all.iter().copied().fold(0.0, f64::max) * 1.25;
-                let mut chart = ChartBuilder::on(half)
-                    .caption(*label, ("sans-serif", 18))
-                    .margin(12)
-                    .x_label_area_size(40)
-                    .y_label_area_size(70)
-                    .build_cartesian_2d(x.clone().log_scale(), (lo..hi).log_scale())
-                    .ok()?;
-                chart
-                    .configure_mesh()
-                    .x_desc("lights")
-                    .y_desc(*label)
-                    .draw()
-                    .ok()?;
-                for (i, m) in methods().iter().enumerate() {
-                    let color = crate::plot::series_color(i);
-                    crate::plot::line_with_points(
-                        &mut chart,
-                        series(m.name, *value),
-                        color,
-                        m.name,
-                    )?;
-                }
-                crate::plot::legend(&mut chart, SeriesLabelPosition::UpperLeft)?;
-            }
-            Some(())
-        },
+        (counts[0], *counts.last()?),
+        &[
+            panel("light evaluations per frame", |r| r.evaluations as f64),
+            panel("shading + assignment, ms", |r| {
+                r.shading_ms + r.assignment_ms
+            }),
+        ],
     )
 }
 

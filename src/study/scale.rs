@@ -248,7 +248,6 @@ type Measure = fn(&ScaleRow) -> f64;
 
 /// Frame and assignment time against the light count, log-log, one line per method.
 pub fn plot(rows: &[ScaleRow]) -> Option<Plot> {
-    use plotters::prelude::*;
     let ok: Vec<&ScaleRow> = rows.iter().filter(|r| r.error.is_none()).collect();
     let mut counts: Vec<u32> = ok.iter().map(|r| r.lights).collect();
     counts.sort_unstable();
@@ -256,53 +255,29 @@ pub fn plot(rows: &[ScaleRow]) -> Option<Plot> {
     if counts.len() < 2 {
         return None;
     }
-    let series = |method: &str, value: Measure| -> Vec<(f64, f64)> {
-        ok.iter()
-            .filter(|r| r.method == method && value(r) > 0.0)
-            .map(|r| (r.lights as f64, value(r)))
-            .collect()
+    let panel = |label, value: Measure| crate::plot::Panel {
+        label,
+        values: ok.iter().map(|r| value(r)).collect(),
+        series: METHODS
+            .iter()
+            .map(|(_, method)| {
+                let points = ok
+                    .iter()
+                    .filter(|r| r.method == *method && value(r) > 0.0)
+                    .map(|r| (r.lights as f64, value(r)))
+                    .collect();
+                (*method, points)
+            })
+            .collect(),
     };
-    let panels: [(&str, Measure); 2] = [
-        ("frame, ms", |r| r.frame_ms),
-        ("light assignment, ms", |r| r.assignment_ms),
-    ];
-    let x = (counts[0] as f64 * 0.8)..(*counts.last()? as f64 * 1.25);
-    crate::plot::svg(
+    crate::plot::against_lights(
         "scale.svg",
         "Scale: frame and assignment time against light count",
-        (1100, 480),
-        |area| {
-            let halves = area.split_evenly((1, 2));
-            for ((label, value), half) in panels.iter().zip(halves.iter()) {
-                let all: Vec<f64> = ok.iter().map(|r| value(r)).filter(|&v| v > 0.0).collect();
-                let lo = all.iter().copied().fold(f64::MAX, f64::min) * 0.8;
-                let hi = all.iter().copied().fold(0.0, f64::max) * 1.25;
-                let mut chart = ChartBuilder::on(half)
-                    .caption(*label, ("sans-serif", 18))
-                    .margin(12)
-                    .x_label_area_size(40)
-                    .y_label_area_size(70)
-                    .build_cartesian_2d(x.clone().log_scale(), (lo..hi).log_scale())
-                    .ok()?;
-                chart
-                    .configure_mesh()
-                    .x_desc("lights")
-                    .y_desc(*label)
-                    .draw()
-                    .ok()?;
-                for (i, (_, method)) in METHODS.iter().enumerate() {
-                    let color = crate::plot::series_color(i);
-                    crate::plot::line_with_points(
-                        &mut chart,
-                        series(method, *value),
-                        color,
-                        method,
-                    )?;
-                }
-                crate::plot::legend(&mut chart, SeriesLabelPosition::UpperLeft)?;
-            }
-            Some(())
-        },
+        (counts[0], *counts.last()?),
+        &[
+            panel("frame, ms", |r| r.frame_ms),
+            panel("light assignment, ms", |r| r.assignment_ms),
+        ],
     )
 }
 
