@@ -1334,16 +1334,9 @@ const SCRIPT_RUN: [&str; 8] = [
     "script.ron",
 ];
 
-/// `clusterlab view ARGS` in `dir` on a display: its exit code and output. A virtual
-/// display that did not come up (seen once in a loaded full run) is the machine's fault,
-/// not the viewer's: it is tried once more.
+/// `clusterlab view ARGS` in `dir` on a display: its exit code and output.
 fn play_viewer(dir: &Path, args: &[&str], env: &[(&str, &str)]) -> (Option<i32>, String) {
-    let play = || common::viewer(args).dir(dir).envs(env).run().outcome();
-    let (code, text) = play();
-    if text.contains("Failed to open connection to X server") {
-        return play();
-    }
-    (code, text)
+    common::on_a_display(|| common::viewer(args).dir(dir).envs(env).run().outcome())
 }
 
 /// A script of one step after the first frame, as `project/script.ron`.

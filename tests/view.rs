@@ -19,15 +19,17 @@ fn json(path: &Path) -> serde_json::Value {
 fn play(script: &str, out: &Path, args: &[&str], env: &[(&str, &str)]) {
     let file = out.join("script.ron");
     std::fs::write(&file, script).unwrap();
-    let (ok, printed) = viewer(["--size", SIZE, "--lights", LIGHTS, "--out"])
-        .arg(out)
-        .arg("--script")
-        .arg(&file)
-        .args(args)
-        .envs(env)
-        .run()
-        .succeeded();
-    assert!(ok, "the viewer failed:\n{printed}");
+    let (code, printed) = crate::common::on_a_display(|| {
+        viewer(["--size", SIZE, "--lights", LIGHTS, "--out"])
+            .arg(out)
+            .arg("--script")
+            .arg(&file)
+            .args(args)
+            .envs(env)
+            .run()
+            .outcome()
+    });
+    assert!(code == Some(0), "the viewer failed:\n{printed}");
 }
 
 /// Run the `render` command a screenshot's record gives, into `out`.

@@ -264,6 +264,17 @@ pub fn viewer<S: AsRef<OsStr>>(args: impl IntoIterator<Item = S>) -> Cli {
     Cli(command)
 }
 
+/// Run a viewer with `play` (its exit code and output): a virtual display that did not come
+/// up (seen in loaded full runs, when Xvfb servers start side by side) is the machine's
+/// fault, not the viewer's, so it is tried once more.
+pub fn on_a_display(play: impl Fn() -> (Option<i32>, String)) -> (Option<i32>, String) {
+    let (code, text) = play();
+    if text.contains("Failed to open connection to X server") {
+        return play();
+    }
+    (code, text)
+}
+
 /// A copy of the shipped shaders with edits to one module, each replacing text that must be
 /// there; removed when dropped.
 pub struct EditedShaders {
