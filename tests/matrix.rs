@@ -632,7 +632,8 @@ fn a_rerun_reuses_exactly_the_cells_no_change_touched() {
 
 /// The pipeline cache on disk: a run saves one for its adapter in `CLUSTERLAB_CACHE`; a file
 /// there whose header names another adapter or another clusterlab version is ignored with
-/// a note naming what wrote it, never loaded, and replaced by this run's.
+/// a note naming what wrote it, never loaded, and replaced by this run's; a file of that
+/// name that is not clusterlab's is left alone, byte for byte.
 #[test]
 fn a_pipeline_cache_of_another_adapter_or_version_is_ignored() {
     let dir = scratch("pipeline-cache");
@@ -708,6 +709,10 @@ fn a_pipeline_cache_of_another_adapter_or_version_is_ignored() {
         // Replaced by this run's, under this run's header.
         assert!(std::fs::read(file).unwrap().starts_with(header.as_bytes()));
     }
+    std::fs::write(file, b"the user's own bytes").unwrap();
+    let text = run("foreign");
+    assert!(text.contains("is not one clusterlab wrote"), "{text}");
+    assert_eq!(std::fs::read(file).unwrap(), b"the user's own bytes");
     let _ = std::fs::remove_dir_all(&dir);
 }
 

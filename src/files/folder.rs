@@ -79,14 +79,15 @@ enum Owner {
 }
 
 /// What `dir` is, judged by its contents: a result folder holds the marker or results.json,
-/// and nothing but what a run writes (the report files, images/*.png and a sequence's
-/// images/*.gif, plots/*.svg).
+/// and nothing but what a run writes (the report files, reuse.json beside the marker,
+/// images/*.png and a sequence's images/*.gif, plots/*.svg).
 fn owner(dir: &Path) -> Result<Owner, String> {
     let unreadable =
         |e: std::io::Error| format!("{}: cannot read folder: {}", shown(dir), describe(&e));
     let mut empty = true;
     let mut marker = None;
     let mut results = false;
+    let mut reuse = false;
     for entry in std::fs::read_dir(dir).map_err(unreadable)? {
         let entry = entry.map_err(unreadable)?;
         empty = false;
@@ -102,7 +103,8 @@ fn owner(dir: &Path) -> Result<Owner, String> {
                 None => results = true,
                 Some(why) => return foreign(format!("its results.json {why}")),
             },
-            "results.csv" | "index.html" | REUSE_FILE if kind.is_file() => {}
+            "results.csv" | "index.html" if kind.is_file() => {}
+            REUSE_FILE if kind.is_file() => reuse = true,
             "images" | "plots" if kind.is_dir() => {
                 let exts: &[&str] = if name == "images" {
                     &[".png", ".gif"]
@@ -126,6 +128,12 @@ fn owner(dir: &Path) -> Result<Owner, String> {
     }
     Ok(if empty {
         Owner::Empty
+    } else if reuse && marker.is_none() {
+        // Every run that writes reuse.json leaves its marker: without one, the file is not
+        // a run's (an earlier version's folder holds none).
+        Owner::Foreign(format!(
+            "it holds `{REUSE_FILE}` but no `{MARKER_NAME}` marker, which every run that writes one leaves"
+        ))
     } else if marker.is_some() || results {
         Owner::Run(marker)
     } else {
@@ -492,6 +500,10 @@ mod tests {
         std::fs::remove_file(dir.join("plots/a.gif")).unwrap();
         // A marker the tool did not write is not one.
         std::fs::write(dir.join(MARKER_NAME), "mine\n").unwrap();
+        assert!(matches!(owner(&dir).unwrap(), Owner::Foreign(_)));
+        std::fs::remove_file(dir.join(MARKER_NAME)).unwrap();
+        // reuse.json is a run's only beside the marker every run that writes it leaves.
+        std::fs::write(dir.join(REUSE_FILE), "{}").unwrap();
         assert!(matches!(owner(&dir).unwrap(), Owner::Foreign(_)));
         std::fs::write(dir.join(MARKER_NAME), "clusterlab results\nprocess 7\n").unwrap();
         assert_eq!(owner(&dir).unwrap(), Owner::Run(Some(7)));

@@ -2,7 +2,8 @@
 //! on Vulkan): one file per adapter in the user's cache folder, never inside the project.
 //! The file opens with a header naming the clusterlab version and the adapter (name,
 //! backend, vendor, device, driver) that wrote it; one written by another is ignored, with
-//! a note, and replaced when the run saves its own. wgpu checks its own header behind ours
+//! a note, and replaced when the run saves its own. A file of that name without the header
+//! is not clusterlab's: it is left alone, and the run keeps no cache. wgpu checks its own header behind ours
 //! (its version, the adapter, the driver's cache key) and the driver checks the shaders'.
 
 use std::path::{Path, PathBuf};
@@ -61,6 +62,12 @@ impl Gpu {
             env!("CARGO_PKG_VERSION")
         );
         let (data, note) = match crate::files::read(&path, READ) {
+            Ok(bytes) if !bytes.starts_with(format!("{MAGIC}\n").as_bytes()) => {
+                return format!(
+                    "pipeline cache: none kept: {} is not one clusterlab wrote (no `{MAGIC}` header), so it is left alone",
+                    path.display()
+                );
+            }
             Ok(bytes) => match bytes.strip_prefix(header.as_bytes()) {
                 Some(data) => (
                     Some(data.to_vec()),
@@ -123,9 +130,9 @@ impl Gpu {
 /// Who wrote a cache file, from its header: its clusterlab version and adapter lines.
 fn written_by(bytes: &[u8]) -> String {
     let head = String::from_utf8_lossy(&bytes[..bytes.len().min(512)]).into_owned();
-    let mut lines = head.lines();
-    match (lines.next(), lines.next(), lines.next()) {
-        (Some(MAGIC), Some(version), Some(adapter)) => format!("{version} on {adapter}"),
-        _ => "something else (no clusterlab header)".into(),
+    let mut lines = head.lines().skip(1);
+    match (lines.next(), lines.next()) {
+        (Some(version), Some(adapter)) => format!("{version} on {adapter}"),
+        _ => "an unfinished header".into(),
     }
 }
