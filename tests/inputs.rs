@@ -204,7 +204,14 @@ fn identities_are_unique_and_merges_refuse_what_they_would_lose() {
         assert_eq!(r["cells"].as_array().unwrap().len(), 1, "{folder}");
         r["cells"][0]["wall_ms"].clone()
     };
-    // (Two runs' wall times to the microsecond tell their cells apart.)
+    // Two runs' wall times can agree to the microsecond (they did through OpenGL): give the
+    // second run's cell a wall time of its own, so the copies are told apart.
+    let second = dir.join("second/results.json");
+    let mut r: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(&second).unwrap()).unwrap();
+    let ms = r["cells"][0]["wall_ms"].as_f64().unwrap();
+    r["cells"][0]["wall_ms"] = serde_json::json!(ms + 1000.0);
+    std::fs::write(&second, serde_json::to_vec(&r).unwrap()).unwrap();
     assert_ne!(wall("first"), wall("second"));
     for (prefer, from) in [("first", "first"), ("last", "second")] {
         let out = format!("merged-{prefer}");
