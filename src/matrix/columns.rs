@@ -188,6 +188,11 @@ fn or_dash<T>(v: Option<T>, f: impl Fn(T) -> String) -> String {
     v.map_or_else(|| "-".to_string(), f)
 }
 
+/// A cell's light-assignment work, where its frame assigned lights on the GPU.
+fn work(m: &Measured) -> Option<crate::render::AssignmentWork> {
+    m.stats.and_then(|s| s.assignment_work)
+}
+
 /// Every result column, in table order.
 pub const COLUMNS: &[Column] = &[
     Column {
@@ -425,6 +430,34 @@ pub const COLUMNS: &[Column] = &[
                 format!("{:.0}", s.cluster_bytes as f64 / 1024.0)
             })
         },
+    },
+    Column {
+        key: "assign_light_tests",
+        heading: "assign tests",
+        shown: CSV_AND_HTML,
+        value: |m| work(m).map(|w| w.light_tests).into(),
+        text: |m| or_dash(work(m), |w| count(w.light_tests)),
+    },
+    Column {
+        key: "assign_node_tests",
+        heading: "node tests",
+        shown: CSV_ONLY,
+        value: |m| work(m).map(|w| w.node_tests).into(),
+        text: |m| or_dash(work(m), |w| count(w.node_tests)),
+    },
+    Column {
+        key: "assign_entries_written",
+        heading: "entries written",
+        shown: CSV_ONLY,
+        value: |m| work(m).map(|w| w.entries_written).into(),
+        text: |m| or_dash(work(m), |w| count(w.entries_written)),
+    },
+    Column {
+        key: "assign_lights_rejected",
+        heading: "lights rejected",
+        shown: CSV_ONLY,
+        value: |m| work(m).map(|w| w.lights_rejected).into(),
+        text: |m| or_dash(work(m), |w| count(w.lights_rejected)),
     },
     Column {
         key: "dropped_lights",

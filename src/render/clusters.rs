@@ -8,6 +8,7 @@ use crate::cpu::clusters::ClusterLists;
 use crate::cpu::zbin::ZBins;
 use crate::gpu::{Gpu, GpuError, read_buffer};
 use crate::render::culling::ProxyLayout;
+use crate::render::stats::AssignmentWork;
 use crate::variant::CullingMethod;
 use crate::variant::{Clusters, Culling, ListUpdate};
 
@@ -44,7 +45,23 @@ pub struct ClusterStats {
     pub overflow: u32,
     pub longest_walk: u32,
     pub proxies_unheld: u32,
-    pub _pad: u32,
+    /// 1 in a counting frame: assignment counts its work (`clustering/work.wesl`).
+    pub counting: u32,
+    /// The work counters, each (low, high) words of 64 bits, in `work.wesl`'s order.
+    pub work: [u32; 8],
+}
+
+impl ClusterStats {
+    /// The work counters as the counting frame left them.
+    pub fn work(&self) -> AssignmentWork {
+        let at = |k: usize| self.work[2 * k] as u64 | (self.work[2 * k + 1] as u64) << 32;
+        AssignmentWork {
+            light_tests: at(0),
+            node_tests: at(1),
+            entries_written: at(2),
+            lights_rejected: at(3),
+        }
+    }
 }
 
 /// Bytes of an indirect dispatch's arguments (x, y, z).

@@ -33,7 +33,7 @@ pub use clusters::{ClusterBuffers, ClusterRange, ClusterStats, GpuDepthMask};
 pub use passes::{PassRunner, shader_module};
 pub use resources::{DepthSetup, F32_BITS_FORMAT, LDR_FORMAT, SceneBuffers, ViewUniform};
 pub use reuse::FrameChange;
-pub use stats::{FrameStats, PixelCounters};
+pub use stats::{AssignmentWork, FrameStats, PixelCounters};
 pub use truth::raster_truth;
 
 use std::time::Instant;
@@ -530,10 +530,21 @@ impl<'g> Renderer<'g> {
         let assigns = !self.skips_pass(ASSIGN, instrumented);
         let moving = PassId::Clustering(compose::ClusterPass::MovingAssign);
         let assigns_moving = !self.skips_pass(moving, instrumented);
+        let marks = !self.skips_pass(
+            PassId::Clustering(compose::ClusterPass::MarkActive),
+            instrumented,
+        );
         gpu.scoped("clearing counters", || {
             let mut e = gpu.device.create_command_encoder(&Default::default());
             if let Some(c) = self.res.clusters.as_ref().filter(|_| assigns) {
-                e.clear_buffer(&c.stats, 0, None);
+                if marks {
+                    e.clear_buffer(&c.stats, 0, None);
+                } else {
+                    // The marks of the frame before stay, and so does their count.
+                    let at = std::mem::offset_of!(ClusterStats, active_clusters) as u64;
+                    e.clear_buffer(&c.stats, 0, Some(at));
+                    e.clear_buffer(&c.stats, at + 4, None);
+                }
             }
             if let Some(m) = self.res.moving.as_ref().filter(|_| assigns_moving) {
                 e.clear_buffer(&m.stats, 0, None);
@@ -542,6 +553,17 @@ impl<'g> Renderer<'g> {
                 self.res.counters.clear(&mut e);
             }
             gpu.queue.submit([e.finish()]);
+            // An instrumented frame's assignment counts its work (after the clear, so the
+            // write lands with the frame's own passes).
+            let counting = std::mem::offset_of!(ClusterStats, counting) as u64;
+            let lists = [
+                self.res.clusters.as_ref().filter(|_| assigns),
+                self.res.moving.as_ref().filter(|_| assigns_moving),
+            ];
+            for c in lists.into_iter().flatten().filter(|_| instrumented) {
+                gpu.queue
+                    .write_buffer(&c.stats, counting, bytemuck::bytes_of(&1u32));
+            }
         })?;
         // CPU assignment is the light_assign pass of its variants.
         let cpu_ms = if assigns { self.assign_on_cpu()? } else { None };

@@ -42,10 +42,18 @@ impl Renderer<'_> {
     pub(super) fn skips_pass(&self, id: PassId, instrumented: bool) -> bool {
         // An instrumented frame's counters come from assignment and shading: what only
         // turns shaded colour into pixels (post effects, tonemap, a debug view) is left out.
-        // After a timed frame it counts on that frame's depth, G-buffer and lists (every
-        // frame of a renderer draws the same picture, and assignment's counters stay in
-        // the cluster stats), so only the shading pass runs.
-        if instrumented && (id.after_shading() || (self.last_frame_countable && !id.is_shading())) {
+        // After a timed frame it counts on that frame's depth, G-buffer and marks (every
+        // frame of a renderer draws the same picture), so only assignment, which counts
+        // its work only when instrumented, and the shading pass run.
+        let assigns = matches!(
+            id,
+            PassId::Clustering(
+                compose::ClusterPass::LightAssign | compose::ClusterPass::MovingAssign
+            )
+        );
+        if instrumented
+            && (id.after_shading() || (self.last_frame_countable && !id.is_shading() && !assigns))
+        {
             return true;
         }
         // An instrumented frame walks both of StaticDynamic's lists itself, and builds what

@@ -70,6 +70,43 @@ pub struct FrameStats {
     pub clusters_out_of_grid: u64,
     /// The first such pixel: [x, y, cluster index].
     pub first_out_of_grid: Option<[u32; 3]>,
+    /// What light assignment did, counted on the GPU (absent where it builds no lists on
+    /// the GPU).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub assignment_work: Option<AssignmentWork>,
+}
+
+/// The work of a frame's light assignment, the same on every machine (`clustering/work.wesl`):
+/// what a change to assignment is judged by where its time measures a CPU.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, serde::Deserialize)]
+pub struct AssignmentWork {
+    /// Bounds tests of a light against one cluster, tile or big tile.
+    pub light_tests: u64,
+    /// Bounds tests of a light BVH node against a cluster.
+    pub node_tests: u64,
+    /// Light-list entries stored (z-binning: tile-mask bits set).
+    pub entries_written: u64,
+    /// Lights whose range holds no cluster, dropped before any per-cluster work.
+    pub lights_rejected: u64,
+}
+
+impl AssignmentWork {
+    /// Light and node tests per light of a frame of `lights` lights.
+    pub fn tests_per_light(&self, lights: usize) -> f64 {
+        (self.light_tests + self.node_tests) as f64 / lights.max(1) as f64
+    }
+}
+
+impl std::ops::Add for AssignmentWork {
+    type Output = Self;
+    fn add(self, o: Self) -> Self {
+        AssignmentWork {
+            light_tests: self.light_tests + o.light_tests,
+            node_tests: self.node_tests + o.node_tests,
+            entries_written: self.entries_written + o.entries_written,
+            lights_rejected: self.lights_rejected + o.lights_rejected,
+        }
+    }
 }
 
 impl FrameStats {
@@ -227,6 +264,13 @@ impl<'g> Renderer<'g> {
                 c.clusters as u64
             };
             stats.active_clusters = self.count_visible_clusters()? as u64;
+            if self.cpu_assignment.is_none() {
+                let moving = match &self.res.moving {
+                    Some(m) => m.read_stats(gpu)?.work(),
+                    None => AssignmentWork::default(),
+                };
+                stats.assignment_work = Some(s.work() + moving);
+            }
             let used = &pixels.clusters;
             let outside = |&(_, &v): &(usize, &u32)| v > c.clusters;
             stats.clusters_out_of_grid = used.iter().enumerate().filter(outside).count() as u64;

@@ -14,6 +14,7 @@ use crate::gpu::Gpu;
 use crate::measure::Frames;
 use crate::plot::Plot;
 use crate::reference::ReferenceCache;
+use crate::render::AssignmentWork;
 use crate::run::{CellOptions, run_scene_keeping_renderer};
 use crate::scene::SceneParams;
 
@@ -64,6 +65,10 @@ pub struct ScaleRow {
     pub evaluations_per_useful: f64,
     /// Bytes of every culling buffer.
     pub list_bytes: u64,
+    /// Light assignment's work counters (`render::AssignmentWork`).
+    pub work: AssignmentWork,
+    /// Its light and node tests per light.
+    pub tests_per_light: f64,
     /// Largest 8-bit error against the reference.
     pub max_abs_8bit: u32,
     pub timing_source: String,
@@ -150,6 +155,8 @@ pub fn run(
                 useful_evaluations: 0,
                 evaluations_per_useful: 0.0,
                 list_bytes: 0,
+                work: AssignmentWork::default(),
+                tests_per_light: 0.0,
                 max_abs_8bit: 0,
                 timing_source: String::new(),
                 error: None,
@@ -181,6 +188,8 @@ pub fn run(
                         row.evaluations_per_useful =
                             s.light_evals as f64 / s.useful_light_evals.max(1) as f64;
                         row.list_bytes = s.cluster_bytes;
+                        row.work = s.assignment_work.unwrap_or_default();
+                        row.tests_per_light = row.work.tests_per_light(lights as usize);
                     }
                     row.max_abs_8bit = r.error.as_ref().map_or(0, |e| e.max_abs_8bit);
                     row.timing_source = r.timing_source.into();
@@ -218,6 +227,9 @@ pub fn table(rows: &[ScaleRow]) -> Table {
             "evaluations",
             "useful",
             "evaluations / useful",
+            "tests / light",
+            "entries written",
+            "rejected",
             "list MiB",
             "max8",
         ],
@@ -237,6 +249,9 @@ pub fn table(rows: &[ScaleRow]) -> Table {
             r.evaluations.to_string(),
             r.useful_evaluations.to_string(),
             format!("{:.2}", r.evaluations_per_useful),
+            format!("{:.1}", r.tests_per_light),
+            r.work.entries_written.to_string(),
+            r.work.lights_rejected.to_string(),
             format!("{:.2}", r.list_bytes as f64 / (1 << 20) as f64),
             r.max_abs_8bit.to_string(),
         ]);

@@ -9,7 +9,7 @@ use super::{clustered, exact_variants, loaded};
 use crate::common::{gpu, small};
 use clusterlab::compose::Composer;
 use clusterlab::gpu::Gpu;
-use clusterlab::render::{FrameStats, Renderer};
+use clusterlab::render::{AssignmentWork, FrameStats, Renderer};
 use clusterlab::scene::{self, Camera, Light, MeshBuilder, Scene, SceneParams};
 use clusterlab::variant::*;
 use glam::DVec3;
@@ -219,7 +219,8 @@ fn every_counter_equals_another_summation_of_its_read_back() {
 /// Tiles 3 x 2 over 10 x 6 pixels (3, 4 and 3 pixels wide), 4 linear slices of 2 from 1 to
 /// 9, and a wall facing the camera at depth 6 (slice 2) that fills the view: light A (at
 /// depth 3, radius 100) reaches every cluster and every pixel; light B (radius 0.05, at
-/// depth 5.9 in front of tile (0, 0)'s 3 x 3 pixels) touches one cluster and no surface.
+/// depth 5.9 in front of tile (0, 0)'s 3 x 3 pixels) touches one cluster and no surface;
+/// light C (radius 1, 20 behind the eye) reaches nothing in view.
 fn hand_built_scene() -> Scene {
     let mut mesh = MeshBuilder::default();
     let z = -6.0;
@@ -251,13 +252,14 @@ fn hand_built_scene() -> Scene {
     let lights = vec![
         Light::point([0.0, 0.0, -3.0], 100.0, [1.0; 3], 1.0),
         Light::point(b.as_vec3().to_array(), 0.05, [1.0; 3], 1.0),
+        Light::point([0.0, 0.0, 20.0], 1.0, [1.0; 3], 1.0),
     ];
     Scene {
         name: "hand-built".into(),
         params: SceneParams {
             width: 10,
             height: 6,
-            lights: 2,
+            lights: 3,
             radius_range: (0.05, 100.0),
             seed: 0,
             time: 0.0,
@@ -280,53 +282,124 @@ fn hand_built_scene() -> Scene {
 /// Every counter of the hand-built scene, worked out by hand: 60 pixels in 6 clusters of
 /// slice 2; A in all 24 lists, B in cluster (0, 0, 2)'s (not with 2.5D culling, whose cells
 /// hold only the wall's depth); with active clusters only slice 2's 6 clusters get lists.
+///
+/// Assignment's work: C's range is empty (1 light rejected), A's range is every cluster
+/// and B's one. One-level tests each cluster of a light's range that takes part twice (the
+/// count and the fill): 2 (24 + 1), active 2 (6 + 1). Two-level (one big tile): the coarse
+/// pass tests tile (0, 0) for A and B (the first tile passes), then each cluster tests the
+/// survivors its slice's mask holds, A and B in slice 2's 6 and A in the other 18: 2 + 12 +
+/// 18. The BVH over 512 sorted entries (16 nodes, a root) tests a light at a leaf only where
+/// its range holds the cluster, so as one-level, and each of its 2 walks per cluster tests
+/// the root and the 16 nodes: 24 x 2 x 17 nodes. Z-binning tests each tile of a light's
+/// range, 6 + 1, and sets a mask bit for each it touches. The rasterised draw tests each
+/// cluster its proxies cover, the range's, once.
 #[test]
 fn a_hand_built_scene_counts_what_was_worked_out_by_hand() {
     let gpu = gpu();
     let composer = Composer::default();
     let scene = hand_built_scene();
     let hdr = gpu.hdr_format.block_copy_size(None).unwrap();
-    // (name, culling, active clusters, light evaluations, list entries, assigned clusters,
-    // lights of the longest visible list, mean over visible clusters)
+    let work = |light_tests, node_tests, entries_written| AssignmentWork {
+        light_tests,
+        node_tests,
+        entries_written,
+        lights_rejected: 1,
+    };
+    // (name, culling, big tiles, active clusters, light evaluations, list entries, assigned
+    // clusters, lights of the longest visible list, mean over visible clusters, work)
     let cases = [
         (
             "boxes",
             Culling::Boxes,
+            None,
             false,
             60 + 9,
             24 + 1,
             24,
             2,
             7.0 / 6.0,
+            work(2 * (24 + 1), 0, 24 + 1),
         ),
         (
             "boxes, active",
             Culling::Boxes,
+            None,
             true,
             60 + 9,
             6 + 1,
             6,
             2,
             7.0 / 6.0,
+            work(2 * (6 + 1), 0, 6 + 1),
         ),
         (
-            "z-binning",
-            Culling::ZBinning,
+            "two-level",
+            Culling::Boxes,
+            Some(4),
             false,
             60 + 9,
             24 + 1,
             24,
             2,
             7.0 / 6.0,
+            work(2 + 6 * 2 + 18, 0, 24 + 1),
         ),
-        ("2.5D", Culling::DepthMask, true, 60, 6, 6, 1, 1.0),
+        (
+            "BVH",
+            Culling::Bvh,
+            None,
+            false,
+            60 + 9,
+            24 + 1,
+            24,
+            2,
+            7.0 / 6.0,
+            work(2 * (24 + 1), 24 * 2 * 17, 24 + 1),
+        ),
+        (
+            "rasterised",
+            Culling::Rasterised,
+            None,
+            false,
+            60 + 9,
+            24 + 1,
+            24,
+            2,
+            7.0 / 6.0,
+            work(24 + 1, 0, 24 + 1),
+        ),
+        (
+            "z-binning",
+            Culling::ZBinning,
+            None,
+            false,
+            60 + 9,
+            24 + 1,
+            24,
+            2,
+            7.0 / 6.0,
+            work(6 + 1, 0, 6 + 1),
+        ),
+        (
+            "2.5D",
+            Culling::DepthMask,
+            None,
+            true,
+            60,
+            6,
+            6,
+            1,
+            1.0,
+            work(2 * (6 + 1), 0, 6),
+        ),
     ];
-    for (name, culling, active, evals, entries, assigned, longest, mean) in cases {
+    for (name, culling, big_tiles, active, evals, entries, assigned, longest, mean, work) in cases {
         for pipeline in [Pipeline::ClusteredForward, Pipeline::ClusteredDeferred] {
             let mut v = clustered(pipeline, ZSlicing::Linear);
             let c = v.clusters.as_mut().unwrap();
             c.grid = (3, 2, 4);
             c.culling = culling;
+            c.big_tiles = big_tiles;
             c.active_clusters = active;
             // Sample bounds would shrink slice 2's boxes to the wall, leaving B out.
             c.sample_bounds = culling == Culling::DepthMask;
@@ -359,11 +432,40 @@ fn a_hand_built_scene_counts_what_was_worked_out_by_hand() {
                 z_range: Some([1.0, 9.0]),
                 clusters_out_of_grid: 0,
                 first_out_of_grid: None,
+                assignment_work: Some(work),
             };
             assert_eq!(s, want, "{what}");
             assert!(s.cluster_bytes > 0, "{what}");
         }
     }
+}
+
+/// The deliberate break of the work counters: one-level assignment that tests each cluster
+/// of a light's range twice draws the same lists, and the hand-worked count catches it.
+#[test]
+fn a_cluster_tested_twice_fails_the_hand_worked_count() {
+    let gpu = gpu();
+    let scene = hand_built_scene();
+    let edited = crate::common::EditedShaders::of(
+        "clustering/one_level.wesl",
+        "work-tested-twice",
+        &[(
+            "if (touches_at(i, c, w.x, w.y)) {",
+            "if (touches_at(i, c, w.x, w.y) && touches_at(i, c, w.x, w.y)) {",
+        )],
+    );
+    let mut v = clustered(Pipeline::ClusteredForward, ZSlicing::Linear);
+    v.clusters.as_mut().unwrap().grid = (3, 2, 4);
+    let v = loaded("tested twice", v);
+    let s = count(&gpu, &edited.composer, &v.variant, &scene).stats;
+    assert_eq!(s.light_list_entries, 24 + 1, "the lists stay the same");
+    let work = s.assignment_work.unwrap();
+    assert_ne!(
+        work.light_tests,
+        2 * (24 + 1),
+        "the break went unseen: {work:?}"
+    );
+    assert_eq!(work.light_tests, 4 * (24 + 1), "{work:?}");
 }
 
 /// Scissor deferred adds each light only inside its screen rectangle: every pixel a light
