@@ -236,7 +236,19 @@ fn every_variant_renders_the_exported_atrium_as_the_built_in_one() {
         if worst > 1 {
             failures.push(format!("{}: images differ by up to {worst} LSB", v.name));
         }
-        if a.report.stats != b.report.stats {
+        // The same picture, the same counters; but assignment's work with StaticDynamic lists
+        // depends on which lights move, and a file's lights never do.
+        let counted = |r: &clusterlab::run::RenderReport| {
+            let mut stats = r.stats.clone();
+            if let Some(s) = stats.as_mut().filter(|_| {
+                v.variant.pipeline.is_clustered()
+                    && v.variant.clusters().update == clusterlab::variant::ListUpdate::StaticDynamic
+            }) {
+                s.assignment_work = None;
+            }
+            stats
+        };
+        if counted(&a.report) != counted(&b.report) {
             failures.push(format!(
                 "{}: counters differ:\n  built-in {:?}\n  file     {:?}",
                 v.name, a.report.stats, b.report.stats
