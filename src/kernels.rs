@@ -60,6 +60,7 @@ fn run_kernel_with(
         &format!("passes::{root}"),
         &features,
         &crate::compose::constants_module(variant),
+        crate::compose::LightLoop::of(variant),
     )?;
     let outputs = gpu.scoped(root, || {
         let module = gpu

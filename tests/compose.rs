@@ -154,7 +154,13 @@ fn shader_errors_name_the_module_file_line_and_column() {
     snapshot_settings("errors").bind(|| {
         for root in ["type_error", "syntax_error", "missing_import"] {
             let error = composer
-                .compose_root(root, &format!("passes::{root}"), &features, "")
+                .compose_root(
+                    root,
+                    &format!("passes::{root}"),
+                    &features,
+                    "",
+                    Default::default(),
+                )
                 .expect_err("a broken shader must be rejected");
             insta::assert_snapshot!(format!("shader_{root}"), error.to_string());
         }
@@ -221,5 +227,54 @@ fn every_pass_composes_for_scenes_with_textures() {
                 );
             }
         }
+    }
+}
+
+/// A light loop is a unit: each way of walking a pixel's lights is its own file, chosen in
+/// Rust (`LightLoop`), not by guards on `fn shade` that must exclude each other; what the
+/// units share stays small. The deliberate break: a `shade` back in the shared module, or a
+/// unit file no loop names.
+#[test]
+fn light_loops_are_units() {
+    use clusterlab::compose::LightLoop;
+    let root = Composer::default().shader_root().join("shading");
+    let shared = std::fs::read_to_string(root.join("light_loop.wesl")).unwrap();
+    let lines = shared.lines().count();
+    assert!(
+        lines <= 150,
+        "light_loop.wesl has {lines} lines, at most 150"
+    );
+    assert!(
+        !shared.contains("fn shade"),
+        "a `shade` in the shared module"
+    );
+    // The units' own helpers: the counters and the reservoir RIS and ReSTIR share.
+    let helpers = ["counters", "reservoir"];
+    let mut files: Vec<String> = std::fs::read_dir(root.join("light_loop"))
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    files.sort();
+    for file in &files {
+        let stem = file.trim_end_matches(".wesl");
+        let named = LightLoop::ALL.iter().any(|l| l.file() == stem);
+        assert!(
+            named || helpers.contains(&stem),
+            "shading/light_loop/{file}: no light loop names it"
+        );
+        let text = std::fs::read_to_string(root.join("light_loop").join(file)).unwrap();
+        let guarded = text
+            .lines()
+            .collect::<Vec<_>>()
+            .windows(2)
+            .any(|w| w[0].trim_start().starts_with("@if") && w[1].starts_with("fn shade("));
+        assert!(!guarded, "{file}: a guard chooses its `shade`");
+    }
+    for l in LightLoop::ALL {
+        assert!(
+            files.contains(&format!("{}.wesl", l.file())),
+            "{l:?}: no shading/light_loop/{}.wesl",
+            l.file()
+        );
     }
 }

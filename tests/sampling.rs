@@ -72,14 +72,24 @@ fn unbiased_samplers_pass_the_z_tests() {
     assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
 
-/// The breaks the tests exist for, each a one-line edit of the light loop.
+/// A deliberate break: the variant, the light loop unit edited, what the edit does, the
+/// edit, and the frames the z-tests take.
+type Break = (
+    &'static str,
+    &'static str,
+    &'static str,
+    (&'static str, &'static str),
+    u32,
+);
+
+/// The breaks the tests exist for, each a one-line edit of a light loop's unit.
 #[test]
 fn each_deliberate_break_fails_the_z_tests() {
     let gpu = gpu();
-    let module = "shading/light_loop.wesl";
-    let breaks: [(&str, &str, (&str, &str), u32); 3] = [
+    let breaks: [Break; 3] = [
         (
             "forward_plus_ris_8",
+            "ris",
             "zero-target candidates skipped (one public port's bias)",
             (
                 "let w = goal * f32(list.count);",
@@ -89,20 +99,23 @@ fn each_deliberate_break_fails_the_z_tests() {
         ),
         (
             "forward_plus_stochastic_culling",
+            "stochastic_culling",
             "kept lights not reweighted",
             (" / keep_probability(light, d2);", ";"),
             1,
         ),
         (
             "clustered_deferred_restir_temporal",
+            "reservoir",
             "the reused reservoir's count left out of M",
             ("out.count += count;", "out.count += 1.0;"),
             4,
         ),
     ];
     let mut passed = Vec::new();
-    for (name, what, edit, count) in breaks {
-        let edited = EditedShaders::of(module, &format!("bias-{name}"), &[edit]);
+    for (name, unit, what, edit, count) in breaks {
+        let module = format!("shading/light_loop/{unit}.wesl");
+        let edited = EditedShaders::of(&module, &format!("bias-{name}"), &[edit]);
         let t = bias_of(&gpu, &edited.composer, &load(name), &frames(count));
         eprintln!("{name}, {what}: {t:?}");
         if t.unbiased() {

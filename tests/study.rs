@@ -386,7 +386,7 @@ fn the_cones_and_culling_studies_exit_1_when_a_light_is_missed() {
         )],
     );
     let culling_broken = common::EditedShaders::of(
-        "shading/light_loop.wesl",
+        "shading/light_loop/zbin_walk.wesl",
         "study-walk-halved",
         &[(
             "var bits = tile_masks[base + w] & span_bits(w, span);",

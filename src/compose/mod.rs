@@ -7,6 +7,7 @@
 
 mod diagnostics;
 mod features;
+mod light_loop;
 mod passes;
 mod resolver;
 
@@ -15,6 +16,7 @@ pub use features::{
     CLUSTERS_PER_LANE, LIGHTS_PER_ROW, SCAN_BLOCK, SCAN_LANES, SceneFeatures, WALK_CUT_SHORT,
     constants_module, feature_flags, features_with, frame_features,
 };
+pub use light_loop::LightLoop;
 pub use passes::{
     ClusterPass, FramePlan, Pass, PassId, PassKind, PostPass, RasterPass, ScreenPass,
     keeps_still_image, pass_flags, passes, passes_for, plan, reads_visible_depths,
@@ -106,13 +108,15 @@ pub struct Composer {
 /// A composed pass and how it was composed.
 type Composed = (ComposedPass, Arc<Composition>);
 
-/// How to compose a pass again: its root, features and constants.
+/// How to compose a pass again: its root, features, constants and light loop.
 #[derive(Clone, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
 pub struct Recipe {
     pub name: String,
     pub root: String,
     pub features: Vec<(String, bool)>,
     pub constants: String,
+    #[serde(default)]
+    pub light_loop: LightLoop,
 }
 
 /// A composition: its recipe and the SHA-256 of the WGSL it gave.
@@ -218,7 +222,13 @@ impl Composer {
             .iter()
             .map(|(k, v)| (k.as_str(), *v))
             .collect();
-        let pass = self.compose_root(&recipe.name, &recipe.root, &features, &recipe.constants)?;
+        let pass = self.compose_root(
+            &recipe.name,
+            &recipe.root,
+            &features,
+            &recipe.constants,
+            recipe.light_loop,
+        )?;
         Ok(sha256_hex(&pass.wgsl))
     }
 
@@ -250,6 +260,7 @@ impl Composer {
             pass.root,
             &features,
             &constants_module(variant),
+            LightLoop::of(variant),
         )
     }
 
@@ -261,28 +272,31 @@ impl Composer {
             .collect()
     }
 
-    /// Compose root module `root` (a path like `passes::forward`) with these feature flags
-    /// and constants module text. Every flag a shader tests must be in `features`.
+    /// Compose root module `root` (a path like `passes::forward`) with these feature flags,
+    /// constants module text and light loop (what `light_loop::selected` is). Every flag a
+    /// shader tests must be in `features`.
     pub fn compose_root(
         &self,
         name: &str,
         root: &str,
         features: &[(&str, bool)],
         constants: &str,
+        light_loop: LightLoop,
     ) -> Result<ComposedPass, ShaderError> {
-        let key = format!("{name}\0{root}\0{features:?}\0{constants}");
+        let key = format!("{name}\0{root}\0{features:?}\0{constants}\0{light_loop:?}");
         let cache = || self.composed.lock().unwrap_or_else(|p| p.into_inner());
         let hit = cache().get(&key).cloned();
         let (pass, composition) = match hit {
             Some(hit) => hit,
             None => {
-                let pass = self.compose_uncached(name, root, features, constants)?;
+                let pass = self.compose_uncached(name, root, features, constants, light_loop)?;
                 let composition = Arc::new(Composition {
                     recipe: Recipe {
                         name: name.to_string(),
                         root: root.to_string(),
                         features: features.iter().map(|&(k, v)| (k.to_string(), v)).collect(),
                         constants: constants.to_string(),
+                        light_loop,
                     },
                     wgsl_sha256: sha256_hex(&pass.wgsl),
                 });
@@ -300,6 +314,7 @@ impl Composer {
         root: &str,
         features: &[(&str, bool)],
         constants: &str,
+        light_loop: LightLoop,
     ) -> Result<ComposedPass, ShaderError> {
         let wesl_error = |message: String| ShaderError::Wesl {
             pass: name.to_string(),
@@ -308,10 +323,15 @@ impl Composer {
         let root_path: ModulePath = format!("package::{root}")
             .parse()
             .map_err(|e| wesl_error(format!("bad root module path `{root}`: {e}")))?;
-        let resolver =
-            ShaderResolver::new(&self.shader_root, &self.display_base, constants.to_string());
+        let resolver = ShaderResolver::new(
+            &self.shader_root,
+            &self.display_base,
+            constants.to_string(),
+            light_loop,
+        );
         let mut compiler = Wesl::new(&self.shader_root).set_custom_resolver(resolver);
         compiler
+            .set_custom_mangler(light_loop::LoopMangler)
             .use_sourcemap(true)
             .use_stripping(true)
             // A flag the Rust side forgot is an error, not a silently dropped branch.

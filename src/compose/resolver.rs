@@ -1,5 +1,6 @@
-//! Where WESL modules come from: files under the shader folder, plus a `constants` module
-//! generated from the variant's numbers.
+//! Where WESL modules come from: files under the shader folder, the chosen light loop's
+//! unit for `shading::light_loop::selected`, and a `constants` module generated from the
+//! variant's numbers.
 
 use std::borrow::Cow;
 use std::path::{Path, PathBuf};
@@ -15,17 +16,32 @@ pub struct ShaderResolver {
     root: PathBuf,
     display_base: PathBuf,
     constants: String,
+    light_loop: super::LightLoop,
 }
 
 impl ShaderResolver {
     /// `root` is the shader folder; file names in messages are shown relative to
     /// `display_base` (the repository root).
-    pub fn new(root: &Path, display_base: &Path, constants: String) -> Self {
+    pub fn new(
+        root: &Path,
+        display_base: &Path,
+        constants: String,
+        light_loop: super::LightLoop,
+    ) -> Self {
         Self {
             files: FileResolver::new(root),
             root: root.to_path_buf(),
             display_base: display_base.to_path_buf(),
             constants,
+            light_loop,
+        }
+    }
+
+    /// The file behind `path`: the light loop's own for the selected loop.
+    fn file_of(&self, path: &ModulePath) -> Option<PathBuf> {
+        match self.light_loop.file_path(path) {
+            Some(unit) => self.files.fs_path(&unit),
+            None => self.files.fs_path(path),
         }
     }
 
@@ -41,7 +57,7 @@ impl Resolver for ShaderResolver {
         }
         // Read here rather than by wesl's resolver, which reads a file whole whatever it is
         // (a named pipe in the shader folder would block the run).
-        let Some(file) = self.files.fs_path(path) else {
+        let Some(file) = self.file_of(path) else {
             // No such file: wesl's own error says so.
             return self.files.resolve_source(path);
         };
@@ -54,7 +70,7 @@ impl Resolver for ShaderResolver {
         if Self::is_constants(path) {
             return Some("<constants generated from the variant>".into());
         }
-        let fs = self.files.fs_path(path)?;
+        let fs = self.file_of(path)?;
         let shown = fs
             .strip_prefix(&self.display_base)
             .map(Path::to_path_buf)
@@ -66,7 +82,7 @@ impl Resolver for ShaderResolver {
         if Self::is_constants(path) {
             None
         } else {
-            self.files.fs_path(path)
+            self.file_of(path)
         }
     }
 }

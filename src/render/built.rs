@@ -2,9 +2,10 @@
 //! pipelines by family, and its bind groups filled from the frame's resources.
 
 use super::culling::BinningPipelines;
+use super::error::RenderError;
 use super::passes::ComputePipelines;
 use super::reflect::PassLayout;
-use super::{RenderError, Renderer, raster, screen};
+use super::{Renderer, raster, screen};
 use crate::compose::{self, ComposedPass, Pass, PassId};
 use crate::variant::CullingMethod;
 

@@ -3,7 +3,7 @@
 //! loop budget for the pipelines that loop over every light (a clustered frame's is checked
 //! on the lists it builds, after it: `Renderer::check_walks`).
 
-use super::RenderError;
+use super::error::RenderError;
 use crate::gpu::{Gpu, GpuError};
 use crate::scene::Scene;
 use crate::variant::{Pipeline, Variant};

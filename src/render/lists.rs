@@ -3,7 +3,8 @@
 
 use std::time::Instant;
 
-use super::{ClusterBuffers, ClusterStats, RenderError};
+use super::error::RenderError;
+use super::{ClusterBuffers, ClusterStats};
 use crate::compose::WALK_CUT_SHORT;
 use crate::cpu::clusters::{self as cpu_clusters, ClusterLists, Grid};
 use crate::gpu::{Gpu, GpuError};

@@ -12,6 +12,7 @@ mod built;
 mod clustering;
 mod clusters;
 mod culling;
+mod error;
 mod gbuffer;
 mod limits;
 mod lists;
@@ -30,6 +31,7 @@ mod stats;
 mod truth;
 
 pub use clusters::{ClusterBuffers, ClusterRange, ClusterStats, GpuDepthMask};
+pub use error::RenderError;
 pub use passes::{PassRunner, shader_module};
 pub use resources::{DepthSetup, F32_BITS_FORMAT, LDR_FORMAT, SceneBuffers, ViewUniform};
 pub use reuse::FrameChange;
@@ -38,7 +40,7 @@ pub use truth::raster_truth;
 
 use std::time::Instant;
 
-use crate::compose::{self, ComposedPass, Composer, FramePlan, Pass, PassId, ShaderError};
+use crate::compose::{self, ComposedPass, Composer, FramePlan, Pass, PassId};
 use crate::gpu::{Gpu, GpuError, TimestampSlot, Timings, read_texture};
 use crate::scene::Scene;
 use crate::variant::{Assignment, Variant};
@@ -48,27 +50,6 @@ use post::PostChain;
 use resources::FrameResources;
 use reuse::{Held, Lists, Redo};
 use skips::Skips;
-
-/// Why a frame could not be rendered.
-#[derive(Debug, thiserror::Error)]
-pub enum RenderError {
-    #[error("{0}")]
-    Shader(#[from] ShaderError),
-    #[error("{0}")]
-    Gpu(#[from] GpuError),
-    /// A pass's module binds something clusterlab cannot fill.
-    #[error("{0}")]
-    Reflection(String),
-    /// A scene the frame cannot be measured on, and why.
-    #[error("{0}")]
-    Scene(String),
-    /// A variant value that only the scene can check (a depth against its camera).
-    #[error("field `{field}` {message}")]
-    VariantForScene { field: String, message: String },
-    /// The frame needs more than the device's limits allow (`needs`).
-    #[error("{0}")]
-    Limits(String),
-}
 
 /// What one frame produced.
 #[derive(Clone, Debug)]

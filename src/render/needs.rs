@@ -6,7 +6,7 @@
 use naga::{AddressSpace, ShaderStage};
 use serde::Serialize;
 
-use super::RenderError;
+use super::error::RenderError;
 use super::reflect::layout_entries;
 use crate::compose::ComposedPass;
 

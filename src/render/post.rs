@@ -5,7 +5,7 @@
 //! another. The colour ping-pongs between two rgba32float storage images, and bloom keeps
 //! its bright and blurred parts in two more; only the images a variant's steps use exist.
 
-use super::RenderError;
+use super::error::RenderError;
 use super::passes::{ComputePipelines, set_compute_groups};
 use super::reflect::PassLayout;
 use super::resources::{FrameResources, Target};

@@ -2,8 +2,9 @@
 //! views: the shaded image, the light lists, boxes, masks and bins, the depth range, and a
 //! debug view drawn from the frame's own depth and lists.
 
+use super::error::RenderError;
 use super::reflect::PassLayout;
-use super::{ClusterRange, GpuDepthMask, RenderError, Renderer, screen};
+use super::{ClusterRange, GpuDepthMask, Renderer, screen};
 use crate::compose::{self, Composer, PassId};
 use crate::cpu::clusters::ClusterLists;
 use crate::gpu::{Gpu, GpuError, read_texture};

@@ -6,7 +6,7 @@ use std::collections::BTreeMap;
 
 use naga::{AddressSpace, ImageClass, ImageDimension, ScalarKind, ShaderStage, TypeInner};
 
-use super::RenderError;
+use super::error::RenderError;
 use crate::compose::ComposedPass;
 use crate::gpu::{Gpu, LayoutObjects};
 

@@ -345,7 +345,7 @@ pub struct Targets {
 }
 
 /// Per-pixel counters of instrumented frames (group 3 of the shading passes, in
-/// `shaders/shading/light_loop.wesl`): light evaluations, useful ones, and the cluster each
+/// `shaders/shading/light_loop/counters.wesl`): light evaluations, useful ones, and the cluster each
 /// pixel looked up (index + 1; 0 for background).
 pub struct Counters {
     pub evals: wgpu::Buffer,
@@ -546,7 +546,7 @@ impl FrameResources {
     /// numbers are written only in the WGSL): the frame's (`view`, `lights`, the base
     /// colour textures), the clusters' (by the names `build_bindings.wesl` declares, and
     /// `lookup.wesl` read-only), the surface's (depth, the G-buffer targets of
-    /// `packing/gbuffer.wesl`), and the counters of `shading/light_loop.wesl`.
+    /// `packing/gbuffer.wesl`), and the counters of `shading/light_loop/counters.wesl`.
     pub fn scene_binding(&self, slot: &Slot) -> Option<wgpu::BindingResource<'_>> {
         fn texture(t: &Target) -> wgpu::BindingResource<'_> {
             wgpu::BindingResource::TextureView(&t.view)

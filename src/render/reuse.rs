@@ -6,7 +6,8 @@ use std::cell::Cell;
 
 use serde::Serialize;
 
-use super::{RenderError, Renderer, ViewUniform};
+use super::error::RenderError;
+use super::{Renderer, ViewUniform};
 use crate::compose::{ClusterPass, PassId, RasterPass, ScreenPass};
 use crate::scene::{Camera, Light, Scene, Vertex};
 use crate::variant::ListUpdate;

@@ -1,4 +1,4 @@
-//! What a sampled light loop binds (`common/sampling.wesl`, `shading/light_loop.wesl`): the
+//! What a sampled light loop binds (`common/sampling.wesl`, `shading/light_loop/`): the
 //! frame's seed, and with temporal reuse each pixel's reservoir of this frame and the last.
 
 use crate::gpu::Gpu;

@@ -3,8 +3,9 @@
 
 use serde::Serialize;
 
+use super::error::RenderError;
 use super::resources::Target;
-use super::{Pipelines, RenderError, Renderer, clustering, gbuffer};
+use super::{Pipelines, Renderer, clustering, gbuffer};
 use crate::compose::Composer;
 use crate::compose::{ClusterPass, PassId};
 use crate::gpu::{GpuError, read_buffer};

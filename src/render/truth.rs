@@ -8,7 +8,7 @@
 //! each sample's kept fragment and the truth writes only its own samples, as the variant's
 //! shading pass does (`common/sample_owner.wesl`).
 
-use super::RenderError;
+use super::error::RenderError;
 use super::passes::{
     ComputePipelines, clear_attachment, color_target, render_pipeline, set_compute_groups,
 };
@@ -44,6 +44,7 @@ pub fn raster_truth(
         "passes::truth",
         &features,
         &crate::compose::constants_module(variant),
+        crate::compose::LightLoop::of(variant),
     )?;
     let prepass = if variant.depth_prepass {
         Some(composer.compose_root(
@@ -51,6 +52,7 @@ pub fn raster_truth(
             "passes::depth_prepass",
             &features,
             &crate::compose::constants_module(variant),
+            crate::compose::LightLoop::of(variant),
         )?)
     } else {
         None
@@ -61,6 +63,7 @@ pub fn raster_truth(
             "passes::truth_blended",
             &features,
             &crate::compose::constants_module(variant),
+            crate::compose::LightLoop::of(variant),
         )?)
     } else {
         None
@@ -436,7 +439,13 @@ fn read_samples(
     composer: &Composer,
     texture: &wgpu::Texture,
 ) -> Result<Vec<u8>, RenderError> {
-    let pass = composer.compose_root("truth samples", "passes::truth_samples", &[], "")?;
+    let pass = composer.compose_root(
+        "truth samples",
+        "passes::truth_samples",
+        &[],
+        "",
+        Default::default(),
+    )?;
     let (w, h) = (texture.width(), texture.height());
     let size = w as u64 * h as u64 * texture.sample_count() as u64 * 16;
     let buffer = gpu.scoped(
