@@ -2,7 +2,8 @@
 //! layers, found by a plain scan of every `crate::NAME` in its source (comments left out).
 
 /// The layers, lowest first (a module of the crate is a file or folder under `src/`).
-/// `main.rs` stands above them all.
+/// `commands/` is the binary's (the bodies `main.rs` dispatches to); `main.rs` stands above
+/// them all.
 const LAYERS: &[&[&str]] = &[
     &["common", "files"],
     &["cpu", "variant", "scene", "flip"],
@@ -13,6 +14,7 @@ const LAYERS: &[&[&str]] = &[
     &["sequence"],
     &["kernels", "stress", "matrix"],
     &["study", "view"],
+    &["commands"],
 ];
 
 fn layer(module: &str) -> Option<usize> {
@@ -108,4 +110,22 @@ fn no_import_climbs_a_layer() {
         }
     }
     assert!(wrong.is_empty(), "imports that climb a layer: {wrong:#?}");
+}
+
+/// `main.rs` parses arguments and dispatches: its only top-level functions are `main` and
+/// the argument parsers (`parse_*`); a command's body lives in `src/commands/`. The
+/// deliberate break: a command body back in `main.rs`.
+#[test]
+fn main_only_parses_and_dispatches() {
+    let strays = |source: &str| -> Vec<String> {
+        source
+            .lines()
+            .filter_map(|l| l.strip_prefix("fn ").or(l.strip_prefix("pub fn ")))
+            .map(|l| l.split('(').next().unwrap_or("").to_string())
+            .filter(|name| name != "main" && !name.starts_with("parse_"))
+            .collect()
+    };
+    assert_eq!(strays("fn render(args: &RenderArgs) {}"), ["render"]);
+    let main = std::fs::read_to_string("src/main.rs").unwrap();
+    assert!(strays(&main).is_empty(), "in main.rs: {:?}", strays(&main));
 }
