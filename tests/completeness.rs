@@ -318,14 +318,20 @@ fn every_sampler_has_a_shipped_variant_a_study_row_and_a_bias_test() {
         Sampler::Uniform { .. } => "uniform",
         Sampler::Ris { temporal: None, .. } => "RIS",
         Sampler::Ris {
-            temporal: Some(_), ..
+            temporal: Some(_),
+            spatial: None,
+            ..
         } => "RIS with temporal reuse",
+        Sampler::Ris {
+            spatial: Some(_), ..
+        } => "RIS with spatiotemporal reuse",
         Sampler::StochasticCulling { .. } => "stochastic culling",
     };
     let kinds = [
         "uniform",
         "RIS",
         "RIS with temporal reuse",
+        "RIS with spatiotemporal reuse",
         "stochastic culling",
     ];
     let sampled: Vec<variant::LoadedVariant> = shipped()
@@ -337,6 +343,11 @@ fn every_sampler_has_a_shipped_variant_a_study_row_and_a_bias_test() {
     let tested: Vec<String> = crate::sampling::unbiased_samplers()
         .into_iter()
         .map(|(v, _)| v.name)
+        .chain(
+            crate::sampling::labelled_biased_samplers()
+                .into_iter()
+                .map(|(v, _)| v.name),
+        )
         .collect();
     let study = clusterlab::study::sampling::SAMPLERS;
     let mut missing = Vec::new();
@@ -347,7 +358,7 @@ fn every_sampler_has_a_shipped_variant_a_study_row_and_a_bias_test() {
     }
     for v in &sampled {
         let name = v.name.as_str();
-        if !study.contains(&name) && name != clusterlab::study::sampling::TEMPORAL {
+        if !study.contains(&name) && !clusterlab::study::sampling::TEMPORAL.contains(&name) {
             missing.push(format!("{name}: no row in `study sampling`"));
         }
         if !tested.iter().any(|t| t == name) {

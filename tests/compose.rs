@@ -249,7 +249,7 @@ fn light_loops_are_units() {
         "a `shade` in the shared module"
     );
     // The units' own helpers: the counters and the reservoir RIS and ReSTIR share.
-    let helpers = ["counters", "reservoir"];
+    let helpers = LightLoop::HELPERS;
     let mut files: Vec<String> = std::fs::read_dir(root.join("light_loop"))
         .unwrap()
         .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())

@@ -50,7 +50,30 @@ pub(crate) fn unbiased_samplers() -> Vec<(LoadedVariant, u32)> {
         (load("forward_plus_stochastic_culling"), 1),
         (load("forward_plus_uniform_8"), 1),
         (load("clustered_deferred_restir_temporal"), 4),
+        (load("clustered_deferred_restir_spatiotemporal"), 4),
     ]
+}
+
+/// Each shipped sampler that is biased by design, with what its label must say.
+pub(crate) fn labelled_biased_samplers() -> Vec<(LoadedVariant, &'static str)> {
+    vec![(
+        load("clustered_deferred_restir_spatiotemporal_1m"),
+        "biased: 1/M across surfaces",
+    )]
+}
+
+/// A sampler biased by design says so wherever its figures are shown, and its unbiased
+/// twin does not.
+#[test]
+fn biased_samplers_are_labelled_biased() {
+    for (v, label) in labelled_biased_samplers() {
+        let s = v.variant.shading.lights.sampling().unwrap();
+        assert!(!s.unbiased(), "{}", v.name);
+        assert_eq!(s.bias_label(), label, "{}", v.name);
+    }
+    let twin = load("clustered_deferred_restir_spatiotemporal");
+    let s = twin.variant.shading.lights.sampling().unwrap();
+    assert_eq!(s.bias_label(), "unbiased while still, biased in motion");
 }
 
 #[test]
@@ -86,7 +109,7 @@ type Break = (
 #[test]
 fn each_deliberate_break_fails_the_z_tests() {
     let gpu = gpu();
-    let breaks: [Break; 3] = [
+    let breaks: [Break; 4] = [
         (
             "forward_plus_ris_8",
             "ris",
@@ -109,6 +132,16 @@ fn each_deliberate_break_fails_the_z_tests() {
             "reservoir",
             "the reused reservoir's count left out of M",
             ("out.count += count;", "out.count += 1.0;"),
+            4,
+        ),
+        (
+            "clustered_deferred_restir_spatiotemporal",
+            "restir_spatiotemporal",
+            "neighbours merged without their M",
+            (
+                "let own = count[k] * target_at(surface[k], y);",
+                "let own = select(count[k], 1.0, k > 1u) * target_at(surface[k], y);",
+            ),
             4,
         ),
     ];

@@ -108,6 +108,14 @@ pub fn perturbed_depth_ulps() -> u32 {
         .unwrap_or(0)
 }
 
+/// The variant's spatial reuse, if its light loop has one.
+fn spatial_reuse(v: &Variant) -> Option<crate::variant::SpatialReuse> {
+    match v.shading.lights.sampling()?.method {
+        Sampler::Ris { spatial, .. } => spatial,
+        Sampler::Uniform { .. } | Sampler::StochasticCulling { .. } => None,
+    }
+}
+
 pub fn feature_flags(v: &Variant) -> Vec<(&'static str, bool)> {
     let p = v.pipeline;
     let clusters = v.clusters();
@@ -137,6 +145,10 @@ pub fn feature_flags(v: &Variant) -> Vec<(&'static str, bool)> {
         (
             "stochastic_culling",
             matches!(sampling, Some(Sampler::StochasticCulling { .. })),
+        ),
+        (
+            "spatial_balance",
+            spatial_reuse(v).is_some_and(|s| s.balance),
         ),
         (
             "uniform_sampling",
@@ -283,11 +295,13 @@ pub fn constants_module(v: &Variant) -> String {
             candidates,
             kept,
             temporal,
+            ..
         }) => (candidates, kept, temporal.unwrap_or(0), 1.0),
         Some(Sampler::StochasticCulling { threshold }) => (1, 1, 0, threshold),
         Some(Sampler::Uniform { candidates }) => (candidates, 1, 0, 1.0),
         None => (1, 1, 0, 1.0),
     };
+    let spatial = spatial_reuse(v);
     let gbuffer_channel = match v.debug_view {
         DebugView::GBuffer { channel } => channel as u32,
         _ => 0,
@@ -315,6 +329,8 @@ pub fn constants_module(v: &Variant) -> String {
         ("CANDIDATES", candidates),
         ("KEPT", kept),
         ("HISTORY_FRAMES", history),
+        ("SPATIAL_NEIGHBOURS", spatial.map_or(0, |s| s.neighbours)),
+        ("SPATIAL_RADIUS", spatial.map_or(0, |s| s.radius)),
         ("PERTURB_DEPTH_ULPS", perturbed_depth_ulps()),
     ]);
     // The CPU twins' slack and clamps, in single precision: the same numbers on both sides.

@@ -28,6 +28,8 @@ pub enum LightLoop {
     Ris,
     /// RIS with ReSTIR's temporal reuse of the previous frame's reservoir.
     RestirTemporal,
+    /// RIS with ReSTIR's temporal and spatial reuse of the previous frame's reservoirs.
+    RestirSpatiotemporal,
     /// Stochastic light culling's roulette over the list.
     StochasticCulling,
 }
@@ -36,15 +38,20 @@ pub enum LightLoop {
 const SELECTED: [&str; 3] = ["shading", "light_loop", "selected"];
 
 impl LightLoop {
-    pub const ALL: [LightLoop; 7] = [
+    pub const ALL: [LightLoop; 8] = [
         LightLoop::ListWalk,
         LightLoop::ZBinWalk,
         LightLoop::StaticDynamic,
         LightLoop::Uniform,
         LightLoop::Ris,
         LightLoop::RestirTemporal,
+        LightLoop::RestirSpatiotemporal,
         LightLoop::StochasticCulling,
     ];
+
+    /// The modules under `shading/light_loop/` that units share: cut from
+    /// `light_loop.wesl`, they keep its names.
+    pub const HELPERS: [&str; 2] = ["counters", "reservoir"];
 
     /// The loop variant `v` shades with.
     pub fn of(v: &Variant) -> Self {
@@ -52,8 +59,15 @@ impl LightLoop {
             Some(Sampler::Uniform { .. }) => LightLoop::Uniform,
             Some(Sampler::Ris { temporal: None, .. }) => LightLoop::Ris,
             Some(Sampler::Ris {
-                temporal: Some(_), ..
+                temporal: Some(_),
+                spatial: None,
+                ..
             }) => LightLoop::RestirTemporal,
+            Some(Sampler::Ris {
+                temporal: Some(_),
+                spatial: Some(_),
+                ..
+            }) => LightLoop::RestirSpatiotemporal,
             Some(Sampler::StochasticCulling { .. }) => LightLoop::StochasticCulling,
             None if !v.pipeline.is_clustered() => LightLoop::ListWalk,
             None => match (v.clusters().method(), v.clusters().update) {
@@ -79,6 +93,7 @@ impl LightLoop {
             LightLoop::Uniform => "uniform",
             LightLoop::Ris => "ris",
             LightLoop::RestirTemporal => "restir_temporal",
+            LightLoop::RestirSpatiotemporal => "restir_spatiotemporal",
             LightLoop::StochasticCulling => "stochastic_culling",
         }
     }
@@ -97,15 +112,20 @@ impl LightLoop {
     }
 }
 
-/// WESL's own mangling, but a module under `shading/light_loop/` named as `light_loop`
-/// itself: a unit and the module it was cut from give their declarations the same names.
+/// WESL's own mangling, but the selected unit and the helpers under `shading/light_loop/`
+/// named as `light_loop` itself: a unit and the module it was cut from give their
+/// declarations the same names. Another unit imported by its own path (a unit that builds
+/// on another's declarations) keeps its own, so that its `shade` and the selected one's
+/// never share a name.
 pub struct LoopMangler;
 
 impl Mangler for LoopMangler {
     fn mangle(&self, path: &ModulePath, item: &str) -> String {
         let within = matches!(path.origin, PathOrigin::Absolute)
-            && path.components.len() > 2
-            && path.components[..2] == SELECTED[..2];
+            && path.components.len() == 3
+            && path.components[..2] == SELECTED[..2]
+            && (path.components[2] == SELECTED[2]
+                || LightLoop::HELPERS.contains(&path.components[2].as_str()));
         if within {
             let shared = ModulePath {
                 origin: PathOrigin::Absolute,

@@ -39,8 +39,13 @@ pub const SAMPLERS: [&str; 5] = [
     "forward_plus_ris_32_kept_4",
     "forward_plus_stochastic_culling",
 ];
-/// The temporal-reuse sampler, run as a still sequence.
-pub const TEMPORAL: &str = "clustered_deferred_restir_temporal";
+/// The samplers that reuse earlier frames' reservoirs, each run as a still sequence:
+/// temporal reuse, and spatiotemporal with the balance heuristic and with 1/M.
+pub const TEMPORAL: [&str; 3] = [
+    "clustered_deferred_restir_temporal",
+    "clustered_deferred_restir_spatiotemporal",
+    "clustered_deferred_restir_spatiotemporal_1m",
+];
 /// The error each sampler is asked to reach, 8-bit RMSE.
 pub const TARGET_RMSE_8BIT: f64 = 2.0;
 /// RIS candidates the sweep tries, and stochastic culling's thresholds (each a quarter of
@@ -102,7 +107,7 @@ pub fn run(
 ) -> Result<Vec<SamplingRow>, StudyError> {
     let exact = super::msaa::shipped(&EXACT)?;
     let samplers = super::msaa::shipped(&SAMPLERS)?;
-    let temporal = super::msaa::shipped(&[TEMPORAL])?;
+    let temporal = super::msaa::shipped(&TEMPORAL)?;
     let defaults = crate::scene::defaults(SCENE).map_err(|e| StudyError::Usage(e.to_string()))?;
     let mut rows = Vec::new();
     for &lights in counts {
@@ -183,6 +188,7 @@ fn sweep(v: &LoadedVariant) -> Vec<LoadedVariant> {
             candidates,
             kept,
             temporal,
+            spatial,
         } => CANDIDATES
             .iter()
             .filter(|&&m| m != candidates && m >= kept)
@@ -191,6 +197,7 @@ fn sweep(v: &LoadedVariant) -> Vec<LoadedVariant> {
                     candidates: m,
                     kept,
                     temporal,
+                    spatial,
                 };
                 with(method, format!("M={m}"))
             })
@@ -529,9 +536,14 @@ pub fn table(rows: &[SamplingRow]) -> Table {
                 None => format!("; {base} does not reach {TARGET_RMSE_8BIT} LSB in its sweep"),
             };
         }
-        if let Some(r) = rows.iter().filter(here).find(|r| r.variant == TEMPORAL) {
+        for r in rows
+            .iter()
+            .filter(here)
+            .filter(|r| TEMPORAL.contains(&r.variant.as_str()))
+        {
             note += &format!(
-                "; {TEMPORAL} over a still sequence: {} frames to {TARGET_RMSE_8BIT} LSB (RMSE {:.2} after the last), a frame {:.2} of the fastest exact frame",
+                "; {} over a still sequence: {} frames to {TARGET_RMSE_8BIT} LSB (RMSE {:.2} after the last), a frame {:.2} of the fastest exact frame",
+                r.variant,
                 r.frames_to_target
                     .map_or(format!("over {TEMPORAL_FRAMES}"), |n| n.to_string()),
                 r.last_rmse_8bit.unwrap_or(r.rmse_8bit),

@@ -349,6 +349,9 @@ pub const MAX_CANDIDATES: u32 = 256;
 pub const MAX_KEPT: u32 = 8;
 /// Longest temporal history, in frames' worth of candidates.
 pub const MAX_HISTORY: u32 = 100;
+/// Most neighbours, and the largest disk in pixels, of spatial reuse.
+pub const MAX_NEIGHBOURS: u32 = 8;
+pub const MAX_SPATIAL_RADIUS: u32 = 64;
 
 fn check_sampling(v: &Variant, out: &mut Vec<Problem>) {
     let Some(s) = v.shading.lights.sampling() else {
@@ -385,7 +388,28 @@ fn check_sampling(v: &Variant, out: &mut Vec<Problem>) {
             candidates,
             kept,
             temporal,
+            spatial,
         } => {
+            if let Some(sp) = spatial {
+                if temporal.is_none() {
+                    out.push(problem(
+                        "shading.lights.method.spatial",
+                        "spatial reuse draws on the previous frame's reservoirs, which temporal reuse keeps: give `temporal: Some(N)`, or `spatial: None`",
+                    ));
+                }
+                if !(1..=MAX_NEIGHBOURS).contains(&sp.neighbours) {
+                    out.push(problem(
+                        "shading.lights.method.spatial.neighbours",
+                        format!("is {}; it must be in 1..={MAX_NEIGHBOURS}", sp.neighbours),
+                    ));
+                }
+                if !(1..=MAX_SPATIAL_RADIUS).contains(&sp.radius) {
+                    out.push(problem(
+                        "shading.lights.method.spatial.radius",
+                        format!("is {}; it must be in 1..={MAX_SPATIAL_RADIUS}", sp.radius),
+                    ));
+                }
+            }
             if !(1..=MAX_CANDIDATES).contains(&candidates) {
                 out.push(problem(
                     "shading.lights.method.candidates",

@@ -517,6 +517,7 @@ impl Default for Sampling {
                 candidates: 8,
                 kept: 1,
                 temporal: None,
+                spatial: None,
             },
             seed: 0,
         }
@@ -541,6 +542,9 @@ pub enum Sampler {
     /// temporal reuse: the previous frame's reservoir at the reprojected pixel, its count
     /// capped at `temporal` times `candidates`, joins this frame's; unbiased while the camera
     /// and the lights hold still, biased (1/M weights across changed targets) once they move.
+    /// With `spatial` too, ReSTIR's spatial reuse fused with the temporal (RTXDI's
+    /// spatiotemporal resampling): the previous frame's reservoirs at neighbours of the
+    /// reprojected pixel join as well.
     Ris {
         /// Candidates a pixel draws, in 1..=256.
         candidates: u32,
@@ -549,6 +553,9 @@ pub enum Sampler {
         /// Temporal reuse: the previous reservoir's count capped at this many frames' worth
         /// of candidates, in 1..=100; `None`: none.
         temporal: Option<u32>,
+        /// Spatial reuse (with `temporal`): which neighbours join and how; `None`: none.
+        #[serde(default)]
+        spatial: Option<SpatialReuse>,
     },
     /// Stochastic light culling (Tokuyoshi and Harada 2016): each light's range is drawn per
     /// frame by Russian roulette, a light reaching a point with probability
@@ -560,6 +567,25 @@ pub enum Sampler {
         /// rouletted, in (0, 1e6].
         threshold: f32,
     },
+}
+
+/// ReSTIR's spatial reuse from the previous frame's reservoirs (Bitterli et al. 2020,
+/// section 4.3; RTXDI's spatiotemporal resampling): `neighbours` pixels drawn from a disk
+/// of `radius` pixels around the reprojected one, a neighbour whose surface is unlike the
+/// pixel's (normals over 25 degrees apart, or depths over 10% apart, as RTXDI rejects them)
+/// left out, each other one's reservoir one candidate standing for its count M.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct SpatialReuse {
+    /// Neighbours a pixel draws, in 1..=8.
+    pub neighbours: u32,
+    /// Radius of their disk in pixels, in 1..=64.
+    pub radius: u32,
+    /// How the reservoirs combine: `true`, each weighted by the generalised balance
+    /// heuristic over the combined surfaces (Bitterli 2020, eq. 22: unbiased while the
+    /// scene holds still); `false`, by 1/M over every combined count (cheaper, biased
+    /// where a neighbour's surface reaches lights the pixel's does not).
+    pub balance: bool,
 }
 
 impl Lights {
@@ -602,10 +628,13 @@ impl Sampling {
 
     /// How a report labels the estimator's bias.
     pub fn bias_label(&self) -> &'static str {
-        if self.unbiased() {
-            "unbiased"
-        } else {
-            "unbiased while still, biased in motion"
+        match self.method {
+            _ if self.unbiased() => "unbiased",
+            Sampler::Ris {
+                spatial: Some(SpatialReuse { balance: false, .. }),
+                ..
+            } => "biased: 1/M across surfaces",
+            _ => "unbiased while still, biased in motion",
         }
     }
 
@@ -616,9 +645,14 @@ impl Sampling {
                 candidates,
                 kept,
                 temporal,
+                spatial,
             } => {
                 let t = temporal.map_or(String::new(), |t| format!(" +temporal {t}"));
-                format!("RIS {candidates}/{kept}{t}")
+                let s = spatial.map_or(String::new(), |s| {
+                    let mis = if s.balance { "balance" } else { "1/M" };
+                    format!(" +spatial {}x{}px {mis}", s.neighbours, s.radius)
+                });
+                format!("RIS {candidates}/{kept}{t}{s}")
             }
             Sampler::StochasticCulling { threshold } => format!("stochastic culling {threshold}"),
             Sampler::Uniform { candidates } => format!("uniform {candidates}"),
