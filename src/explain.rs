@@ -83,8 +83,19 @@ fn explain_variants(variants: &[Value], indent: &str, defs: &Map<String, Value>,
                 if let Some(doc) = t["description"].as_str() {
                     write_doc(out, &format!("{indent}      {k}: "), doc);
                 }
-                if let Some(inner) = resolve(t, defs).and_then(|d| d["oneOf"].as_array()) {
-                    explain_variants(inner, &format!("{indent}        "), defs, out);
+                let inner = resolve(t, defs);
+                if let Some(variants) = inner.and_then(|d| d["oneOf"].as_array()) {
+                    explain_variants(variants, &format!("{indent}        "), defs, out);
+                }
+                // A field that is a struct of its own (`spatial: SpatialReuse`): its fields.
+                for (f, ft) in inner
+                    .and_then(|d| d["properties"].as_object())
+                    .into_iter()
+                    .flatten()
+                {
+                    if let Some(doc) = ft["description"].as_str() {
+                        write_doc(out, &format!("{indent}        {k}.{f}: "), doc);
+                    }
                 }
             }
             continue;
