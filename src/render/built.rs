@@ -7,7 +7,6 @@ use super::passes::ComputePipelines;
 use super::reflect::PassLayout;
 use super::{Renderer, raster, screen};
 use crate::compose::{self, ComposedPass, Pass, PassId};
-use crate::variant::CullingMethod;
 
 /// The pipelines of a built pass.
 pub(super) enum Pipelines {
@@ -56,11 +55,10 @@ impl Renderer<'_> {
             )?),
             PassId::Clustering(p) => {
                 let compute = ComputePipelines::all(gpu, composed, l)?;
-                let method = self.variant.clusters().method();
-                let drawing = self.res.clusters.as_ref().and_then(|c| c.drawing.as_ref());
-                if p == compose::ClusterPass::LightAssign && method == CullingMethod::Rasterised {
-                    let layout = drawing.ok_or_else(|| no_proxy_layout(composed))?.layout;
-                    Pipelines::Binning(compute, BinningPipelines::new(gpu, composed, l, layout)?)
+                if p == compose::ClusterPass::LightAssign {
+                    let drawing = self.res.clusters.as_ref().and_then(|c| c.drawing.as_ref());
+                    let method = self.variant.clusters().method();
+                    method.assignment_pipelines(gpu, composed, l, compute, drawing)?
                 } else {
                     Pipelines::Compute(compute)
                 }
@@ -119,12 +117,4 @@ impl Renderer<'_> {
         }
         Ok(())
     }
-}
-
-/// Rasterised binning's root without the proxy buffers its draw and copies need.
-pub(super) fn no_proxy_layout(pass: &ComposedPass) -> RenderError {
-    RenderError::Reflection(format!(
-        "pass `{}`: rasterised binning's root must declare `light_proxies` and `proxy_draw` (a `ProxyDraw` with `scatter_x`)",
-        pass.name
-    ))
 }

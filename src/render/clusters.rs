@@ -449,7 +449,12 @@ impl ClusterBuffers {
     }
 
     /// `bytes` (or all) of the buffer bound as `name`, as 32-bit words.
-    fn read_named(&self, gpu: &Gpu, name: &str, bytes: Option<u64>) -> Result<Vec<u32>, GpuError> {
+    pub(super) fn read_named(
+        &self,
+        gpu: &Gpu,
+        name: &str,
+        bytes: Option<u64>,
+    ) -> Result<Vec<u32>, GpuError> {
         let buffer = self.buffer(name).ok_or_else(|| {
             GpuError::Captured(format!(
                 "{:?} makes no cluster buffer `{name}`",
@@ -513,15 +518,7 @@ impl ClusterBuffers {
 
     /// Z-binning's sorted lights, bins and tile masks as the GPU holds them.
     pub fn read_zbins(&self, gpu: &Gpu) -> Result<ZBins, GpuError> {
-        let read = |name: &str, bytes: u64| self.read_named(gpu, name, Some(bytes));
-        let (x, y, z) = self.grid;
-        let words = (self.lights as u64).div_ceil(32);
-        Ok(ZBins::from_gpu(
-            (x, y),
-            read("light_order", self.lights as u64 * 4)?,
-            &read("bin_ranges", z as u64 * 8)?,
-            read("tile_masks", (x * y) as u64 * words * 4)?,
-        ))
+        crate::render::culling::read_zbins(self, gpu)
     }
 
     /// Lights in each cluster's list (z-binning: lights a pixel of each tile and bin walks).

@@ -12,10 +12,13 @@ mod two_level;
 mod zbinning;
 
 pub use rasterised::{BinningPipelines, ProxyLayout};
+pub(super) use zbinning::read as read_zbins;
 
-use super::clusters::{ClusterBuffers, DISPATCH_ARGS_BYTES, Sizing};
+use super::built::Pipelines;
+use super::clusters::{ClusterBuffers, DISPATCH_ARGS_BYTES, ProxyDrawing, Sizing};
+use super::error::RenderError;
 use super::passes::{ComputePipelines, set_compute_groups};
-use crate::compose::LIGHTS_PER_ROW;
+use crate::compose::{ComposedPass, LIGHTS_PER_ROW};
 use crate::cpu::sort::{SORT_BLOCK, merge_schedule, sorted_size};
 use crate::gpu::{Gpu, GpuError, TimestampSlot};
 
@@ -42,6 +45,25 @@ impl CullingMethod {
             CullingMethod::Rasterised => rasterised::own_buffers(s),
             CullingMethod::ZBinning => zbinning::own_buffers(s),
             CullingMethod::Bvh => bvh::own_buffers(s.lights),
+        }
+    }
+
+    /// The pipelines of light assignment's pass: its entry points' (`compute`), and with
+    /// rasterised binning its draws' too (laid out as `drawing` says).
+    pub(in crate::render) fn assignment_pipelines(
+        self,
+        gpu: &Gpu,
+        pass: &ComposedPass,
+        layout: &wgpu::PipelineLayout,
+        compute: ComputePipelines,
+        drawing: Option<&ProxyDrawing>,
+    ) -> Result<Pipelines, RenderError> {
+        match self {
+            CullingMethod::Rasterised => rasterised::pipelines(gpu, pass, layout, compute, drawing),
+            CullingMethod::OneLevel
+            | CullingMethod::TwoLevel { .. }
+            | CullingMethod::ZBinning
+            | CullingMethod::Bvh => Ok(Pipelines::Compute(compute)),
         }
     }
 

@@ -8,10 +8,12 @@ use super::one_level::scan_blocks;
 use super::{Clear, Over, Plan, Step, long_lists};
 use crate::compose::ComposedPass;
 use crate::gpu::{Gpu, GpuError};
+use crate::render::built::Pipelines;
 use crate::render::clusters::{
     BIN_TARGET_FORMAT, ClusterBuffers, DISPATCH_ARGS_BYTES, ProxyDrawing, Sizing,
 };
-use crate::render::passes::{begin_render, color_target, render_pipeline};
+use crate::render::error::RenderError;
+use crate::render::passes::{ComputePipelines, begin_render, color_target, render_pipeline};
 use crate::render::reflect::BufferLayout;
 
 /// Rasterised binning's buffer layouts as its shader root declares them, read off its naga
@@ -34,6 +36,28 @@ impl ProxyLayout {
             scatter_at: draw.offset("scatter_x")?,
         })
     }
+}
+
+/// Light assignment's pipelines: its entry points' and the draw's, laid out as `drawing`
+/// (made with the cluster buffers) says.
+pub(super) fn pipelines(
+    gpu: &Gpu,
+    pass: &ComposedPass,
+    layout: &wgpu::PipelineLayout,
+    compute: ComputePipelines,
+    drawing: Option<&ProxyDrawing>,
+) -> Result<Pipelines, RenderError> {
+    let proxies = drawing.ok_or_else(|| no_proxy_layout(pass))?.layout;
+    let draw = BinningPipelines::new(gpu, pass, layout, proxies)?;
+    Ok(Pipelines::Binning(compute, draw))
+}
+
+/// Rasterised binning's root without the proxy buffers its draw and copies need.
+fn no_proxy_layout(pass: &ComposedPass) -> RenderError {
+    RenderError::Reflection(format!(
+        "pass `{}`: rasterised binning's root must declare `light_proxies` and `proxy_draw` (a `ProxyDraw` with `scatter_x`)",
+        pass.name
+    ))
 }
 
 /// The draw of the light proxies, which counts and records the pairs.

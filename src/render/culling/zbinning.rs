@@ -4,6 +4,7 @@
 //! a pixel walks its bin's range.
 
 use super::{Clear, Over, Plan, Step, check_sorted, per_light, sort_lights, sorted_lights};
+use crate::cpu::zbin::ZBins;
 use crate::gpu::{Gpu, GpuError};
 use crate::render::clusters::{ClusterBuffers, Sizing};
 
@@ -24,23 +25,42 @@ pub(super) fn plan(c: &ClusterBuffers, lights: u32) -> Plan<'_> {
     }
 }
 
-/// The sort's order; the lights in depth order (what the shading walks), each bin's range
-/// of them, and each tile's mask of a bit per light.
-pub(super) fn own_buffers(s: &Sizing) -> Vec<(&'static str, u64)> {
-    let (x, y, z) = s.grid;
-    let words = (s.lights as u64).div_ceil(32);
-    vec![
-        sorted_lights(s.lights),
-        ("light_order", s.lights as u64 * 4),
+/// The lights in depth order (what the shading walks), each bin's range of them, and each
+/// tile's mask of a bit per light: their names and sizes in bytes, for `lights` lights on
+/// `grid`.
+fn binned(grid: (u32, u32, u32), lights: u32) -> [(&'static str, u64); 3] {
+    let (x, y, z) = grid;
+    let words = (lights as u64).div_ceil(32);
+    [
+        ("light_order", lights as u64 * 4),
         ("bin_ranges", z as u64 * 8),
         ("tile_masks", (x * y) as u64 * words * 4),
     ]
 }
 
+/// The sort's order, and the binned lights.
+pub(super) fn own_buffers(s: &Sizing) -> Vec<(&'static str, u64)> {
+    let mut buffers = vec![sorted_lights(s.lights)];
+    buffers.extend(binned(s.grid, s.lights));
+    buffers
+}
+
+/// The sorted lights, bins and tile masks as the GPU holds them after a frame.
+pub(in crate::render) fn read(c: &ClusterBuffers, gpu: &Gpu) -> Result<ZBins, GpuError> {
+    let [order, bins, masks] =
+        binned(c.grid, c.lights).map(|(name, bytes)| c.read_named(gpu, name, Some(bytes)));
+    Ok(ZBins::from_gpu(
+        (c.grid.0, c.grid.1),
+        order?,
+        &bins?,
+        masks?,
+    ))
+}
+
 /// Refuse a frame whose sorted order or tile masks do not fit one buffer.
 pub(super) fn check(gpu: &Gpu, grid: (u32, u32, u32), lights: usize) -> Result<(), GpuError> {
     check_sorted(gpu, "z-binning", lights)?;
-    let bytes = (grid.0 * grid.1) as u64 * (lights as u64).div_ceil(32) * 4;
+    let (_, bytes) = binned(grid, lights as u32)[2];
     let max = gpu.max_storage_bytes();
     if bytes > max {
         return Err(GpuError::TooLarge(format!(
