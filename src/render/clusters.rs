@@ -8,6 +8,7 @@ use crate::cpu::clusters::ClusterLists;
 use crate::cpu::zbin::ZBins;
 use crate::gpu::{Gpu, GpuError, read_buffer};
 use crate::render::culling::ProxyLayout;
+use crate::render::reflect::BufferSizes;
 use crate::render::stats::AssignmentWork;
 use crate::variant::CullingMethod;
 use crate::variant::{Clusters, Culling, ListUpdate};
@@ -95,6 +96,8 @@ pub struct ClusterBuffers {
     pub update: ListUpdate,
     /// Rasterised binning: its buffers' layouts as its root declares them.
     proxies: Option<ProxyLayout>,
+    /// Every buffer's bytes as the frame's passes declare it.
+    sizes: BufferSizes,
     /// StaticDynamic's moving lists: the buffers they share with the clusters' own lists
     /// (range, marks, view-space lights), which their bytes leave out.
     shares: bool,
@@ -120,6 +123,20 @@ pub struct Sizing {
     pub entries: u32,
     pub proxies: Option<ProxyLayout>,
     pub max_storage: u64,
+}
+
+/// The buffers of `counts` (names and elements), made at the sizes the frame's passes
+/// declare; one no pass declares is bound by none and made empty (a plan may still clear
+/// it).
+fn make_declared(
+    gpu: &Gpu,
+    sizes: &BufferSizes,
+    counts: Vec<(&'static str, u64)>,
+) -> Vec<(&'static str, wgpu::Buffer)> {
+    counts
+        .into_iter()
+        .map(|(name, count)| make_named(gpu, name, sizes.bytes(name, count).unwrap_or(0)))
+        .collect()
 }
 
 /// A cluster's samples on the GPU: their depth range [z0, z1] (z1 = 0 where it holds none)
@@ -185,8 +202,8 @@ impl ProxyDrawing {
 }
 
 /// The buffers a variant's passes bind beside the ones every method does, by their WGSL
-/// names, with their sizes in bytes: the lists' (methods that build lists), 2.5D culling's
-/// masks, and the method's own (`CullingMethod::own_buffers`).
+/// names, with the elements each holds: the lists' (methods that build lists), 2.5D
+/// culling's masks, and the method's own (`CullingMethod::own_buffers`).
 fn named_sizes(
     method: CullingMethod,
     culling: Culling,
@@ -198,23 +215,24 @@ fn named_sizes(
     if method.builds_lists() {
         let blocks = n.div_ceil(crate::compose::SCAN_BLOCK as u64);
         sizes.extend([
-            ("cluster_bounds", n * 32),
-            ("light_counts", n * 4),
-            ("light_offsets", n * 4),
-            ("block_sums", blocks * 4),
-            ("light_indices", s.entries as u64 * 4),
-            ("fill_cursors", n * 4),
-            ("sample_depths", n * 8),
-            // A 16-byte header, then (cluster, entries) each (`SortJobs`).
-            ("sort_jobs", 16 + n * 8),
+            ("cluster_bounds", n),
+            ("light_counts", n),
+            ("light_offsets", n),
+            ("block_sums", blocks),
+            ("light_indices", s.entries as u64),
+            ("fill_cursors", n),
+            // The minimum (inverted) and maximum of each.
+            ("sample_depths", n * 2),
+            // A job per cluster at most (`SortJobs`).
+            ("sort_jobs", n),
         ]);
     }
     if culling.marks_depth_cells() {
-        sizes.push(("depth_masks", n * 4));
+        sizes.push(("depth_masks", n));
     }
     if update == ListUpdate::Patch {
         // Per cluster, what the patch did to its list (`passes/patch_lists.wesl`).
-        sizes.push(("patch_clusters", n * 4));
+        sizes.push(("patch_clusters", n));
     }
     sizes.extend(method.own_buffers(s));
     sizes
@@ -254,8 +272,9 @@ fn make_named(gpu: &Gpu, name: &'static str, bytes: u64) -> (&'static str, wgpu:
 }
 
 impl ClusterBuffers {
-    /// The buffers of clusters `c` for `lights` lights (with rasterised binning, laid out
-    /// as `proxies`, its root's declarations): only those the variant's passes bind.
+    /// The buffers of clusters `c` for `lights` lights, at the `sizes` the frame's passes
+    /// declare (with rasterised binning, laid out as `proxies`, its root's declarations):
+    /// only those the variant's passes bind.
     pub fn new(
         gpu: &Gpu,
         c: &Clusters,
@@ -263,6 +282,7 @@ impl ClusterBuffers {
         index_capacity: u32,
         range: ClusterRange,
         proxies: Option<ProxyLayout>,
+        sizes: BufferSizes,
     ) -> Self {
         let (grid, method) = (c.grid, c.method());
         let clusters = grid.0 * grid.1 * grid.2;
@@ -280,10 +300,14 @@ impl ClusterBuffers {
             proxies,
             max_storage: gpu.max_storage_bytes(),
         };
-        let named: Vec<_> = named_sizes(method, c.culling, c.update, &sizing)
-            .into_iter()
-            .map(|(name, bytes)| make_named(gpu, name, bytes))
-            .collect();
+        let named = make_declared(
+            gpu,
+            &sizes,
+            named_sizes(method, c.culling, c.update, &sizing),
+        );
+        // Bound by every method's passes; one no pass declares is left empty.
+        let every =
+            |name: &str, count: u64| storage(gpu, name, sizes.bytes(name, count).unwrap_or(0));
         let drawing = proxies.map(|layout| {
             let proxy_bytes = named
                 .iter()
@@ -302,14 +326,14 @@ impl ClusterBuffers {
                         | wgpu::BufferUsages::COPY_DST
                         | wgpu::BufferUsages::COPY_SRC,
                 }),
-            active: storage(gpu, "cluster_active", n * 4),
+            active: every("cluster_active", n),
             stats: storage(
                 gpu,
                 "cluster_stats",
                 std::mem::size_of::<ClusterStats>() as u64,
             ),
-            light_view: storage(gpu, "light_view", lights.max(1) as u64 * 48),
-            light_ranges: storage(gpu, "light_ranges", lights.max(1) as u64 * 16),
+            light_view: every("light_view", lights.max(1) as u64),
+            light_ranges: every("light_ranges", lights.max(1) as u64),
             named,
             sort_dispatch: gpu.device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("long-list sort dispatch"),
@@ -325,6 +349,7 @@ impl ClusterBuffers {
             update: c.update,
             method,
             proxies,
+            sizes,
             shares: false,
         }
     }
@@ -340,7 +365,7 @@ impl ClusterBuffers {
             proxies: None,
             max_storage: gpu.max_storage_bytes(),
         };
-        let named = named_sizes(
+        let lists = named_sizes(
             CullingMethod::OneLevel,
             Culling::Boxes,
             ListUpdate::Rebuild,
@@ -348,8 +373,8 @@ impl ClusterBuffers {
         )
         .into_iter()
         .filter(|(name, _)| LIST_BUFFERS.contains(name))
-        .map(|(name, bytes)| make_named(gpu, name, bytes))
         .collect();
+        let named = make_declared(gpu, &self.sizes, lists);
         Self {
             clusters: self.clusters,
             range: self.range.clone(),
@@ -376,6 +401,7 @@ impl ClusterBuffers {
             update: ListUpdate::Rebuild,
             method: CullingMethod::OneLevel,
             proxies: None,
+            sizes: self.sizes.clone(),
             shares: true,
         }
     }
@@ -412,8 +438,9 @@ impl ClusterBuffers {
             proxies: self.proxies,
             max_storage: gpu.max_storage_bytes(),
         };
-        for (name, bytes) in named_sizes(self.method, self.culling, self.update, &sizing) {
+        for (name, count) in named_sizes(self.method, self.culling, self.update, &sizing) {
             if let Some(slot) = self.named.iter_mut().find(|(n, _)| *n == name)
+                && let bytes = self.sizes.bytes(name, count).unwrap_or(0)
                 && slot.1.size() != bytes.max(16)
             {
                 *slot = make_named(gpu, name, bytes);
@@ -480,9 +507,15 @@ impl ClusterBuffers {
         Ok(bytemuck::pod_read_unaligned(&bytes))
     }
 
+    /// The bytes of `count` elements of buffer `name` as the frame's passes declare it (0
+    /// for one no pass declares).
+    pub fn declared_bytes(&self, name: &str, count: u64) -> u64 {
+        self.sizes.bytes(name, count).unwrap_or(0)
+    }
+
     /// Each cluster's view-space box as the GPU holds it: [min, max], xyz and a fourth word.
     pub fn read_bounds(&self, gpu: &Gpu) -> Result<Vec<[[f32; 4]; 2]>, GpuError> {
-        let n = self.clusters as u64 * 32;
+        let n = self.declared_bytes("cluster_bounds", self.clusters as u64);
         let words = self.read_named(gpu, "cluster_bounds", Some(n))?;
         Ok(words
             .chunks_exact(8)
@@ -496,9 +529,17 @@ impl ClusterBuffers {
         if !self.method.builds_lists() {
             return Ok(vec![GpuDepthMask::default(); n as usize]);
         }
-        let depths = self.read_named(gpu, "sample_depths", Some(n * 8))?;
+        let depths = self.read_named(
+            gpu,
+            "sample_depths",
+            Some(self.declared_bytes("sample_depths", n * 2)),
+        )?;
         let masks = if self.culling.marks_depth_cells() {
-            self.read_named(gpu, "depth_masks", Some(n * 4))?
+            self.read_named(
+                gpu,
+                "depth_masks",
+                Some(self.declared_bytes("depth_masks", n)),
+            )?
         } else {
             vec![0u32; n as usize]
         };
@@ -526,7 +567,7 @@ impl ClusterBuffers {
         if !self.method.builds_lists() {
             return Ok(self.read_zbins(gpu)?.counts());
         }
-        let n = self.clusters as u64 * 4;
+        let n = self.declared_bytes("light_counts", self.clusters as u64);
         self.read_named(gpu, "light_counts", Some(n))
     }
 
@@ -535,15 +576,23 @@ impl ClusterBuffers {
         if !self.method.builds_lists() {
             return Ok(self.read_zbins(gpu)?.lists());
         }
-        let n = self.clusters as u64 * 4;
-        let counts = self.read_named(gpu, "light_counts", Some(n))?;
-        let offsets = self.read_named(gpu, "light_offsets", Some(n))?;
+        let n = self.clusters as u64;
+        let counts = self.read_named(
+            gpu,
+            "light_counts",
+            Some(self.declared_bytes("light_counts", n)),
+        )?;
+        let offsets = self.read_named(
+            gpu,
+            "light_offsets",
+            Some(self.declared_bytes("light_offsets", n)),
+        )?;
         // Lists lie anywhere in the index buffer (two-level places them as it goes, Patch
         // moves the ones it changes): up to the end of the last.
         let end = counts
             .iter()
             .zip(&offsets)
-            .map(|(&c, &o)| (o as u64 + c as u64) * 4)
+            .map(|(&c, &o)| self.declared_bytes("light_indices", o as u64 + c as u64))
             .max()
             .unwrap_or(0);
         let used = end.min(self.named("light_indices").size());

@@ -1,5 +1,6 @@
 //! What a frame of a variant and scene must fit before anything is made for it: the
-//! adapter's sizes, the method's buffers, the scene-dependent variant values, and Mesa's
+//! adapter's sizes (the method's buffers are checked once its passes declare their sizes:
+//! `CullingMethod::check`), the scene-dependent variant values, and Mesa's
 //! loop budget for the pipelines that loop over every light (a clustered frame's is checked
 //! on the lists it builds, after it: `Renderer::check_walks`).
 
@@ -15,7 +16,6 @@ pub fn check_frame(gpu: &Gpu, variant: &Variant, scene: &Scene) -> Result<(), Re
     if variant.pipeline.is_clustered() {
         let c = variant.clusters();
         gpu.check_grid(c.grid)?;
-        c.method().check(gpu, c.grid, scene.lights.len())?;
     }
     check_for_scene(variant, scene)?;
     check_samples(gpu, variant)?;

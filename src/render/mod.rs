@@ -232,8 +232,18 @@ impl<'g> Renderer<'g> {
             .iter()
             .find(|(p, _, _)| p.id == PassId::Clustering(compose::ClusterPass::LightAssign))
             .and_then(|(_, c, _)| culling::ProxyLayout::of(c));
+        let sizes = reflect::BufferSizes::of(
+            composed
+                .iter()
+                .flat_map(|(_, c, i)| std::iter::once(c).chain(i))
+                .chain(support.iter().map(|(_, c)| c)),
+        );
+        if variant.pipeline.is_clustered() {
+            let c = variant.clusters();
+            c.method().check(gpu, c.grid, scene.lights.len(), &sizes)?;
+        }
         let res = gpu.scoped("creating resources", || {
-            FrameResources::new(gpu, variant, scene, proxies)
+            FrameResources::new(gpu, variant, scene, proxies, &sizes)
         })?;
         let post_passes: Vec<_> = composed
             .iter()

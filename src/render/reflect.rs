@@ -287,3 +287,59 @@ impl BufferLayout {
             .map(|&(_, at)| at)
     }
 }
+
+/// How many bytes each storage buffer the frame's passes declare takes, by its declared
+/// name, read off their modules: its fixed part and the stride of its runtime-sized array
+/// (a bare array: none and its stride; a struct ending in one: the bytes before it and its
+/// stride; any other type: its size). Buffers are sized from these, so no element size is
+/// written in Rust.
+#[derive(Clone, Debug, Default)]
+pub struct BufferSizes(BTreeMap<String, (u64, u64)>);
+
+impl BufferSizes {
+    /// The storage buffers `passes` declare (one name, one type, in every pass).
+    pub fn of<'a>(passes: impl IntoIterator<Item = &'a ComposedPass>) -> Self {
+        let mut sizes = BTreeMap::new();
+        for pass in passes {
+            let module = &pass.module;
+            for (_, var) in module.global_variables.iter() {
+                let Some(slot) = &var.binding else { continue };
+                if !matches!(var.space, AddressSpace::Storage { .. }) {
+                    continue;
+                }
+                let Some(name) = pass.slot_names.get(&(slot.group, slot.binding)) else {
+                    continue;
+                };
+                let runtime = |ty: naga::Handle<naga::Type>| match module.types[ty].inner {
+                    TypeInner::Array {
+                        size: naga::ArraySize::Dynamic,
+                        stride,
+                        ..
+                    } => Some(stride as u64),
+                    _ => None,
+                };
+                let size = match &module.types[var.ty].inner {
+                    TypeInner::Struct { members, span } => match members.last() {
+                        Some(last) => match runtime(last.ty) {
+                            Some(stride) => (last.offset as u64, stride),
+                            None => (*span as u64, 0),
+                        },
+                        None => (*span as u64, 0),
+                    },
+                    _ => match runtime(var.ty) {
+                        Some(stride) => (0, stride),
+                        None => (module.types[var.ty].inner.size(module.to_ctx()) as u64, 0),
+                    },
+                };
+                sizes.insert(name.clone(), size);
+            }
+        }
+        Self(sizes)
+    }
+
+    /// The bytes of buffer `name` holding `count` elements of its array, if a pass
+    /// declares it.
+    pub fn bytes(&self, name: &str, count: u64) -> Option<u64> {
+        self.0.get(name).map(|&(fixed, each)| fixed + each * count)
+    }
+}

@@ -455,12 +455,14 @@ pub struct FrameResources {
 impl FrameResources {
     /// Upload `scene` and make the targets, cluster buffers (clustered variants) and
     /// counters a frame of `variant` needs (`proxies`: rasterised binning's buffer layouts,
-    /// from its pass). Call inside an error scope.
+    /// from its pass; `sizes`: every buffer's, from the frame's passes). Call inside an
+    /// error scope.
     pub fn new(
         gpu: &Gpu,
         variant: &Variant,
         scene: &Scene,
         proxies: Option<super::culling::ProxyLayout>,
+        sizes: &super::reflect::BufferSizes,
     ) -> Self {
         let (w, h) = (scene.params.width, scene.params.height);
         let sampling = variant.shading.lights.sampling();
@@ -497,7 +499,7 @@ impl FrameResources {
                 .max(1024)
                 .min(bindable) as u32;
             let range = super::ClusterRange::new(scene.camera.near as f32, scene.camera.far as f32);
-            super::ClusterBuffers::new(gpu, &c, lights, capacity, range, proxies)
+            super::ClusterBuffers::new(gpu, &c, lights, capacity, range, proxies, sizes.clone())
         });
         let update = variant
             .pipeline

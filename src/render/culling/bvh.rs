@@ -11,6 +11,7 @@ use crate::cpu::bvh::level_sizes;
 use crate::cpu::sort::sorted_size;
 use crate::gpu::{Gpu, GpuError};
 use crate::render::clusters::ClusterBuffers;
+use crate::render::reflect::BufferSizes;
 
 /// Most lights: the lowest level's dispatch has a workgroup per node of 32 sorted entries,
 /// at most 65535, and the sorted order is a power of two: 2^20 entries make 32768 nodes.
@@ -44,16 +45,16 @@ pub(super) fn plan(c: &ClusterBuffers, lights: u32, refit: bool) -> Plan<'_> {
 pub(super) fn own_buffers(lights: u32) -> Vec<(&'static str, u64)> {
     let n = sorted_size(lights);
     let nodes: u64 = level_sizes(n).iter().map(|&s| s as u64).sum();
-    vec![sorted_lights(lights), ("bvh_nodes", nodes * 16)]
+    vec![sorted_lights(lights), ("bvh_nodes", nodes)]
 }
 
 /// Refuse a frame of more lights than the tree's lowest level can be built for, or whose
 /// order does not fit one buffer.
-pub(super) fn check(gpu: &Gpu, lights: usize) -> Result<(), GpuError> {
+pub(super) fn check(gpu: &Gpu, lights: usize, sizes: &BufferSizes) -> Result<(), GpuError> {
     if lights > MAX_LIGHTS as usize {
         return Err(GpuError::TooLarge(format!(
             "the light BVH is built for at most {MAX_LIGHTS} lights and the scene has {lights}; use fewer lights or another `clusters.culling`"
         )));
     }
-    check_sorted(gpu, "the light BVH", lights)
+    check_sorted(gpu, "the light BVH", lights, sizes)
 }

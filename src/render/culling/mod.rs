@@ -21,23 +21,31 @@ use super::passes::{ComputePipelines, set_compute_groups};
 use crate::compose::{ComposedPass, LIGHTS_PER_ROW};
 use crate::cpu::sort::{SORT_BLOCK, merge_schedule, sorted_size};
 use crate::gpu::{Gpu, GpuError, TimestampSlot};
+use crate::render::reflect::BufferSizes;
 
 use crate::variant::CullingMethod;
 
 impl CullingMethod {
-    /// Refuse a frame of `lights` lights the method's buffers cannot hold.
-    pub fn check(self, gpu: &Gpu, grid: (u32, u32, u32), lights: usize) -> Result<(), GpuError> {
+    /// Refuse a frame of `lights` lights the method's buffers (`sizes`, as its passes
+    /// declare them) cannot hold.
+    pub fn check(
+        self,
+        gpu: &Gpu,
+        grid: (u32, u32, u32),
+        lights: usize,
+        sizes: &BufferSizes,
+    ) -> Result<(), GpuError> {
         match self {
             CullingMethod::OneLevel
             | CullingMethod::TwoLevel { .. }
             | CullingMethod::Rasterised => Ok(()),
-            CullingMethod::Bvh => bvh::check(gpu, lights),
-            CullingMethod::ZBinning => zbinning::check(gpu, grid, lights),
+            CullingMethod::Bvh => bvh::check(gpu, lights, sizes),
+            CullingMethod::ZBinning => zbinning::check(gpu, grid, lights, sizes),
         }
     }
 
     /// The buffers only this method binds (its own root's and its own module's), by the
-    /// names they are declared by, with their sizes in bytes.
+    /// names they are declared by, with the elements each holds.
     pub fn own_buffers(self, s: &Sizing) -> Vec<(&'static str, u64)> {
         match self {
             CullingMethod::OneLevel => Vec::new(),
@@ -176,12 +184,18 @@ fn sort_lights(lights: u32) -> Vec<Step<'static>> {
 
 /// The sort's order: a key and a light an entry.
 fn sorted_lights(lights: u32) -> (&'static str, u64) {
-    ("sorted_lights", sorted_size(lights) as u64 * 8)
+    ("sorted_lights", sorted_size(lights) as u64)
 }
 
 /// Refuse a frame whose sorted order does not fit one buffer.
-fn check_sorted(gpu: &Gpu, method: &str, lights: usize) -> Result<(), GpuError> {
-    let (_, bytes) = sorted_lights(lights as u32);
+fn check_sorted(
+    gpu: &Gpu,
+    method: &str,
+    lights: usize,
+    sizes: &BufferSizes,
+) -> Result<(), GpuError> {
+    let (name, count) = sorted_lights(lights as u32);
+    let bytes = sizes.bytes(name, count).unwrap_or(0);
     let max = gpu.max_storage_bytes();
     if bytes > max {
         return Err(GpuError::TooLarge(format!(

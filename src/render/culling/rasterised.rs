@@ -142,13 +142,15 @@ pub(super) fn own_buffers(s: &Sizing) -> Vec<(&'static str, u64)> {
     let Some(layout) = s.proxies else {
         return Vec::new();
     };
-    let proxy = layout.proxy_bytes;
-    let worst = s.lights.max(1) as u64 * s.grid.2 as u64 * proxy;
-    let pairs = s.entries as u64 * 4;
+    let worst = s.lights.max(1) as u64 * s.grid.2 as u64;
+    let pairs = s.entries as u64;
     vec![
-        ("light_proxies", worst.min(s.max_storage / proxy * proxy)),
-        ("proxy_draw", layout.draw_bytes),
-        ("proxy_places", s.lights as u64 * 4),
+        (
+            "light_proxies",
+            worst.min(s.max_storage / layout.proxy_bytes),
+        ),
+        ("proxy_draw", 0),
+        ("proxy_places", s.lights as u64),
         ("pair_clusters", pairs),
         ("pair_lights", pairs),
         ("pair_places", pairs),

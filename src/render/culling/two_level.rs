@@ -35,8 +35,9 @@ pub(super) fn own_buffers(s: &Sizing, big: u32) -> Vec<(&'static str, u64)> {
     vec![
         (
             "coarse_masks",
-            (big_tiles * (words + words.div_ceil(32)) + z as u64 * words) * 4,
+            big_tiles * (words + words.div_ceil(32)) + z as u64 * words,
         ),
-        ("big_tile_depths", big_tiles * 8),
+        // The minimum (inverted) and maximum of each.
+        ("big_tile_depths", big_tiles * 2),
     ]
 }

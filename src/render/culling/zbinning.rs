@@ -7,6 +7,7 @@ use super::{Clear, Over, Plan, Step, check_sorted, per_light, sort_lights, sorte
 use crate::cpu::zbin::ZBins;
 use crate::gpu::{Gpu, GpuError};
 use crate::render::clusters::{ClusterBuffers, Sizing};
+use crate::render::reflect::BufferSizes;
 
 pub(super) fn plan(c: &ClusterBuffers, lights: u32) -> Plan<'_> {
     let mut steps = vec![Step::Dispatch("transform_lights", Over::Threads(lights, 1))];
@@ -25,16 +26,16 @@ pub(super) fn plan(c: &ClusterBuffers, lights: u32) -> Plan<'_> {
     }
 }
 
-/// The lights in depth order (what the shading walks), each bin's range of them, and each
-/// tile's mask of a bit per light: their names and sizes in bytes, for `lights` lights on
-/// `grid`.
+/// The lights in depth order (what the shading walks), each bin's range of them (first
+/// and last), and each tile's mask of a bit per light: their names and elements, for
+/// `lights` lights on `grid`.
 fn binned(grid: (u32, u32, u32), lights: u32) -> [(&'static str, u64); 3] {
     let (x, y, z) = grid;
     let words = (lights as u64).div_ceil(32);
     [
-        ("light_order", lights as u64 * 4),
-        ("bin_ranges", z as u64 * 8),
-        ("tile_masks", (x * y) as u64 * words * 4),
+        ("light_order", lights as u64),
+        ("bin_ranges", z as u64 * 2),
+        ("tile_masks", (x * y) as u64 * words),
     ]
 }
 
@@ -47,8 +48,8 @@ pub(super) fn own_buffers(s: &Sizing) -> Vec<(&'static str, u64)> {
 
 /// The sorted lights, bins and tile masks as the GPU holds them after a frame.
 pub(in crate::render) fn read(c: &ClusterBuffers, gpu: &Gpu) -> Result<ZBins, GpuError> {
-    let [order, bins, masks] =
-        binned(c.grid, c.lights).map(|(name, bytes)| c.read_named(gpu, name, Some(bytes)));
+    let [order, bins, masks] = binned(c.grid, c.lights)
+        .map(|(name, count)| c.read_named(gpu, name, Some(c.declared_bytes(name, count))));
     Ok(ZBins::from_gpu(
         (c.grid.0, c.grid.1),
         order?,
@@ -58,9 +59,15 @@ pub(in crate::render) fn read(c: &ClusterBuffers, gpu: &Gpu) -> Result<ZBins, Gp
 }
 
 /// Refuse a frame whose sorted order or tile masks do not fit one buffer.
-pub(super) fn check(gpu: &Gpu, grid: (u32, u32, u32), lights: usize) -> Result<(), GpuError> {
-    check_sorted(gpu, "z-binning", lights)?;
-    let (_, bytes) = binned(grid, lights as u32)[2];
+pub(super) fn check(
+    gpu: &Gpu,
+    grid: (u32, u32, u32),
+    lights: usize,
+    sizes: &BufferSizes,
+) -> Result<(), GpuError> {
+    check_sorted(gpu, "z-binning", lights, sizes)?;
+    let (name, count) = binned(grid, lights as u32)[2];
+    let bytes = sizes.bytes(name, count).unwrap_or(0);
     let max = gpu.max_storage_bytes();
     if bytes > max {
         return Err(GpuError::TooLarge(format!(
