@@ -201,9 +201,9 @@ fn spot_variants() -> Vec<LoadedVariant> {
 }
 
 /// Naive forward with the same rasterisation (depth set-up and pre-pass) as `v`.
-fn naive_twin(v: &Variant) -> Variant {
+fn naive_counterpart(v: &Variant) -> Variant {
     Variant {
-        description: "naive twin".into(),
+        description: "naive counterpart".into(),
         pipeline: Pipeline::NaiveForward,
         depth_prepass: v.depth_prepass,
         depth: v.depth.clone(),
@@ -246,7 +246,7 @@ fn assert_within_bound(
 }
 
 /// Naive forward's frame with the lights that reach each pixel, and the reference, for each
-/// rasterisation and shading of one scene (what `naive_twin` keeps of a variant): about 8
+/// rasterisation and shading of one scene (what `naive_counterpart` keeps of a variant): about 8
 /// serve the 40-odd exact variants.
 struct Baselines<'a> {
     gpu: &'a Gpu,
@@ -276,13 +276,13 @@ impl<'a> Baselines<'a> {
         std::sync::Arc<(FrameOutput, Vec<u32>)>,
         std::sync::Arc<clusterlab::cpu::frame::ReferenceFrame>,
     ) {
-        let twin = naive_twin(&v.variant);
+        let counterpart = naive_counterpart(&v.variant);
         let (gpu, composer, scene) = (self.gpu, &self.composer, self.scene);
         let naive = self
             .naive
-            .entry(format!("{twin:?}"))
+            .entry(format!("{counterpart:?}"))
             .or_insert_with(|| {
-                let mut r = Renderer::new(gpu, composer, &twin, scene).unwrap();
+                let mut r = Renderer::new(gpu, composer, &counterpart, scene).unwrap();
                 let frame = r.render().unwrap();
                 r.prepare_counting(composer, scene);
                 r.stats().unwrap();
@@ -760,7 +760,7 @@ fn lights_up_to_the_largest_radius_are_in_every_list() {
         let frame = r.render().unwrap();
         (frame, r.stats().unwrap())
     };
-    let mut naive_v = naive_twin(&exact_variants()[0].variant);
+    let mut naive_v = naive_counterpart(&exact_variants()[0].variant);
     naive_v.depth_prepass = true;
     let (_, naive_stats) = useful(&composer, &naive_v);
     assert!(naive_stats.useful_light_evals > 0);
