@@ -100,15 +100,12 @@ enum Command {
         #[command(flatten)]
         gpu: GpuArgs,
     },
-    /// Run a study against published numbers: codecs (normal codec angular error, GPU and
-    /// CPU), depth (view depth rebuilt from the depth buffer), slicing (culling efficiency of
-    /// each z-slicing scheme and grid), cones (spot lights culled by sphere or cone), culling
-    /// (every culling method, and which did best on each scene and light count), msaa,
-    /// transparency, temporal (list strategies for moving lights), sampling (sampled
-    /// light loops against the exact ones) and scale (4096 lights to a million).
+    /// Run a study against published numbers (`--help` says what each measures and which
+    /// options it reads).
     Study {
         /// Which study.
-        name: clusterlab::study::StudyName,
+        #[arg(value_parser = parse_study_name())]
+        name: String,
         /// Print the rows as JSON (the table goes to stderr).
         #[arg(long)]
         json: bool,
@@ -118,21 +115,20 @@ enum Command {
         /// Codecs: uniform unit vectors to sample (1 to 67108864).
         #[arg(long, default_value_t = 1 << 20, value_parser = parse_samples)]
         samples: usize,
-        /// Slicing, cones, culling and scale: image size, WIDTHxHEIGHT (default 640x360;
-        /// scale: 1920x1080 on a GPU, 640x360 on a software adapter).
+        /// Image size, WIDTHxHEIGHT (default 640x360; scale: 1920x1080 on a GPU, 640x360 on
+        /// a software adapter).
         #[arg(long, value_parser = parse_size)]
         size: Option<(u32, u32)>,
-        /// Slicing, cones and culling: comma-separated scenes, built-in names or glTF files (default:
-        /// every built-in scene).
+        /// Slicing, cones, culling and msaa: comma-separated scenes, built-in names or glTF
+        /// files (default: every built-in scene).
         #[arg(long, value_delimiter = ',')]
         scenes: Vec<String>,
-        /// Slicing, cones, culling, msaa, transparency, temporal and sampling: lights in every
-        /// scene (default: each scene's own; culling: 64, 1024, 4096 and 16384; temporal:
-        /// 1024 and 16384; sampling: 1024, 4096 and 16384; scale: 4096 to 1048576 on a GPU,
-        /// to 262144 on a software adapter).
-        #[arg(long)]
-        lights: Option<u32>,
-        /// Slicing, cones and culling: timed frames per run, at least 1 (the median is reported).
+        /// Comma-separated light counts, each run in every scene (default: the study's own,
+        /// its help says which).
+        #[arg(long, value_delimiter = ',')]
+        lights: Vec<u32>,
+        /// Timed frames per run, at least 1 (the median is reported; temporal: the frames
+        /// of each sequence after the first).
         #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..))]
         frames: u32,
         #[command(flatten)]
@@ -468,6 +464,15 @@ fn parse_fraction(s: &str) -> Result<f32, String> {
         .ok_or_else(|| format!("`{s}` is not a fraction in 0..=1 (e.g. 0.5)"))
 }
 
+/// The studies' names, each with what it measures.
+fn parse_study_name() -> clap::builder::PossibleValuesParser {
+    clap::builder::PossibleValuesParser::new(
+        clusterlab::study::STUDIES
+            .iter()
+            .map(|e| clap::builder::PossibleValue::new(e.name).help(e.about)),
+    )
+}
+
 fn parse_size(s: &str) -> Result<(u32, u32), String> {
     let (w, h) = s
         .split_once(['x', 'X'])
@@ -606,8 +611,7 @@ fn main() -> ExitCode {
         } => {
             let mut options = clusterlab::study::StudyOptions {
                 samples,
-                size: size.unwrap_or(clusterlab::study::StudyOptions::default().size),
-                explicit_size: size,
+                size,
                 lights,
                 frames,
                 ..Default::default()
@@ -615,7 +619,7 @@ fn main() -> ExitCode {
             if !scenes.is_empty() {
                 options.scenes = scenes;
             }
-            study(name, &options, json, &out, &gpu)
+            study(&name, &options, json, &out, &gpu)
         }
     };
     match result {

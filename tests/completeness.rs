@@ -92,7 +92,14 @@ fn every_normal_codec_has_a_kernel_check_a_stress_run_and_a_study_row() {
     let gpu = common::gpu();
     let composer = Composer::default();
     let packed = NormalCodec::packed(32);
-    let study = codecs::run(&gpu, &composer, 256, 1).expect("codec study");
+    let options = clusterlab::study::StudyOptions {
+        samples: 256,
+        ..Default::default()
+    };
+    let study =
+        clusterlab::study::run_points::<codecs::CodecStudy>(&gpu, &composer, &options, &mut |_| {})
+            .expect("codec study")
+            .rows;
     let runs: Vec<String> = stress_case("normals_on_octahedron_seams")
         .expect("the normal-codec stress case")
         .variants
@@ -365,6 +372,38 @@ fn every_sampler_has_a_shipped_variant_a_study_row_and_a_bias_test() {
             missing.push(format!(
                 "{name}: not in the bias tests (`tests/sampling.rs`)"
             ));
+        }
+    }
+    assert!(missing.is_empty(), "{}", missing.join("\n"));
+}
+
+/// A study is one file under `src/study/`, its line in `STUDIES` and its page: each file
+/// there (but the runner and the table) is a registered study named after it, with its page
+/// in `docs/studies/` and its row in that folder's index.
+#[test]
+fn every_study_file_is_registered_with_its_page() {
+    let names: Vec<&str> = clusterlab::study::STUDIES.iter().map(|e| e.name).collect();
+    let index = std::fs::read_to_string("docs/studies/README.md").expect("the studies' index");
+    let mut missing = Vec::new();
+    for entry in std::fs::read_dir("src/study").expect("src/study") {
+        let path = entry.expect("an entry").path();
+        let stem = path
+            .file_stem()
+            .and_then(|s| s.to_str())
+            .unwrap_or_default();
+        if ["mod", "table"].contains(&stem) {
+            continue;
+        }
+        if !names.contains(&stem) {
+            missing.push(format!("src/study/{stem}.rs: no `Entry::of` in STUDIES"));
+        }
+    }
+    for name in &names {
+        if !Path::new(&format!("docs/studies/{name}.md")).is_file() {
+            missing.push(format!("{name}: no docs/studies/{name}.md"));
+        }
+        if !index.contains(&format!("| `{name}` | [{name}.md]({name}.md) |")) {
+            missing.push(format!("{name}: no row in docs/studies/README.md"));
         }
     }
     assert!(missing.is_empty(), "{}", missing.join("\n"));

@@ -5,8 +5,26 @@
 use crate::common::{self, cli, scratch};
 
 use clusterlab::compose::Composer;
+use clusterlab::gpu::Gpu;
 use clusterlab::gpu::expect::{self, Allowance, Check};
+use clusterlab::study::{self, Finished, Study, StudyOptions};
 use clusterlab::study::{codecs, culling, depth, msaa, slicing};
+
+/// Study `S` with `options`, every point run.
+fn run<S: Study>(gpu: &Gpu, options: StudyOptions) -> Finished<S> {
+    study::run_points::<S>(gpu, &Composer::default(), &options, &mut |_| {}).expect(S::NAME)
+}
+
+/// The options of a small run on the atrium: `size`, `lights`, one timed frame.
+fn small(size: (u32, u32), lights: &[u32]) -> StudyOptions {
+    StudyOptions {
+        scenes: vec!["atrium".into()],
+        size: Some(size),
+        lights: lights.to_vec(),
+        frames: 1,
+        ..Default::default()
+    }
+}
 
 fn rel(a: f64, b: f64) -> f64 {
     (a - b).abs() / b.abs().max(1e-30)
@@ -16,8 +34,10 @@ fn rel(a: f64, b: f64) -> f64 {
 fn codecs_on_the_gpu_match_the_cpu_twin_and_the_published_figures() {
     let gpu = common::gpu();
     // The study's own sample and seed: the figures docs/studies/codecs.md states.
-    let seed = clusterlab::study::StudyOptions::default().seed;
-    let rows = codecs::run(&gpu, &Composer::default(), 1 << 20, seed).expect("codecs study");
+    let options = StudyOptions::default();
+    assert_eq!(options.samples, 1 << 20);
+    let done = run::<codecs::CodecStudy>(&gpu, options);
+    let rows = &done.rows;
     for g in rows.iter().filter(|r| r.source == "gpu") {
         let c = rows
             .iter()
@@ -59,11 +79,7 @@ fn codecs_on_the_gpu_match_the_cpu_twin_and_the_published_figures() {
         assert!(g.max_deg >= codecs::covering_bound_deg(g.bits as f64));
     }
     // Every printed figure of the GPU is the CPU twin's, or one unit off in its last digit.
-    assert!(
-        codecs::all_agree(&rows),
-        "{}",
-        codecs::table(&rows).terminal()
-    );
+    assert!(done.ok, "{}", done.table().terminal());
     let find = |codec: &str, sampling: &str, bits: u32| {
         rows.iter()
             .find(|r| {
@@ -106,7 +122,13 @@ fn codecs_on_the_gpu_match_the_cpu_twin_and_the_published_figures() {
 #[test]
 fn depth_comes_back_as_reeds_model_says() {
     let gpu = common::gpu();
-    let study = depth::run(&gpu, &Composer::default(), 200, 2).expect("depth study");
+    let options = StudyOptions {
+        depth_columns: 200,
+        depth_rows: 2,
+        ..Default::default()
+    };
+    let study = run::<depth::DepthStudy>(&gpu, options);
+    assert!(study.ok);
     assert_eq!(study.rows.len(), 8 * 5);
     // Where the adapter stores reversed-Z float32 depth no better than 24-bit unorm, hold it
     // to the 24-bit model (declared in `gpu::expect`).
@@ -189,15 +211,9 @@ fn depth_comes_back_as_reeds_model_says() {
 fn slicing_counts_what_shading_does() {
     let gpu = common::gpu();
     let lights = 64;
-    let rows = slicing::run(
-        &gpu,
-        &Composer::default(),
-        &["atrium"],
-        (64, 36),
-        Some(lights),
-        1,
-    )
-    .expect("slicing study");
+    let done = run::<slicing::SlicingStudy>(&gpu, small((64, 36), &[lights]));
+    assert!(done.ok);
+    let rows = done.rows;
     // Every scheme on every grid, then tiled and Olsson's clustered shading.
     assert_eq!(
         rows.len(),
@@ -238,7 +254,8 @@ fn culling_counts_what_shading_does() {
     let composer = Composer::default();
     let size = (96, 54);
     let counts = [64, 256];
-    let rows = culling::run(&gpu, &composer, &["atrium"], size, &counts, 1).expect("culling study");
+    let done = run::<culling::CullingStudy>(&gpu, small(size, &counts));
+    let rows = &done.rows;
     let methods = culling::methods();
     assert_eq!(
         rows.len(),
@@ -273,24 +290,24 @@ fn culling_counts_what_shading_does() {
             }
         }
     }
-    assert!(culling::all_exact(&rows));
+    assert!(done.ok);
     let mut short = rows.clone();
     short[3].useful_evaluations -= 1;
     assert!(
-        !culling::all_exact(&short),
+        !study::all_kept(&done.study, &short),
         "a method that lost one useful evaluation passed"
     );
     // Z-binning keeps bins and one bit per light and tile, not per-cluster lists.
     let bytes = |m: &str| rows.iter().find(|r| r.method == m).expect(m).list_bytes;
     assert!(bytes("z-binning") < bytes("fine clusters"));
-    assert!(culling::plot(&rows).is_some());
+    assert!(done.plot().is_some());
 
     // Which did best, at 64 lights without spots: among the exact runs only.
     let runs: Vec<&culling::CullingRow> = rows
         .iter()
         .filter(|r| r.lights == 64 && r.spot_fraction == 0.0)
         .collect();
-    let b = culling::best(&rows, "atrium", 64, 0.0).expect("a best method");
+    let b = culling::best(rows, "atrium", 64, 0.0).expect("a best method");
     let fastest = runs
         .iter()
         .map(|r| r.frame_ms)
@@ -302,7 +319,7 @@ fn culling_counts_what_shading_does() {
     assert_eq!(Some(b.fewest_evaluations.evaluations), fewest);
     let least = runs.iter().map(|r| r.list_bytes).min();
     assert_eq!(Some(b.least_memory.list_bytes), least);
-    let notes = culling::table(&rows).notes.join("\n");
+    let notes = done.table().notes.join("\n");
     let line = format!(
         "atrium, 64 lights, spots 0: fastest frame {} (",
         b.fastest.method
@@ -328,7 +345,7 @@ fn culling_counts_what_shading_does() {
         r.error = Some("no adapter".into());
         r.timing_source.clear();
     }
-    let notes = culling::table(&failed).notes.join("\n");
+    let notes = done.study.table(&failed).notes.join("\n");
     assert!(!notes.contains("fastest frame"), "{notes}");
     assert!(notes.contains("medians of the timed frames. "), "{notes}");
 }
@@ -453,20 +470,13 @@ fn the_msaa_study_runs_every_pipeline_at_every_sample_count_exactly() {
     } else {
         assert!(counts.contains(&4), "{counts:?}");
     }
-    let rows = msaa::run(
-        &gpu,
-        &Composer::default(),
-        &["atrium"],
-        (64, 36),
-        Some(64),
-        1,
-    )
-    .expect("msaa study");
+    let done = run::<msaa::MsaaStudy>(&gpu, small((64, 36), &[64]));
+    let rows = &done.rows;
     assert_eq!(
         rows.len(),
         clusterlab::matrix::MSAA_GROUP.len() * counts.len()
     );
-    assert!(msaa::all_exact(&rows), "{rows:#?}");
+    assert!(done.ok, "{rows:#?}");
     for r in rows.iter().filter(|r| r.samples > 1) {
         let one = rows
             .iter()
@@ -475,9 +485,9 @@ fn the_msaa_study_runs_every_pipeline_at_every_sample_count_exactly() {
         assert!(r.bytes_per_pixel > one.bytes_per_pixel, "{}", r.variant);
         assert!(r.edge_fraction > 0.0, "{}", r.variant);
     }
-    let notes = msaa::table(&rows, &counts).notes.join("\n");
+    let notes = done.table().notes.join("\n");
     assert_eq!(
-        msaa::ratios(&rows).len(),
+        msaa::ratios(rows).len(),
         msaa::PAIRS.len() * counts.len(),
         "{notes}"
     );
@@ -491,12 +501,13 @@ fn the_msaa_study_runs_every_pipeline_at_every_sample_count_exactly() {
 fn the_temporal_study_runs_every_strategy_at_every_fraction_exactly() {
     use clusterlab::study::temporal;
     let gpu = common::gpu();
-    let rows = temporal::run(&gpu, &Composer::default(), (64, 36), &[64], 1).expect("study");
+    let done = run::<temporal::TemporalStudy>(&gpu, small((64, 36), &[64]));
+    let rows = &done.rows;
     assert_eq!(
         rows.len(),
         temporal::VARIANTS.len() * temporal::MOVING.len() * 2
     );
-    assert!(temporal::all_exact(&rows), "{rows:#?}");
+    assert!(done.ok, "{rows:#?}");
     // Whether any of the 64 lights moves at a fraction (1% of 64 may be none).
     let movers = |moving: f32| {
         let mut p = clusterlab::scene::defaults(temporal::SCENE).unwrap();
@@ -506,7 +517,7 @@ fn the_temporal_study_runs_every_strategy_at_every_fraction_exactly() {
         !scene.moving_lights.is_empty()
     };
     assert!(!movers(0.0) && movers(0.5));
-    for r in &rows {
+    for r in rows {
         let idle = !movers(r.moving) && !r.camera_moves;
         assert_eq!(r.frames_reused, u32::from(idle), "{r:#?}");
         assert_eq!(r.frame_ms == 0.0, idle, "{r:#?}");
@@ -518,10 +529,10 @@ fn the_temporal_study_runs_every_strategy_at_every_fraction_exactly() {
             assert_eq!(r.vs_rebuild, Some(1.0), "{}", r.variant);
         }
     }
-    let table = temporal::table(&rows);
+    let table = done.table();
     assert_eq!(table.rows.len(), rows.len());
     assert!(table.notes.iter().any(|n| n.contains("Moreau")));
-    assert!(temporal::plot(&rows).is_some());
+    assert!(done.plot().is_some());
 }
 
 /// The spatial reuse of shipped variant `name` (its sweep points share it), if any.
@@ -543,15 +554,16 @@ fn spatial_of(name: &str) -> Option<clusterlab::variant::SpatialReuse> {
 fn the_sampling_study_measures_every_sampler_against_the_exact_variants() {
     use clusterlab::study::sampling;
     let gpu = common::gpu();
-    let rows = sampling::run(&gpu, &Composer::default(), (64, 36), &[256], 1).expect("study");
-    assert!(sampling::all_ran(&rows), "{rows:#?}");
+    let done = run::<sampling::SamplingStudy>(&gpu, small((64, 36), &[256]));
+    let rows = &done.rows;
+    assert!(done.ok, "{rows:#?}");
     let points = sampling::RADII.len();
     let shipped = |r: &&sampling::SamplingRow| !r.sweep;
     assert_eq!(
         rows.iter().filter(shipped).count(),
         points * (sampling::EXACT.len() + sampling::SAMPLERS.len() + sampling::TEMPORAL.len())
     );
-    for r in &rows {
+    for r in rows {
         if r.sampler == "exact" {
             assert!(r.max_abs_8bit <= 1, "{r:#?}");
             assert_eq!(r.candidates, r.evaluations, "{r:#?}");
@@ -611,10 +623,10 @@ fn the_sampling_study_measures_every_sampler_against_the_exact_variants() {
             .unwrap();
         assert!(temporal.last_rmse_8bit.is_some());
     }
-    let table = sampling::table(&rows);
+    let table = done.table();
     assert_eq!(table.rows.len(), rows.len());
     assert!(table.notes.iter().any(|n| n.contains("Bitterli")));
-    assert!(sampling::plot(&rows).is_some());
+    assert!(done.plot().is_some());
 }
 
 /// The scale study runs every method exactly at each count it is given, and every method
@@ -622,26 +634,18 @@ fn the_sampling_study_measures_every_sampler_against_the_exact_variants() {
 /// light would find fewer); the radius shrinks with the count as its rule says.
 #[test]
 fn the_scale_study_runs_every_method_exactly() {
-    use clusterlab::study::{StudyOptions, scale};
+    use clusterlab::study::scale;
     let gpu = common::gpu();
-    let mut rows = Vec::new();
-    for lights in [256, 2048] {
-        let options = StudyOptions {
-            explicit_size: Some((64, 36)),
-            lights: Some(lights),
-            frames: 1,
-            ..Default::default()
-        };
-        rows.extend(scale::run(&gpu, &Composer::default(), &options).expect("scale study"));
-    }
+    let done = run::<scale::ScaleStudy>(&gpu, small((64, 36), &[256, 2048]));
+    let rows = &done.rows;
     assert_eq!(rows.len(), 2 * scale::METHODS.len());
-    assert!(scale::all_exact(&rows), "{rows:#?}");
-    for r in &rows {
+    assert!(done.ok, "{rows:#?}");
+    for r in rows {
         let first = rows.iter().find(|o| o.lights == r.lights).unwrap();
         assert_eq!(r.useful_evaluations, first.useful_evaluations, "{r:#?}");
         assert!(r.useful_evaluations > 0 && r.evaluations >= r.useful_evaluations);
         assert!(r.max_abs_8bit <= clusterlab::run::EXACT_LSB, "{r:#?}");
         assert_eq!((r.radius_min, r.radius_max), scale::radius_range(r.lights));
     }
-    assert!(scale::plot(&rows).is_some());
+    assert!(done.plot().is_some());
 }

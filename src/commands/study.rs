@@ -5,23 +5,24 @@ use clusterlab::compose::Composer;
 use std::path::Path;
 
 pub(crate) fn study(
-    name: clusterlab::study::StudyName,
+    name: &str,
     options: &clusterlab::study::StudyOptions,
     json: bool,
     out: &Path,
     gpu: &GpuArgs,
 ) -> Result<bool, String> {
     clusterlab::files::write::check_folder(out, "--out")?;
+    let study = clusterlab::study::find(name).map_err(|e| e.to_string())?;
     let gpu = gpu.open()?;
     eprintln!(
-        "study {} on {} ({}, {})",
-        name.as_str(),
-        gpu.adapter.name,
-        gpu.adapter.backend,
-        gpu.adapter.driver
+        "study {name} on {} ({}, {})",
+        gpu.adapter.name, gpu.adapter.backend, gpu.adapter.driver
     );
     let started = std::time::Instant::now();
-    let result = clusterlab::study::run(name, &gpu, &Composer::default(), options)
+    let result = study
+        .run(&gpu, &Composer::default(), options, &mut |line| {
+            eprintln!("  {line}")
+        })
         .map_err(|e| e.to_string())?;
     let command: Vec<String> = std::env::args().collect();
     let command = format!("clusterlab {}", command[1..].join(" "));

@@ -6,8 +6,10 @@ use rand::{Rng, SeedableRng};
 use rayon::prelude::*;
 use serde::Serialize;
 
-use super::StudyError;
+use std::sync::Arc;
+
 use super::table::{Table, sig};
+use super::{StudyError, StudyOptions};
 use crate::compose::Composer;
 use crate::cpu::normals::*;
 use crate::cpu::normals::{decode, encode};
@@ -39,7 +41,7 @@ pub const TYLER_OCT: [(u32, f64, f64); 3] = [
 ];
 
 /// Error statistics of one codec at one bit count, from one side (GPU or CPU).
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Default, Serialize)]
 pub struct CodecRow {
     pub codec: String,
     /// "uniform" (on the sphere) or "cube" (cube points normalized, as Tyler 2024 samples).
@@ -60,7 +62,10 @@ pub struct CodecRow {
     pub codes_differing_from_cpu: u64,
     pub samples: u64,
     pub adversarial_samples: u64,
+    pub error: Option<String>,
 }
+
+super::outcome_in_error_field!(CodecRow);
 
 /// `n` unit vectors uniform on the sphere (z uniform in [-1, 1], azimuth uniform), seeded.
 pub fn uniform_normals(n: usize, seed: u64) -> Vec<DVec3> {
@@ -207,88 +212,173 @@ fn angles(truth: &[DVec3], decoded: impl IndexedParallelIterator<Item = DVec3>) 
         .collect()
 }
 
-/// Run the study: every codec on `samples` uniform normals (seeded) plus the adversarial set;
-/// plain octahedral also on `samples` cube-normalized ones, to compare with Tyler 2024.
-pub fn run(
-    gpu: &Gpu,
-    composer: &Composer,
+/// A set of normals the codecs round-trip: the sample, then the adversarial normals, as
+/// f64 truth and as the f32 inputs of the GPU and the CPU twin.
+pub struct NormalSet {
+    /// "uniform" or "cube".
+    sampling: &'static str,
+    truth: Vec<DVec3>,
+    gpu_in: Vec<[f32; 4]>,
+    cpu_in: Vec<DVec3>,
+    /// Normals of the sample; the adversarial ones follow.
     samples: usize,
-    seed: u64,
-) -> Result<Vec<CodecRow>, StudyError> {
-    let codecs = NormalCodec::packed(32);
-    let mut rows = run_set(
-        gpu,
-        composer,
-        "uniform",
-        &uniform_normals(samples, seed),
-        &codecs,
-    )?;
-    let cube = cube_normalized_normals(samples, seed);
-    rows.extend(run_set(gpu, composer, "cube", &cube, &codecs[..1])?);
-    Ok(rows)
+    adversarial: Vec<DVec3>,
 }
 
-/// Every codec of `codecs` at every bit count on `sample` plus the adversarial set, on the
-/// GPU and by the CPU twin; with uniform sampling, also the f32 row.
-fn run_set(
-    gpu: &Gpu,
-    composer: &Composer,
-    sampling: &str,
-    sample: &[DVec3],
-    codecs: &[NormalCodec],
-) -> Result<Vec<CodecRow>, StudyError> {
-    let adversarial = adversarial_normals();
-    let (nu, na) = (sample.len(), adversarial.len());
-    // One batch: the sample, then the adversarial normals.
-    let truth: Vec<DVec3> = sample.iter().chain(&adversarial).copied().collect();
-    let (gpu_in, cpu_in) = as_f32(&truth);
-    let mut rows = Vec::new();
-    let row = |name: &str, bits: u32, source: &str, errors: &mut Vec<f64>, differing: u64| {
-        let (adv_max, adv_worst) = worst(&errors[nu..], &adversarial);
+impl NormalSet {
+    fn new(sampling: &'static str, sample: &[DVec3]) -> Self {
+        let adversarial = adversarial_normals();
+        let truth: Vec<DVec3> = sample.iter().chain(&adversarial).copied().collect();
+        let (gpu_in, cpu_in) = as_f32(&truth);
+        NormalSet {
+            sampling,
+            truth,
+            gpu_in,
+            cpu_in,
+            samples: sample.len(),
+            adversarial,
+        }
+    }
+
+    /// The row of `errors` (the sample's, then the adversarial ones').
+    fn row(&self, codec: &str, bits: u32, source: &str, errors: &mut [f64]) -> CodecRow {
+        let nu = self.samples;
+        let (adv_max, adv_worst) = worst(&errors[nu..], &self.adversarial);
         let (mean, p99, max) = summarize(&mut errors[..nu]);
         CodecRow {
-            codec: name.to_string(),
-            sampling: sampling.to_string(),
-            bits,
-            source: source.to_string(),
             mean_deg: mean,
             p99_deg: p99,
             max_deg: max,
             adversarial_max_deg: adv_max,
             adversarial_worst: adv_worst,
-            codes_differing_from_cpu: differing,
             samples: nu as u64,
-            adversarial_samples: na as u64,
-        }
-    };
-    for kind in codecs {
-        for total in NORMAL_BITS {
-            let codec = kind.with_bits(total);
-            let (gpu_codes, gpu_decoded) =
-                crate::kernels::gpu_codec_round_trip(gpu, composer, codec, &gpu_in)?;
-            let (cpu_codes, cpu_decoded) = cpu_round_trip(codec, &cpu_in);
-            let differing = gpu_codes
-                .iter()
-                .zip(&cpu_codes)
-                .filter(|(a, b)| a != b)
-                .count() as u64;
-            let mut gpu_errors = angles(
-                &truth,
-                gpu_decoded
-                    .par_iter()
-                    .map(|d| DVec3::new(d[0] as f64, d[1] as f64, d[2] as f64)),
-            );
-            let mut cpu_errors = angles(&truth, cpu_decoded.into_par_iter());
-            rows.push(row(codec.label(), total, "gpu", &mut gpu_errors, differing));
-            rows.push(row(codec.label(), total, "cpu", &mut cpu_errors, 0));
+            adversarial_samples: self.adversarial.len() as u64,
+            ..self.named(codec, bits, source)
         }
     }
-    if sampling == "uniform" {
-        // Three f32 components (the Wide layout): the only error is rounding the normal.
-        let mut f32_errors = angles(&truth, cpu_in.into_par_iter());
-        rows.push(row("xyz f32", 96, "cpu", &mut f32_errors, 0));
+
+    /// A row of this set with no figures yet.
+    fn named(&self, codec: &str, bits: u32, source: &str) -> CodecRow {
+        CodecRow {
+            codec: codec.to_string(),
+            sampling: self.sampling.to_string(),
+            bits,
+            source: source.to_string(),
+            ..Default::default()
+        }
     }
-    Ok(rows)
+}
+
+/// The study: every codec on `--samples` uniform normals (seeded) plus the adversarial set;
+/// plain octahedral also on as many cube-normalized ones, to compare with Tyler 2024.
+pub struct CodecStudy;
+
+/// One codec at one bit count on one set, GPU and CPU; or three f32 components.
+pub enum Point {
+    Codec {
+        set: Arc<NormalSet>,
+        codec: NormalCodec,
+    },
+    /// Three f32 components (the Wide layout): the only error is rounding the normal.
+    F32 { set: Arc<NormalSet> },
+}
+
+impl super::Study for CodecStudy {
+    const NAME: &'static str = "codecs";
+    const ABOUT: &'static str = "Angular error of every normal codec at every bit count, on \
+        the GPU through the G-buffer's WGSL and by the CPU twin in f64, beside Tyler 2024 and \
+        Meyer 2010; GPU and CPU must print the same (--samples)";
+    type Point = Point;
+    type Row = CodecRow;
+
+    fn plan(_gpu: &Gpu, options: &StudyOptions) -> Result<(Self, Vec<Point>), StudyError> {
+        if options.samples == 0 {
+            return Err(StudyError::Usage("--samples must be at least 1".into()));
+        }
+        let (n, seed) = (options.samples, options.seed);
+        let uniform = Arc::new(NormalSet::new("uniform", &uniform_normals(n, seed)));
+        let cube = Arc::new(NormalSet::new("cube", &cube_normalized_normals(n, seed)));
+        let codecs = NormalCodec::packed(32);
+        let mut points = Vec::new();
+        for (set, kinds) in [(&uniform, &codecs[..]), (&cube, &codecs[..1])] {
+            for kind in kinds {
+                for total in NORMAL_BITS {
+                    let (set, codec) = (set.clone(), kind.with_bits(total));
+                    points.push(Point::Codec { set, codec });
+                }
+            }
+        }
+        points.push(Point::F32 { set: uniform });
+        Ok((CodecStudy, points))
+    }
+
+    fn label(&self, p: &Point) -> String {
+        match p {
+            Point::Codec { set, codec } => {
+                format!("{} {} bits, {}", codec.label(), codec.bits(), set.sampling)
+            }
+            Point::F32 { set } => format!("xyz f32, {}", set.sampling),
+        }
+    }
+
+    /// The GPU row and the CPU twin's row.
+    fn run(&self, gpu: &Gpu, composer: &Composer, p: &Point) -> Result<Vec<CodecRow>, StudyError> {
+        let (set, codec) = match p {
+            Point::Codec { set, codec } => (set, *codec),
+            Point::F32 { set } => {
+                let mut errors = angles(&set.truth, set.cpu_in.clone().into_par_iter());
+                return Ok(vec![set.row("xyz f32", 96, "cpu", &mut errors)]);
+            }
+        };
+        let (gpu_codes, gpu_decoded) =
+            crate::kernels::gpu_codec_round_trip(gpu, composer, codec, &set.gpu_in)?;
+        let (cpu_codes, cpu_decoded) = cpu_round_trip(codec, &set.cpu_in);
+        let differing = gpu_codes
+            .iter()
+            .zip(&cpu_codes)
+            .filter(|(a, b)| a != b)
+            .count() as u64;
+        let mut gpu_errors = angles(
+            &set.truth,
+            gpu_decoded
+                .par_iter()
+                .map(|d| DVec3::new(d[0] as f64, d[1] as f64, d[2] as f64)),
+        );
+        let mut cpu_errors = angles(&set.truth, cpu_decoded.into_par_iter());
+        let (label, bits) = (codec.label(), codec.bits());
+        Ok(vec![
+            CodecRow {
+                codes_differing_from_cpu: differing,
+                ..set.row(label, bits, "gpu", &mut gpu_errors)
+            },
+            set.row(label, bits, "cpu", &mut cpu_errors),
+        ])
+    }
+
+    fn failed(&self, p: &Point, error: String) -> CodecRow {
+        let named = match p {
+            Point::Codec { set, codec } => set.named(codec.label(), codec.bits(), "gpu"),
+            Point::F32 { set } => set.named("xyz f32", 96, "cpu"),
+        };
+        CodecRow {
+            error: Some(error),
+            ..named
+        }
+    }
+
+    /// A GPU row prints the same as its CPU twin, to one unit of the last printed digit.
+    fn keeps(&self, g: &CodecRow, rows: &[CodecRow]) -> bool {
+        g.source != "gpu"
+            || cpu_twin(rows, g).is_some_and(|c| row_agrees(g, c, agree_within_last_digit))
+    }
+
+    fn table(&self, rows: &[CodecRow]) -> Table {
+        table(rows)
+    }
+
+    fn plot(&self, rows: &[CodecRow]) -> Option<Plot> {
+        plot(rows)
+    }
 }
 
 /// Smallest max error any code of `bits` bits can have: 2^bits caps of angular radius t
@@ -326,17 +416,9 @@ pub fn row_agrees(g: &CodecRow, c: &CodecRow, agree: fn(f64, f64) -> bool) -> bo
         && agree(g.adversarial_max_deg, c.adversarial_max_deg)
 }
 
-/// Whether every GPU row agrees with its CPU twin to within one unit of the printed
-/// precision (the study fails otherwise).
-pub fn all_agree(rows: &[CodecRow]) -> bool {
-    rows.iter()
-        .filter(|r| r.source == "gpu")
-        .all(|g| cpu_twin(rows, g).is_some_and(|c| row_agrees(g, c, agree_within_last_digit)))
-}
-
 /// The printed table: one line per codec and bit count, GPU figures with the CPU's where
 /// they print differently, and the published figures beside them.
-pub fn table(rows: &[CodecRow]) -> Table {
+fn table(rows: &[CodecRow]) -> Table {
     let mut t = Table::new(
         "Normal codecs: angular error in degrees (GPU through the G-buffer's WGSL; CPU twin in f64)",
         &[
@@ -358,6 +440,10 @@ pub fn table(rows: &[CodecRow]) -> Table {
             format!("{} (cpu {})", degrees(g), degrees(c))
         }
     };
+    for r in rows.iter().filter(|r| r.error.is_some()) {
+        let error = r.error.as_deref().unwrap_or_default();
+        t.failed_row(vec![r.codec.clone(), r.bits.to_string()], error);
+    }
     for g in rows.iter().filter(|r| r.source == "gpu") {
         let Some(c) = cpu_twin(rows, g) else {
             continue;
@@ -402,7 +488,10 @@ pub fn table(rows: &[CodecRow]) -> Table {
             degrees(covering_bound_deg(g.bits as f64)),
         ]);
     }
-    if let Some(x) = rows.iter().find(|r| r.codec == "xyz f32") {
+    if let Some(x) = rows
+        .iter()
+        .find(|r| r.codec == "xyz f32" && r.error.is_none())
+    {
         t.row(vec![
             x.codec.clone(),
             x.bits.to_string(),
@@ -447,7 +536,7 @@ pub fn meyer_f32_max_deg() -> f64 {
 }
 
 /// Max error against bits per codec (GPU), with the covering bound.
-pub fn plot(rows: &[CodecRow]) -> Option<Plot> {
+fn plot(rows: &[CodecRow]) -> Option<Plot> {
     use plotters::prelude::*;
     crate::plot::svg(
         "codecs.svg",

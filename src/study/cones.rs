@@ -2,10 +2,12 @@
 //! test, on every built-in scene at spot fractions 0, 0.5 and 1: light evaluations performed
 //! and useful, shading time, and lights missing from a cluster they light (must be 0).
 
+use std::sync::Arc;
+
 use serde::Serialize;
 use strum::IntoEnumIterator;
 
-use super::{StudyError, Table};
+use super::{StudyError, StudyOptions, Table};
 use crate::compose::Composer;
 use crate::gpu::Gpu;
 use crate::render::Renderer;
@@ -15,8 +17,20 @@ use crate::variant::{Clusters, Pipeline, SpotTest, Variant, ZSlicing};
 /// The spot fractions every scene runs at.
 pub const FRACTIONS: [f32; 3] = [0.0, 0.5, 1.0];
 
+/// The study: both spot tests at each fraction on each scene.
+pub struct ConeStudy {
+    frames: u32,
+}
+
+/// One spot test on one scene (its name, lights and spot fraction in its parameters).
+pub struct Point {
+    name: String,
+    scene: Arc<Scene>,
+    test: SpotTest,
+}
+
 /// One scene, spot fraction and spot test.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Default, Serialize)]
 pub struct ConeRow {
     pub scene: String,
     pub width: u32,
@@ -35,6 +49,8 @@ pub struct ConeRow {
     pub error: Option<String>,
 }
 
+super::outcome_in_error_field!(ConeRow);
+
 /// Forward+ with a depth pre-pass on the default grid, with `test` for spots.
 fn variant(test: SpotTest) -> Variant {
     Variant {
@@ -51,105 +67,128 @@ fn variant(test: SpotTest) -> Variant {
     }
 }
 
-fn measure(
-    gpu: &Gpu,
-    composer: &Composer,
-    v: &Variant,
-    scene: &Scene,
-    frames: u32,
-) -> Result<(crate::render::FrameStats, f64, u64), String> {
-    let mut r = Renderer::new(gpu, composer, v, scene).map_err(|e| e.to_string())?;
-    r.render().map_err(|e| e.to_string())?;
-    let mut shading = Vec::new();
-    for _ in 0..frames.max(1) {
-        let f = r.render().map_err(|e| e.to_string())?;
-        shading.push(f.timings.get("forward"));
+/// The row of a point, with no figures yet.
+fn named(p: &Point) -> ConeRow {
+    let params = &p.scene.params;
+    ConeRow {
+        scene: p.name.clone(),
+        width: params.width,
+        height: params.height,
+        lights: params.lights,
+        spot_fraction: params.spots,
+        spot_test: format!("{:?}", p.test),
+        ..Default::default()
     }
-    let stats = r.stats().map_err(|e| e.to_string())?;
-    let (missed, _) = crate::stress::missing_lights_of(&r, v, scene)?;
-    Ok((stats, crate::measure::median(shading), missed))
 }
 
-/// Run both spot tests at each fraction on each scene (at `size`, with `lights` or the
-/// scene's default count). Scenes with no lights are left out: they have no spots to cull.
-pub fn run(
-    gpu: &Gpu,
-    composer: &Composer,
-    scenes: &[&str],
-    size: (u32, u32),
-    lights: Option<u32>,
-    frames: u32,
-) -> Result<Vec<ConeRow>, StudyError> {
-    let mut rows = Vec::new();
-    for &name in scenes {
-        let defaults =
-            crate::scene::defaults(name).map_err(|e| StudyError::Usage(e.to_string()))?;
-        let lights = lights.unwrap_or(defaults.lights);
-        if lights == 0 {
-            continue;
-        }
-        for spots in FRACTIONS {
-            let params = SceneParams {
-                width: size.0,
-                height: size.1,
-                lights,
-                spots,
-                ..defaults
-            };
-            let scene = crate::scene::generate(name, params)
-                .map_err(|e| StudyError::Usage(e.to_string()))?;
-            let mut sphere_evals = None;
-            // The schema's list, the sphere test first: the others are measured against it.
-            for test in SpotTest::iter() {
-                let mut row = ConeRow {
-                    scene: name.to_string(),
-                    width: size.0,
-                    height: size.1,
-                    lights,
-                    spot_fraction: spots,
-                    spot_test: format!("{test:?}"),
-                    evaluations: 0,
-                    useful_evaluations: 0,
-                    efficiency: 0.0,
-                    over_sphere: None,
-                    shading_ms: 0.0,
-                    missed: 0,
-                    error: None,
-                };
-                // One failing run is reported in its row; the others go on.
-                match measure(gpu, composer, &variant(test), &scene, frames) {
-                    Ok((s, shading_ms, missed)) => {
-                        row.evaluations = s.light_evals;
-                        row.useful_evaluations = s.useful_light_evals;
-                        row.efficiency = s.useful_fraction();
-                        row.shading_ms = shading_ms;
-                        row.missed = missed;
-                        if test == SpotTest::Sphere {
-                            sphere_evals = Some(s.light_evals);
-                        }
-                        row.over_sphere = sphere_evals
-                            .filter(|&n| n > 0)
-                            .map(|n| s.light_evals as f64 / n as f64);
-                    }
-                    Err(e) => row.error = Some(e),
+impl super::Study for ConeStudy {
+    const NAME: &'static str = "cones";
+    const ABOUT: &'static str = "Spot lights culled by their bounding sphere against the cone \
+        test, at spot fractions 0, 0.5 and 1 on each scene: evaluations, shading time and \
+        lights missed, which must be 0 (--scenes, --size, --lights, --frames)";
+    type Point = Point;
+    type Row = ConeRow;
+
+    /// Scenes with no lights are left out: they have no spots to cull.
+    fn plan(_gpu: &Gpu, options: &StudyOptions) -> Result<(Self, Vec<Point>), StudyError> {
+        let size = options.size();
+        let mut points = Vec::new();
+        for name in &options.scenes {
+            let defaults = super::scene_defaults(name)?;
+            for lights in options.lights_or(&[defaults.lights]) {
+                if lights == 0 {
+                    continue;
                 }
-                rows.push(row);
+                for spots in FRACTIONS {
+                    let params = SceneParams {
+                        width: size.0,
+                        height: size.1,
+                        lights,
+                        spots,
+                        ..defaults
+                    };
+                    let scene = Arc::new(super::generate(name, params)?);
+                    // The schema's list, the sphere test first: the others are measured
+                    // against it.
+                    for test in SpotTest::iter() {
+                        let (name, scene) = (name.clone(), scene.clone());
+                        points.push(Point { name, scene, test });
+                    }
+                }
+            }
+        }
+        let frames = options.frames;
+        Ok((ConeStudy { frames }, points))
+    }
+
+    fn label(&self, p: &Point) -> String {
+        let params = &p.scene.params;
+        let (lights, spots) = (params.lights, params.spots);
+        format!("{} {lights} lights, spots {spots}: {:?}", p.name, p.test)
+    }
+
+    fn run(&self, gpu: &Gpu, composer: &Composer, p: &Point) -> Result<Vec<ConeRow>, StudyError> {
+        let v = variant(p.test);
+        let mut r = Renderer::new(gpu, composer, &v, &p.scene)?;
+        r.render()?;
+        let mut shading = Vec::new();
+        for _ in 0..self.frames.max(1) {
+            let f = r.render()?;
+            shading.push(f.timings.get("forward"));
+        }
+        let stats = r.stats()?;
+        let (missed, _) =
+            crate::stress::missing_lights_of(&r, &v, &p.scene).map_err(StudyError::Usage)?;
+        Ok(vec![ConeRow {
+            evaluations: stats.light_evals,
+            useful_evaluations: stats.useful_light_evals,
+            efficiency: stats.useful_fraction(),
+            shading_ms: crate::measure::median(shading),
+            missed,
+            ..named(p)
+        }])
+    }
+
+    fn failed(&self, p: &Point, error: String) -> ConeRow {
+        ConeRow {
+            error: Some(error),
+            ..named(p)
+        }
+    }
+
+    /// Each test's evaluations over the sphere test's on the same frame.
+    fn relate(&self, rows: &mut [ConeRow]) {
+        let same_frame = |a: &ConeRow, b: &ConeRow| {
+            (&a.scene, a.lights, a.spot_fraction) == (&b.scene, b.lights, b.spot_fraction)
+        };
+        let sphere = format!("{:?}", SpotTest::Sphere);
+        for i in 0..rows.len() {
+            let base = rows
+                .iter()
+                .find(|o| same_frame(o, &rows[i]) && o.spot_test == sphere && o.error.is_none())
+                .map(|o| o.evaluations)
+                .filter(|&n| n > 0);
+            if rows[i].error.is_none() {
+                rows[i].over_sphere = base.map(|n| rows[i].evaluations as f64 / n as f64);
             }
         }
     }
-    Ok(rows)
+
+    /// No light missed.
+    fn keeps(&self, row: &ConeRow, _: &[ConeRow]) -> bool {
+        row.missed == 0
+    }
+
+    fn table(&self, rows: &[ConeRow]) -> Table {
+        table(rows)
+    }
 }
 
-/// True when every run finished and no run missed a light.
-pub fn all_exact(rows: &[ConeRow]) -> bool {
-    rows.iter().all(|r| r.error.is_none() && r.missed == 0)
-}
-
-pub fn table(rows: &[ConeRow]) -> Table {
+fn table(rows: &[ConeRow]) -> Table {
     let mut t = Table::new(
         "Spot culling: bounding sphere against the cone test (Forward+, 16x9x24 exponential, depth pre-pass)",
         &[
-            "scene",
+            "scene / lights",
             "spots",
             "test",
             "evaluations",
@@ -161,19 +200,17 @@ pub fn table(rows: &[ConeRow]) -> Table {
         ],
     );
     for r in rows {
+        let names = vec![
+            format!("{} / {}", r.scene, r.lights),
+            r.spot_fraction.to_string(),
+            r.spot_test.clone(),
+        ];
         if let Some(e) = &r.error {
-            let names = vec![
-                r.scene.clone(),
-                r.spot_fraction.to_string(),
-                r.spot_test.clone(),
-            ];
             t.failed_row(names, e);
             continue;
         }
-        t.row(vec![
-            r.scene.clone(),
-            r.spot_fraction.to_string(),
-            r.spot_test.clone(),
+        let mut cells = names;
+        cells.extend([
             r.evaluations.to_string(),
             r.useful_evaluations.to_string(),
             format!("{:.1}%", 100.0 * r.efficiency),
@@ -182,6 +219,7 @@ pub fn table(rows: &[ConeRow]) -> Table {
             format!("{:.1}", r.shading_ms),
             r.missed.to_string(),
         ]);
+        t.row(cells);
     }
     t.notes.push(
         "cone / sphere: the cone test's evaluations over the sphere test's on the same frame; missed: light-cluster pairs where a light lights a sampled point of the cluster but is not in its list (must be 0)".into(),

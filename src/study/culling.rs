@@ -2,14 +2,16 @@
 //! 64 to 16384 lights with none and half of them spots: light evaluations performed and
 //! useful, the worst tile or cluster, assignment and shading time, and list memory.
 
+use std::sync::Arc;
+
 use serde::Serialize;
 
 use super::table::{Table, sig};
-use super::{StudyError, measure};
+use super::{StudyError, StudyOptions, measure};
 use crate::compose::Composer;
 use crate::gpu::Gpu;
 use crate::plot::Plot;
-use crate::scene::SceneParams;
+use crate::scene::{Scene, SceneParams};
 use crate::variant::{Clusters, Culling, Pipeline, Variant, ZSlicing};
 
 /// Light counts of the study.
@@ -173,7 +175,7 @@ pub fn methods() -> Vec<Method> {
 }
 
 /// One method on one scene, light count and spot fraction.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Default, Serialize)]
 pub struct CullingRow {
     pub scene: String,
     pub width: u32,
@@ -203,95 +205,136 @@ pub struct CullingRow {
     pub error: Option<String>,
 }
 
-/// Run every method on each scene at `size`, at each of `light_counts` and both spot
-/// fractions. A failing run is reported in its row; the others go on.
-pub fn run(
-    gpu: &Gpu,
-    composer: &Composer,
-    scenes: &[&str],
-    size: (u32, u32),
-    light_counts: &[u32],
+super::outcome_in_error_field!(CullingRow);
+
+/// The study: every method on each scene, light count and spot fraction.
+pub struct CullingStudy {
+    methods: Vec<Method>,
     frames: u32,
-) -> Result<Vec<CullingRow>, StudyError> {
-    // Every scene's parameters first, so that a bad name or size fails before anything runs.
-    let defaults: Vec<(&str, SceneParams)> = scenes
-        .iter()
-        .map(|&name| {
-            crate::scene::defaults(name)
-                .map(|d| (name, d))
-                .map_err(|e| StudyError::Usage(e.to_string()))
-        })
-        .collect::<Result<_, _>>()?;
-    let mut rows = Vec::new();
-    for (name, defaults) in defaults {
-        for &lights in light_counts {
-            for spots in SPOT_FRACTIONS {
-                let params = SceneParams {
-                    width: size.0,
-                    height: size.1,
-                    lights,
-                    spots,
-                    ..defaults
-                };
-                let scene = crate::scene::generate(name, params)
-                    .map_err(|e| StudyError::Usage(e.to_string()))?;
-                for m in methods() {
-                    let v = m.variant(size);
-                    let g = v.clusters().grid;
-                    let mut row = CullingRow {
-                        scene: name.to_string(),
+}
+
+/// One method (an index into the study's) on one scene.
+pub struct Point {
+    name: String,
+    scene: Arc<Scene>,
+    method: usize,
+}
+
+impl CullingStudy {
+    /// The row of a point, with no figures yet.
+    fn named(&self, p: &Point) -> CullingRow {
+        let params = &p.scene.params;
+        let m = &self.methods[p.method];
+        let g = m.variant((params.width, params.height)).clusters().grid;
+        CullingRow {
+            scene: p.name.clone(),
+            width: params.width,
+            height: params.height,
+            lights: params.lights,
+            spot_fraction: params.spots,
+            method: m.name.into(),
+            grid: format!("{}x{}x{}", g.0, g.1, g.2),
+            ..Default::default()
+        }
+    }
+}
+
+impl super::Study for CullingStudy {
+    const NAME: &'static str = "culling";
+    const ABOUT: &'static str = "Every culling method (clusters, tiled, 2.5D, Olsson, \
+        z-binning, rasterised binning, two-level) on each scene at 64 to 16384 lights, spot \
+        fractions 0 and 0.5: evaluations, the worst list, time, list bytes, and which did \
+        best; every method must find the same useful evaluations (--scenes, --size, \
+        --lights, --frames)";
+    type Point = Point;
+    type Row = CullingRow;
+
+    fn plan(_gpu: &Gpu, options: &StudyOptions) -> Result<(Self, Vec<Point>), StudyError> {
+        let size = options.size();
+        let methods = methods();
+        let mut points = Vec::new();
+        for name in &options.scenes {
+            let defaults = super::scene_defaults(name)?;
+            for lights in options.lights_or(&LIGHT_COUNTS) {
+                for spots in SPOT_FRACTIONS {
+                    let params = SceneParams {
                         width: size.0,
                         height: size.1,
                         lights,
-                        spot_fraction: spots,
-                        method: m.name.into(),
-                        grid: format!("{}x{}x{}", g.0, g.1, g.2),
-                        evaluations: 0,
-                        useful_evaluations: 0,
-                        efficiency: 0.0,
-                        worst_list: 0,
-                        assignment_ms: 0.0,
-                        shading_ms: 0.0,
-                        frame_ms: 0.0,
-                        list_bytes: 0,
-                        timing_source: String::new(),
-                        error: None,
+                        spots,
+                        ..defaults
                     };
-                    match measure(gpu, composer, &v, &scene, frames) {
-                        Ok(r) => {
-                            let s = r.stats;
-                            row.evaluations = s.light_evals;
-                            row.useful_evaluations = s.useful_light_evals;
-                            row.efficiency = s.useful_fraction();
-                            row.worst_list = s.max_lights_per_visible_cluster;
-                            row.assignment_ms = r.assignment_ms;
-                            row.shading_ms = r.shading_ms;
-                            row.frame_ms = r.frame_ms;
-                            row.list_bytes = s.cluster_bytes;
-                            row.timing_source = r.timing_source.into();
-                        }
-                        Err(e) => row.error = Some(e.to_string()),
+                    let scene = Arc::new(super::generate(name, params)?);
+                    for method in 0..methods.len() {
+                        let (name, scene) = (name.clone(), scene.clone());
+                        points.push(Point {
+                            name,
+                            scene,
+                            method,
+                        });
                     }
-                    rows.push(row);
                 }
             }
         }
+        let frames = options.frames;
+        Ok((CullingStudy { methods, frames }, points))
     }
-    Ok(rows)
-}
 
-/// Whether every run succeeded and every method found the same useful evaluations on the
-/// same frame: each is exact, so a method that left out a light would count fewer.
-pub fn all_exact(rows: &[CullingRow]) -> bool {
-    rows.iter().all(|r| {
-        r.error.is_none()
-            && rows
-                .iter()
-                .filter(|o| {
-                    o.scene == r.scene && o.lights == r.lights && o.spot_fraction == r.spot_fraction
-                })
-                .all(|o| o.useful_evaluations == r.useful_evaluations)
-    })
+    fn label(&self, p: &Point) -> String {
+        let params = &p.scene.params;
+        let (lights, spots) = (params.lights, params.spots);
+        let method = self.methods[p.method].name;
+        format!("{} {lights} lights, spots {spots}: {method}", p.name)
+    }
+
+    fn run(
+        &self,
+        gpu: &Gpu,
+        composer: &Composer,
+        p: &Point,
+    ) -> Result<Vec<CullingRow>, StudyError> {
+        let params = &p.scene.params;
+        let v = self.methods[p.method].variant((params.width, params.height));
+        let r = measure(gpu, composer, &v, &p.scene, self.frames)?;
+        let s = r.stats;
+        Ok(vec![CullingRow {
+            evaluations: s.light_evals,
+            useful_evaluations: s.useful_light_evals,
+            efficiency: s.useful_fraction(),
+            worst_list: s.max_lights_per_visible_cluster,
+            assignment_ms: r.assignment_ms,
+            shading_ms: r.shading_ms,
+            frame_ms: r.frame_ms,
+            list_bytes: s.cluster_bytes,
+            timing_source: r.timing_source.into(),
+            ..self.named(p)
+        }])
+    }
+
+    fn failed(&self, p: &Point, error: String) -> CullingRow {
+        CullingRow {
+            error: Some(error),
+            ..self.named(p)
+        }
+    }
+
+    /// The same useful evaluations as every other method on the same frame: each is exact,
+    /// so a method that left out a light would count fewer.
+    fn keeps(&self, r: &CullingRow, rows: &[CullingRow]) -> bool {
+        rows.iter()
+            .filter(|o| {
+                o.scene == r.scene && o.lights == r.lights && o.spot_fraction == r.spot_fraction
+            })
+            .all(|o| o.useful_evaluations == r.useful_evaluations)
+    }
+
+    fn table(&self, rows: &[CullingRow]) -> Table {
+        table(rows)
+    }
+
+    fn plot(&self, rows: &[CullingRow]) -> Option<Plot> {
+        plot(rows)
+    }
 }
 
 /// Harada 2012 (2.5D culling): the worst tiles of a deep scene held over 200 lights with
@@ -359,7 +402,7 @@ pub fn best<'a>(rows: &'a [CullingRow], scene: &str, lights: u32, spots: f32) ->
 }
 
 /// The table: each scene, light count and spot fraction, methods ranked by useful fraction.
-pub fn table(rows: &[CullingRow]) -> Table {
+fn table(rows: &[CullingRow]) -> Table {
     let mut t = Table::new(
         "Culling: every method on every scene (Forward+, depth pre-pass)",
         &[
@@ -467,7 +510,7 @@ type Measure = fn(&CullingRow) -> f64;
 
 /// Evaluations performed (left) and shading time (right) against light count, log-log, one
 /// line per method (the mean over scenes and spot fractions).
-pub fn plot(rows: &[CullingRow]) -> Option<Plot> {
+fn plot(rows: &[CullingRow]) -> Option<Plot> {
     let ok: Vec<&CullingRow> = rows
         .iter()
         .filter(|r| r.error.is_none() && r.evaluations > 0)

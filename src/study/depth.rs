@@ -4,8 +4,8 @@
 use glam::DVec3;
 use serde::Serialize;
 
-use super::StudyError;
 use super::table::{Table, sig};
+use super::{StudyError, StudyOptions};
 use crate::compose::Composer;
 use crate::cpu::depth::DepthMapping;
 use crate::gpu::Gpu;
@@ -159,7 +159,7 @@ pub fn planes_scene(columns: u32, rows: u32) -> (Scene, Vec<f64>) {
 }
 
 /// Errors of one setup over one decade of distance.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Default, Serialize)]
 pub struct DepthRow {
     pub setup: String,
     pub format: String,
@@ -178,7 +178,18 @@ pub struct DepthRow {
     pub samples: u64,
     /// Pixels that showed background (a strip missed).
     pub missing: u64,
+    pub error: Option<String>,
+    /// Per pixel column in the decade, its view depth and the largest relative error of
+    /// the GPU rebuild there (the plot's curve).
+    #[serde(skip)]
+    pub curve: Vec<(f64, f64)>,
+    /// How the adapter stores Depth24Plus, judged from this setup's stored values (24-bit
+    /// reversed-Z with an infinite far plane only: it puts distant planes on small values).
+    #[serde(skip)]
+    pub unorm24_storage: Option<String>,
 }
+
+super::outcome_in_error_field!(DepthRow);
 
 /// The relative errors of one pixel column (one plane).
 #[derive(Clone, Default)]
@@ -193,42 +204,68 @@ struct ColumnErrors {
     missing: u64,
 }
 
-/// Per column: the largest relative error of the GPU rebuild, for the plot.
-pub struct DepthCurve {
-    pub setup: String,
-    pub points: Vec<(f64, f64)>,
-}
-
-/// What the study measured.
+/// The study: every setup on one frame of planes at known depths.
 pub struct DepthStudy {
-    pub rows: Vec<DepthRow>,
-    pub curves: Vec<DepthCurve>,
-    /// How the adapter stores Depth24Plus, judged from the stored values.
-    pub unorm24_storage: String,
+    scene: Scene,
+    /// Each pixel column's exact view depth.
+    truth: Vec<f64>,
+    columns: u32,
     /// Why this adapter's reversed-Z float32 depth differs, where it is declared to.
-    pub adapter_deviation: Option<&'static str>,
+    adapter_deviation: Option<&'static str>,
 }
 
-pub fn run(
-    gpu: &Gpu,
-    composer: &Composer,
-    columns: u32,
-    rows: u32,
-) -> Result<DepthStudy, StudyError> {
-    let (scene, truth) = planes_scene(columns, rows);
-    let mut out = DepthStudy {
-        rows: Vec::new(),
-        curves: Vec::new(),
-        unorm24_storage: String::new(),
-        adapter_deviation: crate::gpu::expect::allowance(
-            gpu,
-            crate::gpu::expect::Check::ReversedFloatDepth,
-        )
-        .map(|d| d.why),
-    };
-    for setup in Setup::all() {
+/// The row of a setup's decade, with no figures yet.
+fn named(setup: &Setup, (from, to): (f64, f64)) -> DepthRow {
+    DepthRow {
+        setup: setup.name(),
+        format: format!("{:?}", setup.format),
+        reversed_z: setup.mapping.reversed,
+        infinite_far: setup.mapping.infinite_far,
+        from,
+        to,
+        ..Default::default()
+    }
+}
+
+impl super::Study for DepthStudy {
+    const NAME: &'static str = "depth";
+    const ABOUT: &'static str = "Relative error of view depth rebuilt from the depth buffer, \
+        for each format and depth mapping, against Reed 2015's model; no plane may be missed";
+    type Point = Setup;
+    type Row = DepthRow;
+
+    fn plan(gpu: &Gpu, options: &StudyOptions) -> Result<(Self, Vec<Setup>), StudyError> {
+        let (columns, rows) = (options.depth_columns, options.depth_rows);
+        if columns < 2 || rows == 0 {
+            return Err(StudyError::Usage(
+                "the depth study needs at least 2 columns and 1 row".into(),
+            ));
+        }
+        let (scene, truth) = planes_scene(columns, rows);
+        let adapter_deviation =
+            crate::gpu::expect::allowance(gpu, crate::gpu::expect::Check::ReversedFloatDepth)
+                .map(|d| d.why);
+        let study = DepthStudy {
+            scene,
+            truth,
+            columns,
+            adapter_deviation,
+        };
+        Ok((study, Setup::all()))
+    }
+
+    fn label(&self, setup: &Setup) -> String {
+        setup.name()
+    }
+
+    fn run(
+        &self,
+        gpu: &Gpu,
+        composer: &Composer,
+        setup: &Setup,
+    ) -> Result<Vec<DepthRow>, StudyError> {
         let variant = setup.variant();
-        let mut renderer = Renderer::new(gpu, composer, &variant, &scene)?;
+        let mut renderer = Renderer::new(gpu, composer, &variant, &self.scene)?;
         renderer.render()?;
         let samples = crate::kernels::gpu_depth_samples(
             gpu,
@@ -238,7 +275,7 @@ pub fn run(
             NEAR as f32,
             FAR as f32,
         )?;
-        let w = columns as usize;
+        let (w, truth) = (self.columns as usize, &self.truth);
         let mut per_column = vec![ColumnErrors::default(); w];
         for (i, (&d, &rebuilt)) in samples.device.iter().zip(&samples.view_depth).enumerate() {
             let c = &mut per_column[i % w];
@@ -257,15 +294,14 @@ pub fn run(
             c.max_stored = c.max_stored.max((stored - z).abs() / z);
             c.count += 1;
         }
-        if setup.format == DepthFormat::Unorm24
+        let storage = (setup.format == DepthFormat::Unorm24
             && setup.mapping
                 == (DepthMapping {
                     reversed: true,
                     infinite_far: true,
-                })
-        {
-            out.unorm24_storage = unorm24_storage(&samples.device);
-        }
+                }))
+        .then(|| unorm24_storage(&samples.device));
+        let mut rows = Vec::new();
         for &(from, to) in &BINS {
             let in_bin: Vec<usize> = (0..w)
                 .filter(|&i| {
@@ -279,13 +315,7 @@ pub fn run(
                     .fold(0.0, f64::max)
             };
             let count: u64 = in_bin.iter().map(|&i| per_column[i].count).sum();
-            out.rows.push(DepthRow {
-                setup: setup.name(),
-                format: format!("{:?}", setup.format),
-                reversed_z: setup.mapping.reversed,
-                infinite_far: setup.mapping.infinite_far,
-                from,
-                to,
+            rows.push(DepthRow {
                 max_relative_gpu: max(|c| c.max_gpu),
                 mean_relative_gpu: in_bin.iter().map(|&i| per_column[i].sum_gpu).sum::<f64>()
                     / count.max(1) as f64,
@@ -296,14 +326,37 @@ pub fn run(
                     .fold(0.0, f64::max),
                 samples: count,
                 missing: in_bin.iter().map(|&i| per_column[i].missing).sum(),
+                curve: in_bin
+                    .iter()
+                    .map(|&i| (truth[i], per_column[i].max_gpu))
+                    .collect(),
+                unorm24_storage: storage.clone(),
+                ..named(setup, (from, to))
             });
         }
-        out.curves.push(DepthCurve {
-            setup: setup.name(),
-            points: (0..w).map(|i| (truth[i], per_column[i].max_gpu)).collect(),
-        });
+        Ok(rows)
     }
-    Ok(out)
+
+    /// A setup that failed leaves one row, its first decade's.
+    fn failed(&self, setup: &Setup, error: String) -> DepthRow {
+        DepthRow {
+            error: Some(error),
+            ..named(setup, BINS[0])
+        }
+    }
+
+    /// Every plane drawn.
+    fn keeps(&self, row: &DepthRow, _: &[DepthRow]) -> bool {
+        row.missing == 0
+    }
+
+    fn table(&self, rows: &[DepthRow]) -> Table {
+        table(rows, self.adapter_deviation)
+    }
+
+    fn plot(&self, rows: &[DepthRow]) -> Option<Plot> {
+        plot(rows)
+    }
 }
 
 /// "24-bit unorm" when the small stored values sit on the 1/(2^24 - 1) grid (reversed-Z puts
@@ -335,7 +388,7 @@ fn unorm24_storage(device: &[f32]) -> String {
 
 /// The table: per setup, the max relative error of the GPU rebuild in each decade, with
 /// Reed's model in parentheses.
-pub fn table(study: &DepthStudy) -> Table {
+fn table(rows: &[DepthRow], adapter_deviation: Option<&str>) -> Table {
     let mut columns = vec!["setup".to_string()];
     columns.extend(
         BINS.iter()
@@ -346,11 +399,14 @@ pub fn table(study: &DepthStudy) -> Table {
         "Depth: max relative error of view depth rebuilt from the depth buffer, measured (Reed 2015 model)",
         &refs,
     );
-    let mut setups: Vec<&str> = study.rows.iter().map(|r| r.setup.as_str()).collect();
-    setups.dedup();
-    for s in setups {
+    for s in setups(rows) {
+        let here: Vec<&DepthRow> = rows.iter().filter(|r| r.setup == s).collect();
+        if let Some(e) = here.iter().find_map(|r| r.error.as_deref()) {
+            t.failed_row(vec![s.to_string()], e);
+            continue;
+        }
         let mut cells = vec![s.to_string()];
-        for r in study.rows.iter().filter(|r| r.setup == s) {
+        for r in here {
             cells.push(format!(
                 "{} ({})",
                 sig(r.max_relative_gpu, 2),
@@ -359,21 +415,31 @@ pub fn table(study: &DepthStudy) -> Table {
         }
         t.row(cells);
     }
-    let missing: u64 = study.rows.iter().map(|r| r.missing).sum();
+    let missing: u64 = rows.iter().map(|r| r.missing).sum();
+    let storage = rows
+        .iter()
+        .find_map(|r| r.unorm24_storage.as_deref())
+        .unwrap_or("not measured");
     t.notes.push(format!(
         "Planes at 0.1..1e4 (one pixel column each, log spaced), near {NEAR}, finite far \
          {FAR}; view depth rebuilt by the shaders' `view_depth_from_device` in f32 and \
          compared with the planes' exact depth in f64. Model (Reed 2015): the exact d(z) \
          rounded to the format, half a step over the slope dd/dz. Depth24Plus is stored on \
-         this adapter as: {}. Pixels that missed their plane: {missing}.",
-        study.unorm24_storage
+         this adapter as: {storage}. Pixels that missed their plane: {missing}."
     ));
-    if let Some(why) = study.adapter_deviation {
+    if let Some(why) = adapter_deviation {
         t.notes.push(format!(
             "On this adapter reversed-Z float32 is only as precise as 24-bit depth: {why}."
         ));
     }
     t
+}
+
+/// The setups of `rows`, in order.
+fn setups(rows: &[DepthRow]) -> Vec<&str> {
+    let mut setups: Vec<&str> = rows.iter().map(|r| r.setup.as_str()).collect();
+    setups.dedup();
+    setups
 }
 
 /// The envelope of a curve: the largest error in each of `bins` log-spaced distance bins
@@ -400,7 +466,7 @@ fn envelope(points: &[(f64, f64)], bins: usize) -> Vec<(f64, f64)> {
 
 /// Relative error against distance, per setup (log-log): the measured envelope as lines,
 /// Reed's model as dashes.
-pub fn plot(study: &DepthStudy) -> Option<Plot> {
+fn plot(rows: &[DepthRow]) -> Option<Plot> {
     use plotters::prelude::*;
     const FLOOR: f64 = 1e-9;
     crate::plot::svg(
@@ -426,16 +492,21 @@ pub fn plot(study: &DepthStudy) -> Option<Plot> {
                 .y_label_formatter(&|v| format!("{v:.0e}"))
                 .draw()
                 .ok()?;
-            for (i, curve) in study.curves.iter().enumerate() {
+            for (i, setup) in setups(rows).into_iter().enumerate() {
                 let color = crate::plot::series_color(i);
-                let points: Vec<(f64, f64)> = envelope(&curve.points, 60)
+                let curve: Vec<(f64, f64)> = rows
+                    .iter()
+                    .filter(|r| r.setup == setup)
+                    .flat_map(|r| r.curve.iter().copied())
+                    .collect();
+                let points: Vec<(f64, f64)> = envelope(&curve, 60)
                     .into_iter()
                     .map(|(z, e)| (z, e.max(FLOOR)))
                     .collect();
                 chart
                     .draw_series(LineSeries::new(points, color.stroke_width(2)))
                     .ok()?
-                    .label(curve.setup.clone())
+                    .label(setup.to_string())
                     .legend(move |(x, y)| PathElement::new([(x, y), (x + 16, y)], color));
             }
             // Reed's model for the three distinct cases: fixed point (either direction),

@@ -1,6 +1,7 @@
-//! Accuracy studies against published numbers (`clusterlab study NAME`): normal codecs,
-//! depth reconstruction, z-slicing efficiency. Each writes a table (terminal, Markdown, CSV,
-//! JSON) and a plot, from the same code that renders the frames.
+//! Studies against published numbers (`clusterlab study NAME`). A study is one file: its
+//! points, how a point runs, its table and plot (`Study`); running the points, the check
+//! that every row keeps the study's promise, the files (terminal, Markdown, CSV, JSON, the
+//! plot) and the dispatch (`STUDIES`) are here, once.
 
 pub mod codecs;
 pub mod cones;
@@ -76,67 +77,12 @@ pub(crate) fn measure(
     })
 }
 
-/// The studies.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-pub enum StudyName {
-    /// Angular error of every normal codec at every bit count, GPU and CPU.
-    Codecs,
-    /// Relative error of view depth rebuilt from the depth buffer.
-    Depth,
-    /// Culling efficiency of each z-slicing scheme and grid on each built-in scene.
-    Slicing,
-    /// Spot lights culled by their bounding sphere against the cone test, at spot fractions
-    /// 0, 0.5 and 1 on each built-in scene; lights missed (must be 0).
-    Cones,
-    /// Every culling method (clusters, tiled, 2.5D, Olsson, z-binning, rasterised binning,
-    /// two-level) on each built-in scene at 64 to 16384 lights (or `--lights`), spot
-    /// fractions 0 and 0.5.
-    Culling,
-    /// Naive forward, Forward+ and clustered deferred (tiled and two-level both ways) at
-    /// every sample count the adapter multisamples, 1024 lights (or `--lights`): time,
-    /// memory, edge pixels, and where deferred and forward cross over.
-    Msaa,
-    /// Every pipeline and culling method on the glass scene with its blended panes and
-    /// without: the transparent pass, the blended depths pass, and what the panes cost the
-    /// opaque frame through shared list bounds.
-    Transparency,
-    /// Every list strategy for moving lights (rebuild, static and dynamic lists, patch,
-    /// BVH refit) against the fraction of lights moving (0 to 100%), camera still and
-    /// moving, at 1024 and 16384 lights (or `--lights`) on the atrium: a sequence of
-    /// `--frames` frames after the first for each.
-    Temporal,
-    /// Time against error: the sampled light loops (RIS, stochastic light culling, ReSTIR's
-    /// temporal reuse) beside the fastest exact variants on the atrium at 1024, 4096 and
-    /// 16384 lights (or `--lights`), radius 2..4 and 4..8: each sampler's error, the
-    /// candidates each needs for 2 LSB RMSE, and the frames temporal reuse needs.
-    Sampling,
-    /// The exact culling methods from 4096 lights to a million on the atrium (radius scaled
-    /// with the count): frame, assignment and shading time, evaluations per useful one,
-    /// list bytes and exactness; 640x360 and up to 262144 lights on a software adapter.
-    Scale,
-}
-
-impl StudyName {
-    pub fn as_str(self) -> &'static str {
-        match self {
-            StudyName::Codecs => "codecs",
-            StudyName::Depth => "depth",
-            StudyName::Slicing => "slicing",
-            StudyName::Cones => "cones",
-            StudyName::Culling => "culling",
-            StudyName::Msaa => "msaa",
-            StudyName::Transparency => "transparency",
-            StudyName::Temporal => "temporal",
-            StudyName::Sampling => "sampling",
-            StudyName::Scale => "scale",
-        }
-    }
-}
-
 #[derive(Debug, thiserror::Error)]
 pub enum StudyError {
     #[error("{0}")]
     Render(#[from] RenderError),
+    #[error("{0}")]
+    Run(#[from] crate::run::RunError),
     #[error("{0}")]
     Usage(String),
     #[error("{0}")]
@@ -149,23 +95,43 @@ impl From<GpuError> for StudyError {
     }
 }
 
-/// What a study may be asked for.
+/// What a study may be asked for; each study reads the options it has and says in its
+/// help which.
 #[derive(Clone, Debug)]
 pub struct StudyOptions {
     /// Codecs: uniform unit vectors (at least 1M for the published comparison).
     pub samples: usize,
     pub seed: u64,
-    /// Slicing: scenes and image size, timed frames per run.
+    /// Scenes, built-in names or glTF files.
     pub scenes: Vec<String>,
-    pub size: (u32, u32),
-    /// The size given on the command line, if one was (scale chooses its own otherwise).
-    pub explicit_size: Option<(u32, u32)>,
-    /// Slicing: lights in every scene instead of each scene's default.
-    pub lights: Option<u32>,
+    /// The image size (None: the study's own, `DEFAULT_SIZE` for most).
+    pub size: Option<(u32, u32)>,
+    /// Light counts (empty: each study's own).
+    pub lights: Vec<u32>,
+    /// Timed frames per run.
     pub frames: u32,
     /// Depth: pixel columns (one distance each) and rows of the frame.
     pub depth_columns: u32,
     pub depth_rows: u32,
+}
+
+/// The image size of the studies that render unless `--size` says otherwise.
+pub const DEFAULT_SIZE: (u32, u32) = (640, 360);
+
+impl StudyOptions {
+    /// The size asked for, or `DEFAULT_SIZE`.
+    pub fn size(&self) -> (u32, u32) {
+        self.size.unwrap_or(DEFAULT_SIZE)
+    }
+
+    /// The light counts asked for, or the study's `own`.
+    pub fn lights_or(&self, own: &[u32]) -> Vec<u32> {
+        if self.lights.is_empty() {
+            own.to_vec()
+        } else {
+            self.lights.clone()
+        }
+    }
 }
 
 impl Default for StudyOptions {
@@ -177,9 +143,8 @@ impl Default for StudyOptions {
                 .iter()
                 .map(|s| s.name.to_string())
                 .collect(),
-            size: (640, 360),
-            explicit_size: None,
-            lights: None,
+            size: None,
+            lights: Vec::new(),
             frames: 3,
             depth_columns: 1000,
             depth_rows: 4,
@@ -187,20 +152,208 @@ impl Default for StudyOptions {
     }
 }
 
+/// A study: the points it runs, how one point runs, and how its rows read. Running every
+/// point (a failed one leaves its row and the others go on), the check that every row keeps
+/// the study's promise, the files and the command's dispatch are written once (`conduct`,
+/// `write`, `STUDIES`): adding a study is its file, its line in `STUDIES` and its page.
+pub trait Study: Sized {
+    /// Its name on the command line and in its files' names.
+    const NAME: &'static str;
+    /// What it measures, and the options it reads (the command's help).
+    const ABOUT: &'static str;
+    /// One run: a variant on a scene at a light count, a codec on a set of normals, ...
+    type Point;
+    /// What a point's run gives; a failed point's row holds its error.
+    type Row: Serialize + Outcome;
+
+    /// The study for these options and its points, in the order they run. A bad option or
+    /// scene fails here, before anything runs.
+    fn plan(gpu: &Gpu, options: &StudyOptions) -> Result<(Self, Vec<Self::Point>), StudyError>;
+    /// The point, as the progress line names it.
+    fn label(&self, point: &Self::Point) -> String;
+    /// Run one point: its row, or its rows.
+    fn run(
+        &self,
+        gpu: &Gpu,
+        composer: &Composer,
+        point: &Self::Point,
+    ) -> Result<Vec<Self::Row>, StudyError>;
+    /// The row of a point whose run failed: what names it, and the error.
+    fn failed(&self, point: &Self::Point, error: String) -> Self::Row;
+    /// Figures a row takes from the others (ratios, a front), once every point ran.
+    fn relate(&self, _rows: &mut [Self::Row]) {}
+    /// Whether a row that ran keeps the study's promise (exact, no light missed), seen
+    /// beside the others; a failed row never does.
+    fn keeps(&self, _row: &Self::Row, _rows: &[Self::Row]) -> bool {
+        true
+    }
+    fn table(&self, rows: &[Self::Row]) -> Table;
+    fn plot(&self, _rows: &[Self::Row]) -> Option<Plot> {
+        None
+    }
+}
+
+/// Whether a row's point failed, and why.
+pub trait Outcome {
+    fn failure(&self) -> Option<&str>;
+}
+
+/// Implements `Outcome` for rows whose `error` field holds why their point failed.
+macro_rules! outcome_in_error_field {
+    ($($row:ty),*) => {$(
+        impl $crate::study::Outcome for $row {
+            fn failure(&self) -> Option<&str> {
+                self.error.as_deref()
+            }
+        }
+    )*};
+}
+pub(crate) use outcome_in_error_field;
+
+/// A study that ran: the study as planned, its rows, and whether every row kept its promise.
+pub struct Finished<S: Study> {
+    pub study: S,
+    pub rows: Vec<S::Row>,
+    pub ok: bool,
+}
+
+impl<S: Study> Finished<S> {
+    pub fn table(&self) -> Table {
+        self.study.table(&self.rows)
+    }
+
+    pub fn plot(&self) -> Option<Plot> {
+        self.study.plot(&self.rows)
+    }
+}
+
+/// Whether every row ran and keeps the study's promise.
+pub fn all_kept<S: Study>(study: &S, rows: &[S::Row]) -> bool {
+    rows.iter()
+        .all(|r| r.failure().is_none() && study.keeps(r, rows))
+}
+
+/// Run every point of study `S`, each as one cell of the device's time limit; `progress`
+/// hears of each point as it ends ("[3/28] 4096 lights: FP BVH, 1.2 s").
+pub fn run_points<S: Study>(
+    gpu: &Gpu,
+    composer: &Composer,
+    options: &StudyOptions,
+    progress: &mut dyn FnMut(&str),
+) -> Result<Finished<S>, StudyError> {
+    let (study, points) = S::plan(gpu, options)?;
+    let mut rows = Vec::new();
+    for (i, point) in points.iter().enumerate() {
+        let started = std::time::Instant::now();
+        gpu.begin_cell();
+        let outcome = match study.run(gpu, composer, point) {
+            Ok(ran) => {
+                let failure = ran.iter().find_map(|r| r.failure().map(str::to_string));
+                rows.extend(ran);
+                failure
+            }
+            Err(e) => {
+                rows.push(study.failed(point, e.to_string()));
+                Some(e.to_string())
+            }
+        };
+        progress(&format!(
+            "[{}/{}] {}, {:.1} s{}",
+            i + 1,
+            points.len(),
+            study.label(point),
+            started.elapsed().as_secs_f64(),
+            outcome.map_or(String::new(), |e| format!(": FAILED: {e}"))
+        ));
+    }
+    study.relate(&mut rows);
+    let ok = all_kept(&study, &rows);
+    Ok(Finished { study, rows, ok })
+}
+
+/// Run study `S` and lay out what it found.
+fn conduct<S: Study>(
+    gpu: &Gpu,
+    composer: &Composer,
+    options: &StudyOptions,
+    progress: &mut dyn FnMut(&str),
+) -> Result<StudyOutput, StudyError> {
+    let done = run_points::<S>(gpu, composer, options, progress)?;
+    Ok(StudyOutput {
+        name: S::NAME,
+        table: done.table(),
+        rows: serde_json::to_value(&done.rows).map_err(|e| StudyError::Io(e.to_string()))?,
+        csv: csv_of(&done.rows)?,
+        plot: done.plot(),
+        ok: done.ok,
+    })
+}
+
+/// A study as the command line finds and runs it.
+pub struct Entry {
+    pub name: &'static str,
+    pub about: &'static str,
+    conduct: Conduct,
+}
+
+type Conduct =
+    fn(&Gpu, &Composer, &StudyOptions, &mut dyn FnMut(&str)) -> Result<StudyOutput, StudyError>;
+
+impl Entry {
+    const fn of<S: Study>() -> Entry {
+        Entry {
+            name: S::NAME,
+            about: S::ABOUT,
+            conduct: conduct::<S>,
+        }
+    }
+
+    /// Run the study; `progress` hears of each point as it ends.
+    pub fn run(
+        &self,
+        gpu: &Gpu,
+        composer: &Composer,
+        options: &StudyOptions,
+        progress: &mut dyn FnMut(&str),
+    ) -> Result<StudyOutput, StudyError> {
+        (self.conduct)(gpu, composer, options, progress)
+    }
+}
+
+/// Every study, in the order `clusterlab study --help` lists them.
+pub const STUDIES: [Entry; 10] = [
+    Entry::of::<codecs::CodecStudy>(),
+    Entry::of::<depth::DepthStudy>(),
+    Entry::of::<slicing::SlicingStudy>(),
+    Entry::of::<cones::ConeStudy>(),
+    Entry::of::<culling::CullingStudy>(),
+    Entry::of::<msaa::MsaaStudy>(),
+    Entry::of::<transparency::TransparencyStudy>(),
+    Entry::of::<temporal::TemporalStudy>(),
+    Entry::of::<sampling::SamplingStudy>(),
+    Entry::of::<scale::ScaleStudy>(),
+];
+
+/// The study of that name.
+pub fn find(name: &str) -> Result<&'static Entry, StudyError> {
+    STUDIES.iter().find(|e| e.name == name).ok_or_else(|| {
+        let names: Vec<&str> = STUDIES.iter().map(|e| e.name).collect();
+        StudyError::Usage(format!(
+            "no study named `{name}`; the studies: {}",
+            names.join(", ")
+        ))
+    })
+}
+
 /// A study's results.
 pub struct StudyOutput {
-    pub name: StudyName,
+    pub name: &'static str,
     pub table: Table,
     /// The typed rows, as JSON.
     pub rows: serde_json::Value,
     pub csv: String,
     pub plot: Option<Plot>,
-    /// False when the study found a disagreement it exists to rule out (codecs: GPU and
-    /// CPU differ at the printed precision; slicing: a run failed; cones: a run failed or
-    /// missed a light; culling: a run failed or its useful evaluations differ from the other
-    /// methods' on the same frame; msaa, transparency: a run failed or was over 1 LSB;
-    /// temporal: a sequence failed or a checked frame was not exact; sampling: a run
-    /// failed).
+    /// False when a point failed or a row broke the promise the study keeps (`Study::keeps`).
     pub ok: bool,
 }
 
@@ -213,157 +366,36 @@ fn csv_of<T: Serialize>(rows: &[T]) -> Result<String, StudyError> {
     String::from_utf8(bytes).map_err(|e| StudyError::Io(e.to_string()))
 }
 
-fn output<T: Serialize>(
-    name: StudyName,
-    table: Table,
-    rows: &[T],
-    plot: Option<Plot>,
-    ok: bool,
-) -> Result<StudyOutput, StudyError> {
-    Ok(StudyOutput {
-        name,
-        table,
-        rows: serde_json::to_value(rows).map_err(|e| StudyError::Io(e.to_string()))?,
-        csv: csv_of(rows)?,
-        plot,
-        ok,
-    })
+/// The shipped variants `names` (`variants/NAME.ron`).
+pub(crate) fn shipped(names: &[&str]) -> Result<Vec<crate::variant::LoadedVariant>, StudyError> {
+    names
+        .iter()
+        .map(|name| {
+            let path = Path::new("variants").join(format!("{name}.ron"));
+            crate::variant::load(&path).map_err(|e| {
+                StudyError::Usage(format!("{e} (run the study from the project folder)"))
+            })
+        })
+        .collect()
 }
 
-/// Run study `name`.
-pub fn run(
-    name: StudyName,
-    gpu: &Gpu,
-    composer: &Composer,
-    options: &StudyOptions,
-) -> Result<StudyOutput, StudyError> {
-    let scenes: Vec<&str> = options.scenes.iter().map(|s| s.as_str()).collect();
-    match name {
-        StudyName::Codecs => {
-            if options.samples == 0 {
-                return Err(StudyError::Usage("--samples must be at least 1".into()));
-            }
-            let rows = codecs::run(gpu, composer, options.samples, options.seed)?;
-            let ok = codecs::all_agree(&rows);
-            output(name, codecs::table(&rows), &rows, codecs::plot(&rows), ok)
-        }
-        StudyName::Depth => {
-            if options.depth_columns < 2 || options.depth_rows == 0 {
-                return Err(StudyError::Usage(
-                    "the depth study needs at least 2 columns and 1 row".into(),
-                ));
-            }
-            let study = depth::run(gpu, composer, options.depth_columns, options.depth_rows)?;
-            let ok = study.rows.iter().all(|r| r.missing == 0);
-            output(
-                name,
-                depth::table(&study),
-                &study.rows,
-                depth::plot(&study),
-                ok,
-            )
-        }
-        StudyName::Slicing => {
-            let rows = slicing::run(
-                gpu,
-                composer,
-                &scenes,
-                options.size,
-                options.lights,
-                options.frames,
-            )?;
-            let ok = rows.iter().all(|r| r.error.is_none());
-            output(name, slicing::table(&rows), &rows, slicing::plot(&rows), ok)
-        }
-        StudyName::Cones => {
-            let rows = cones::run(
-                gpu,
-                composer,
-                &scenes,
-                options.size,
-                options.lights,
-                options.frames,
-            )?;
-            let ok = cones::all_exact(&rows);
-            output(name, cones::table(&rows), &rows, None, ok)
-        }
-        StudyName::Culling => {
-            let counts = match options.lights {
-                Some(n) => vec![n],
-                None => culling::LIGHT_COUNTS.to_vec(),
-            };
-            let rows = culling::run(
-                gpu,
-                composer,
-                &scenes,
-                options.size,
-                &counts,
-                options.frames,
-            )?;
-            let ok = culling::all_exact(&rows);
-            output(name, culling::table(&rows), &rows, culling::plot(&rows), ok)
-        }
-        StudyName::Msaa => {
-            let rows = msaa::run(
-                gpu,
-                composer,
-                &scenes,
-                options.size,
-                options.lights,
-                options.frames,
-            )?;
-            let ok = msaa::all_exact(&rows);
-            let table = msaa::table(&rows, &gpu.multisample_counts());
-            output(name, table, &rows, None, ok)
-        }
-        StudyName::Transparency => {
-            let rows =
-                transparency::run(gpu, composer, options.size, options.lights, options.frames)?;
-            let ok = transparency::all_exact(&rows);
-            output(name, transparency::table(&rows), &rows, None, ok)
-        }
-        StudyName::Temporal => {
-            let counts = match options.lights {
-                Some(n) => vec![n],
-                None => temporal::LIGHT_COUNTS.to_vec(),
-            };
-            let rows = temporal::run(gpu, composer, options.size, &counts, options.frames)?;
-            let ok = temporal::all_exact(&rows);
-            output(
-                name,
-                temporal::table(&rows),
-                &rows,
-                temporal::plot(&rows),
-                ok,
-            )
-        }
-        StudyName::Sampling => {
-            let counts = match options.lights {
-                Some(n) => vec![n],
-                None => sampling::LIGHT_COUNTS.to_vec(),
-            };
-            let rows = sampling::run(gpu, composer, options.size, &counts, options.frames)?;
-            let ok = sampling::all_ran(&rows);
-            output(
-                name,
-                sampling::table(&rows),
-                &rows,
-                sampling::plot(&rows),
-                ok,
-            )
-        }
-        StudyName::Scale => {
-            let rows = scale::run(gpu, composer, options)?;
-            let ok = scale::all_exact(&rows);
-            output(name, scale::table(&rows), &rows, scale::plot(&rows), ok)
-        }
-    }
+/// Scene `name`'s own parameters, or a usage error naming what is wrong.
+pub(crate) fn scene_defaults(name: &str) -> Result<crate::scene::SceneParams, StudyError> {
+    crate::scene::defaults(name).map_err(|e| StudyError::Usage(e.to_string()))
+}
+
+/// The scene `name` with `params`, or a usage error naming what is wrong.
+pub(crate) fn generate(
+    name: &str,
+    params: crate::scene::SceneParams,
+) -> Result<crate::scene::Scene, StudyError> {
+    crate::scene::generate(name, params).map_err(|e| StudyError::Usage(e.to_string()))
 }
 
 /// The JSON document of a study: what ran where, and its rows.
 pub fn json(out: &StudyOutput, adapter: &AdapterSummary, command: &str) -> serde_json::Value {
     serde_json::json!({
-        "study": out.name.as_str(),
+        "study": out.name,
         "ok": out.ok,
         "adapter": adapter,
         "command": command,
@@ -381,7 +413,7 @@ pub fn write(
     command: &str,
 ) -> Result<Vec<PathBuf>, StudyError> {
     crate::files::write::create_folder(dir).map_err(StudyError::Io)?;
-    let name = out.name.as_str();
+    let name = out.name;
     let doc = serde_json::to_string_pretty(&json(out, adapter, command))
         .map_err(|e| StudyError::Io(e.to_string()))?;
     let markdown = format!(

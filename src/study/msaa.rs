@@ -5,14 +5,16 @@
 //! (GPU Pro 4, 2013: deferred about 0.8 of forward at 1x, forward 1.5-2x faster at 4x); and
 //! the classified deferred resolve's evaluations against the (1 + 3e) bound.
 
+use std::sync::Arc;
+
 use serde::Serialize;
 
-use super::{StudyError, Table};
+use super::{StudyError, StudyOptions, Table};
 use crate::compose::Composer;
 use crate::gpu::Gpu;
 use crate::measure::Frames;
 use crate::run::{CellOptions, run_scene};
-use crate::scene::SceneParams;
+use crate::scene::{Scene, SceneParams};
 use crate::variant::LoadedVariant;
 
 /// Lights in every scene unless `--lights` says otherwise (GPU Pro 4 measured 1024).
@@ -26,9 +28,10 @@ pub const PAIRS: [(&str, &str); 3] = [
 ];
 
 /// One variant on one scene at one sample count.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Default, Serialize)]
 pub struct MsaaRow {
     pub scene: String,
+    pub lights: u32,
     pub variant: String,
     pub samples: u32,
     /// Median whole frame, ms.
@@ -46,132 +49,174 @@ pub struct MsaaRow {
     pub error: Option<String>,
 }
 
-/// The shipped variants `names` (`variants/NAME.ron`).
-pub(super) fn shipped(names: &[&str]) -> Result<Vec<LoadedVariant>, StudyError> {
-    names
-        .iter()
-        .map(|name| {
-            let path = std::path::PathBuf::from(format!("variants/{name}.ron"));
-            crate::variant::load(&path).map_err(|e| StudyError::Usage(e.to_string()))
-        })
-        .collect()
+super::outcome_in_error_field!(MsaaRow);
+
+/// The study: every variant of the group at every sample count the adapter has, on each
+/// scene.
+pub struct MsaaStudy {
+    /// The sample counts the adapter multisamples.
+    counts: Vec<u32>,
+    frames: u32,
 }
 
-/// Run every variant of the group at every sample count the adapter has, on each scene
-/// (at `size`, with `lights` or `DEFAULT_LIGHTS`).
-pub fn run(
-    gpu: &Gpu,
-    composer: &Composer,
-    scenes: &[&str],
-    size: (u32, u32),
-    lights: Option<u32>,
-    frames: u32,
-) -> Result<Vec<MsaaRow>, StudyError> {
-    let counts = gpu.multisample_counts();
-    let variants = shipped(&crate::matrix::MSAA_GROUP)?;
-    let mut rows = Vec::new();
-    for &name in scenes {
-        let defaults =
-            crate::scene::defaults(name).map_err(|e| StudyError::Usage(e.to_string()))?;
-        let params = SceneParams {
-            width: size.0,
-            height: size.1,
-            lights: lights.unwrap_or(DEFAULT_LIGHTS),
-            ..defaults
-        };
-        let scene =
-            crate::scene::generate(name, params).map_err(|e| StudyError::Usage(e.to_string()))?;
-        for v in &variants {
-            let mut one_sample_evals = None;
-            for &samples in &counts {
-                let mut loaded = v.clone();
-                loaded.variant.msaa.samples = samples;
-                let mut row = MsaaRow {
-                    scene: name.to_string(),
-                    variant: v.name.clone(),
-                    samples,
-                    frame_ms: 0.0,
-                    shading_ms: 0.0,
-                    raster_ms: 0.0,
-                    bytes_per_pixel: 0,
-                    evaluations: 0,
-                    over_one_sample: None,
-                    edge_fraction: 0.0,
-                    max_abs_8bit: 0,
-                    error: None,
+/// One variant at one sample count on one scene.
+pub struct Point {
+    name: String,
+    scene: Arc<Scene>,
+    variant: LoadedVariant,
+    samples: u32,
+}
+
+/// The row of a point, with no figures yet.
+fn named(p: &Point) -> MsaaRow {
+    MsaaRow {
+        scene: p.name.clone(),
+        lights: p.scene.params.lights,
+        variant: p.variant.name.clone(),
+        samples: p.samples,
+        ..Default::default()
+    }
+}
+
+impl super::Study for MsaaStudy {
+    const NAME: &'static str = "msaa";
+    const ABOUT: &'static str = "Naive forward, Forward+ and clustered deferred (tiled and \
+        two-level both ways) at every sample count the adapter multisamples, 1024 lights: \
+        time, memory, edge pixels, and where deferred and forward cross over; every run \
+        within 1 LSB (--scenes, --size, --lights, --frames)";
+    type Point = Point;
+    type Row = MsaaRow;
+
+    fn plan(gpu: &Gpu, options: &StudyOptions) -> Result<(Self, Vec<Point>), StudyError> {
+        let counts = gpu.multisample_counts();
+        let size = options.size();
+        let variants = super::shipped(&crate::matrix::MSAA_GROUP)?;
+        let mut points = Vec::new();
+        for name in &options.scenes {
+            let defaults = super::scene_defaults(name)?;
+            for lights in options.lights_or(&[DEFAULT_LIGHTS]) {
+                let params = SceneParams {
+                    width: size.0,
+                    height: size.1,
+                    lights,
+                    ..defaults
                 };
-                let options = CellOptions {
-                    frames: Frames::exact(1, frames),
-                    stats: true,
-                    ..Default::default()
-                };
-                // One failing run is reported in its row; the others go on.
-                match run_scene(gpu, composer, &loaded, &scene, options) {
-                    Ok(cell) => {
-                        let r = &cell.report;
-                        let ms = |pass: &str| r.gpu_ms.get(pass).and_then(|v| v.as_f64());
-                        row.frame_ms = ms("total").unwrap_or(0.0);
-                        row.shading_ms = ms("forward").or(ms("resolve")).unwrap_or(0.0);
-                        row.raster_ms = ["depth_prepass", "gbuffer", "forward", "sample_resolve"]
-                            .iter()
-                            .filter_map(|p| ms(p))
-                            .sum();
-                        if let Some(s) = &r.stats {
-                            row.bytes_per_pixel = s.frame_bytes_per_pixel;
-                            row.evaluations = s.light_evals;
-                            row.edge_fraction = s.edge_fraction;
-                        }
-                        if samples == 1 {
-                            one_sample_evals = Some(row.evaluations);
-                        }
-                        row.over_one_sample = one_sample_evals
-                            .filter(|&n| n > 0)
-                            .map(|n| row.evaluations as f64 / n as f64);
-                        row.max_abs_8bit = r.error.as_ref().map_or(0, |e| e.max_abs_8bit);
-                        row.error = cell.report.failure.clone();
+                let scene = Arc::new(super::generate(name, params)?);
+                for v in &variants {
+                    for &samples in &counts {
+                        let mut variant = v.clone();
+                        variant.variant.msaa.samples = samples;
+                        points.push(Point {
+                            name: name.clone(),
+                            scene: scene.clone(),
+                            variant,
+                            samples,
+                        });
                     }
-                    Err(e) => row.error = Some(e.to_string()),
                 }
-                rows.push(row);
+            }
+        }
+        let frames = options.frames;
+        Ok((MsaaStudy { counts, frames }, points))
+    }
+
+    fn label(&self, p: &Point) -> String {
+        let lights = p.scene.params.lights;
+        let (variant, samples) = (&p.variant.name, p.samples);
+        format!("{} {lights} lights: {variant} at {samples} samples", p.name)
+    }
+
+    fn run(&self, gpu: &Gpu, composer: &Composer, p: &Point) -> Result<Vec<MsaaRow>, StudyError> {
+        let options = CellOptions {
+            frames: Frames::exact(1, self.frames),
+            stats: true,
+            ..Default::default()
+        };
+        let cell = run_scene(gpu, composer, &p.variant, &p.scene, options)?;
+        let r = &cell.report;
+        let ms = |pass: &str| r.gpu_ms.get(pass).and_then(|v| v.as_f64());
+        let mut row = named(p);
+        row.frame_ms = ms("total").unwrap_or(0.0);
+        row.shading_ms = ms("forward").or(ms("resolve")).unwrap_or(0.0);
+        row.raster_ms = ["depth_prepass", "gbuffer", "forward", "sample_resolve"]
+            .iter()
+            .filter_map(|p| ms(p))
+            .sum();
+        if let Some(s) = &r.stats {
+            row.bytes_per_pixel = s.frame_bytes_per_pixel;
+            row.evaluations = s.light_evals;
+            row.edge_fraction = s.edge_fraction;
+        }
+        row.max_abs_8bit = r.error.as_ref().map_or(0, |e| e.max_abs_8bit);
+        row.error = r.failure.clone();
+        Ok(vec![row])
+    }
+
+    fn failed(&self, p: &Point, error: String) -> MsaaRow {
+        MsaaRow {
+            error: Some(error),
+            ..named(p)
+        }
+    }
+
+    /// Each run's evaluations over the same variant's with one sample.
+    fn relate(&self, rows: &mut [MsaaRow]) {
+        for i in 0..rows.len() {
+            let one = rows
+                .iter()
+                .find(|o| {
+                    let r = &rows[i];
+                    (&o.scene, o.lights, &o.variant, o.samples)
+                        == (&r.scene, r.lights, &r.variant, 1)
+                        && o.error.is_none()
+                })
+                .map(|o| o.evaluations)
+                .filter(|&n| n > 0);
+            if rows[i].error.is_none() {
+                rows[i].over_one_sample = one.map(|n| rows[i].evaluations as f64 / n as f64);
             }
         }
     }
-    Ok(rows)
+
+    /// Within 1 LSB of its reference.
+    fn keeps(&self, row: &MsaaRow, _: &[MsaaRow]) -> bool {
+        row.max_abs_8bit <= 1
+    }
+
+    fn table(&self, rows: &[MsaaRow]) -> Table {
+        table(rows, &self.counts)
+    }
 }
 
-/// True when every run finished within 1 LSB of its reference.
-pub fn all_exact(rows: &[MsaaRow]) -> bool {
-    rows.iter()
-        .all(|r| r.error.is_none() && r.max_abs_8bit <= 1)
-}
-
-/// Deferred frame time over forward's, per scene, pair and sample count.
-pub fn ratios(rows: &[MsaaRow]) -> Vec<(String, String, u32, f64)> {
-    let frame = |scene: &str, variant: &str, samples: u32| {
+/// Deferred frame time over forward's, per scene, light count, pair and sample count.
+pub fn ratios(rows: &[MsaaRow]) -> Vec<(String, u32, String, u32, f64)> {
+    let frame = |of: &MsaaRow, variant: &str| {
         rows.iter()
-            .find(|r| r.scene == scene && r.variant == variant && r.samples == samples)
+            .find(|r| {
+                (&r.scene, r.lights, r.variant.as_str(), r.samples)
+                    == (&of.scene, of.lights, variant, of.samples)
+            })
             .filter(|r| r.error.is_none() && r.frame_ms > 0.0)
             .map(|r| r.frame_ms)
     };
     let mut out = Vec::new();
     for r in rows.iter().filter(|r| r.variant == PAIRS[0].0) {
         for (forward, deferred) in PAIRS {
-            if let (Some(f), Some(d)) = (
-                frame(&r.scene, forward, r.samples),
-                frame(&r.scene, deferred, r.samples),
-            ) {
-                out.push((r.scene.clone(), deferred.to_string(), r.samples, d / f));
+            if let (Some(f), Some(d)) = (frame(r, forward), frame(r, deferred)) {
+                let (scene, deferred) = (r.scene.clone(), deferred.to_string());
+                out.push((scene, r.lights, deferred, r.samples, d / f));
             }
         }
     }
     out
 }
 
-pub fn table(rows: &[MsaaRow], counts: &[u32]) -> Table {
+fn table(rows: &[MsaaRow], counts: &[u32]) -> Table {
     let mut t = Table::new(
         "MSAA: time, memory and evaluations of each pipeline per sample count",
         &[
             "scene",
+            "lights",
             "variant",
             "samples",
             "frame ms",
@@ -186,7 +231,12 @@ pub fn table(rows: &[MsaaRow], counts: &[u32]) -> Table {
         ],
     );
     for r in rows {
-        let names = vec![r.scene.clone(), r.variant.clone(), r.samples.to_string()];
+        let names = vec![
+            r.scene.clone(),
+            r.lights.to_string(),
+            r.variant.clone(),
+            r.samples.to_string(),
+        ];
         if let Some(e) = &r.error {
             t.failed_row(names, e);
             continue;
@@ -205,9 +255,9 @@ pub fn table(rows: &[MsaaRow], counts: &[u32]) -> Table {
         ]);
         t.row(cells);
     }
-    for (scene, deferred, samples, ratio) in ratios(rows) {
+    for (scene, lights, deferred, samples, ratio) in ratios(rows) {
         t.notes.push(format!(
-            "{scene}, {deferred} / its forward pair at {samples}x: {ratio:.2} of the frame time (GPU Pro 4, GTX 480, 1024 lights: about 0.8 at 1x, 1.5-2 at 4x)"
+            "{scene}, {lights} lights, {deferred} / its forward pair at {samples}x: {ratio:.2} of the frame time (GPU Pro 4, GTX 480, 1024 lights: about 0.8 at 1x, 1.5-2 at 4x)"
         ));
     }
     t.notes.push(format!(

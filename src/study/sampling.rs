@@ -7,9 +7,11 @@
 //! earlier state of the art at equal error) and stochastic light culling (Tokuyoshi and
 //! Harada 2016).
 
+use std::sync::Arc;
+
 use serde::Serialize;
 
-use super::{StudyError, Table};
+use super::{StudyError, StudyOptions, Table};
 use crate::compose::Composer;
 use crate::gpu::Gpu;
 use crate::metrics;
@@ -91,87 +93,203 @@ pub struct SamplingRow {
     pub error: Option<String>,
 }
 
+super::outcome_in_error_field!(SamplingRow);
+
 impl SamplingRow {
     fn radius(&self) -> [f32; 2] {
         [self.radius_min, self.radius_max]
     }
 }
 
-/// Run every point.
-pub fn run(
-    gpu: &Gpu,
-    composer: &Composer,
-    size: (u32, u32),
-    counts: &[u32],
+/// The study: at each light count and radius range, the exact variants, each sampler and
+/// its sweep, and the temporal samplers over a still sequence.
+pub struct SamplingStudy {
     frames: u32,
-) -> Result<Vec<SamplingRow>, StudyError> {
-    let exact = super::msaa::shipped(&EXACT)?;
-    let samplers = super::msaa::shipped(&SAMPLERS)?;
-    let temporal = super::msaa::shipped(&TEMPORAL)?;
-    let defaults = crate::scene::defaults(SCENE).map_err(|e| StudyError::Usage(e.to_string()))?;
-    let mut rows = Vec::new();
-    for &lights in counts {
-        for &(lo, hi) in &RADII {
-            // The scene's own frame (its camera walking, its lights moving): every frame
-            // builds its lists, as a frame of a running demo does.
-            let params = SceneParams {
-                width: size.0,
-                height: size.1,
-                lights,
-                radius_range: (lo, hi),
-                ..defaults
-            };
-            let scene = crate::scene::generate(SCENE, params)
-                .map_err(|e| StudyError::Usage(e.to_string()))?;
-            let references = ReferenceCache::default();
-            let mut point = Vec::new();
-            let measure_here = |v: &LoadedVariant, sweep: bool| {
-                measure(gpu, composer, v, &scene, &references, frames, sweep)
-            };
-            for v in &exact {
-                point.push(measure_here(v, false));
-            }
-            for v in &samplers {
-                point.push(measure_here(v, false));
-                // Cheapest first: past the first point at the target, dearer ones say nothing.
-                for swept in sweep(v) {
-                    let row = measure_here(&swept, true);
-                    let reached = row.error.is_none() && row.rmse_8bit <= TARGET_RMSE_8BIT;
-                    point.push(row);
-                    if reached {
-                        break;
-                    }
-                }
-            }
-            // Temporal reuse: the same frame held still, the camera and lights where they
-            // are at its time.
-            let still = SceneParams {
-                motion: Motion {
-                    lights: 0.0,
-                    camera: false,
-                    still_at: defaults.time,
-                },
-                ..params
-            };
-            for v in &temporal {
-                point.push(temporal_point(
-                    gpu,
-                    composer,
-                    v,
-                    still,
-                    &ReferenceCache::default(),
-                ));
-            }
-            finish(&mut point);
-            rows.extend(point);
+}
+
+/// One variant at one light count and radius range.
+pub enum Point {
+    /// The scene's own frame (its camera walking, its lights moving: every frame builds its
+    /// lists, as a frame of a running demo does); a sampler's sweep with it, cheapest first.
+    Frame {
+        variant: LoadedVariant,
+        scene: Arc<Scene>,
+        references: Arc<ReferenceCache>,
+        sweep: bool,
+    },
+    /// A sampler that reuses earlier frames: the same frame held still, the camera and
+    /// lights where they are at its time.
+    Still {
+        variant: LoadedVariant,
+        params: SceneParams,
+    },
+}
+
+impl Point {
+    fn variant(&self) -> &LoadedVariant {
+        match self {
+            Point::Frame { variant, .. } | Point::Still { variant, .. } => variant,
         }
     }
-    Ok(rows)
+
+    fn params(&self) -> &SceneParams {
+        match self {
+            Point::Frame { scene, .. } => &scene.params,
+            Point::Still { params, .. } => params,
+        }
+    }
+}
+
+impl super::Study for SamplingStudy {
+    const NAME: &'static str = "sampling";
+    const ABOUT: &'static str = "Time against error: the sampled light loops (uniform, RIS, \
+        stochastic light culling, ReSTIR's temporal and spatiotemporal reuse) beside the \
+        fastest exact variants on the atrium at 1024, 4096 and 16384 lights, radius 2..4 and \
+        4..8: each sampler's error, the candidates each needs for 2 LSB RMSE, and the frames \
+        temporal reuse needs (--size, --lights, --frames)";
+    type Point = Point;
+    type Row = SamplingRow;
+
+    fn plan(_gpu: &Gpu, options: &StudyOptions) -> Result<(Self, Vec<Point>), StudyError> {
+        let exact = super::shipped(&EXACT)?;
+        let samplers = super::shipped(&SAMPLERS)?;
+        let temporal = super::shipped(&TEMPORAL)?;
+        let defaults = super::scene_defaults(SCENE)?;
+        let size = options.size();
+        let mut points = Vec::new();
+        for lights in options.lights_or(&LIGHT_COUNTS) {
+            for &radius_range in &RADII {
+                let params = SceneParams {
+                    width: size.0,
+                    height: size.1,
+                    lights,
+                    radius_range,
+                    ..defaults
+                };
+                let scene = Arc::new(super::generate(SCENE, params)?);
+                let references = Arc::new(ReferenceCache::default());
+                for (v, sweep) in exact
+                    .iter()
+                    .map(|v| (v, false))
+                    .chain(samplers.iter().map(|v| (v, true)))
+                {
+                    points.push(Point::Frame {
+                        variant: v.clone(),
+                        scene: scene.clone(),
+                        references: references.clone(),
+                        sweep,
+                    });
+                }
+                let still = SceneParams {
+                    motion: Motion {
+                        lights: 0.0,
+                        camera: false,
+                        still_at: defaults.time,
+                    },
+                    ..params
+                };
+                for v in &temporal {
+                    points.push(Point::Still {
+                        variant: v.clone(),
+                        params: still,
+                    });
+                }
+            }
+        }
+        let frames = options.frames;
+        Ok((SamplingStudy { frames }, points))
+    }
+
+    fn label(&self, p: &Point) -> String {
+        let params = p.params();
+        let (lights, (lo, hi)) = (params.lights, params.radius_range);
+        let name = &p.variant().name;
+        format!("{lights} lights, radius {lo}..{hi}: {name}")
+    }
+
+    fn run(
+        &self,
+        gpu: &Gpu,
+        composer: &Composer,
+        p: &Point,
+    ) -> Result<Vec<SamplingRow>, StudyError> {
+        match p {
+            Point::Frame {
+                variant,
+                scene,
+                references,
+                sweep,
+            } => {
+                let measure_here = |v: &LoadedVariant, swept: bool| {
+                    measure(gpu, composer, v, scene, references, self.frames, swept)
+                };
+                let mut rows = vec![measure_here(variant, false)?];
+                if *sweep {
+                    // Cheapest first: past the first point at the target, dearer ones say
+                    // nothing. A swept variant that fails leaves its row; the sweep goes on.
+                    for swept in sweep_of(variant) {
+                        // Each swept variant has the cell's time limit to itself.
+                        gpu.begin_cell();
+                        let row = measure_here(&swept, true).unwrap_or_else(|e| SamplingRow {
+                            error: Some(e.to_string()),
+                            ..empty_row(&swept, &scene.params, true)
+                        });
+                        let reached = row.error.is_none() && row.rmse_8bit <= TARGET_RMSE_8BIT;
+                        rows.push(row);
+                        if reached {
+                            break;
+                        }
+                    }
+                }
+                Ok(rows)
+            }
+            Point::Still { variant, params } => {
+                let references = ReferenceCache::default();
+                Ok(vec![temporal_point(
+                    gpu,
+                    composer,
+                    variant,
+                    *params,
+                    &references,
+                )?])
+            }
+        }
+    }
+
+    fn failed(&self, p: &Point, error: String) -> SamplingRow {
+        SamplingRow {
+            error: Some(error),
+            ..empty_row(p.variant(), p.params(), false)
+        }
+    }
+
+    /// Each row's speed-up and place on the front, among the rows of its light count and
+    /// radius range.
+    fn relate(&self, rows: &mut [SamplingRow]) {
+        let mut start = 0;
+        while start < rows.len() {
+            let key = (rows[start].lights, rows[start].radius());
+            let len = rows[start..]
+                .iter()
+                .take_while(|r| (r.lights, r.radius()) == key)
+                .count();
+            finish(&mut rows[start..start + len]);
+            start += len;
+        }
+    }
+
+    fn table(&self, rows: &[SamplingRow]) -> Table {
+        table(rows)
+    }
+
+    fn plot(&self, rows: &[SamplingRow]) -> Option<crate::plot::Plot> {
+        plot(rows)
+    }
 }
 
 /// The sweep of a shipped sampler, cheapest first: RIS and uniform sampling over
 /// `CANDIDATES` (but its own), stochastic culling over thresholds a quarter apart.
-fn sweep(v: &LoadedVariant) -> Vec<LoadedVariant> {
+fn sweep_of(v: &LoadedVariant) -> Vec<LoadedVariant> {
     let Some(s) = v.variant.shading.lights.sampling() else {
         return Vec::new();
     };
@@ -265,7 +383,7 @@ const LIST_PASSES: [&str; 5] = [
 const SHADING_PASSES: [&str; 2] = ["forward", "resolve"];
 
 /// One variant on `scene`: an untimed frame, `frames` timed, the error of the last, the
-/// counters; a failure is reported in its row.
+/// counters.
 fn measure(
     gpu: &Gpu,
     composer: &Composer,
@@ -274,48 +392,41 @@ fn measure(
     references: &ReferenceCache,
     frames: u32,
     sweep: bool,
-) -> SamplingRow {
+) -> Result<SamplingRow, StudyError> {
     let mut row = empty_row(v, &scene.params, sweep);
-    gpu.begin_cell();
-    let result = (|| -> Result<(), StudyError> {
-        let mut renderer = Renderer::new(gpu, composer, &v.variant, scene)?;
-        renderer.render()?;
-        let (mut totals, mut lists, mut shading) = (Vec::new(), Vec::new(), Vec::new());
-        let mut last = None;
-        for _ in 0..frames.max(1) {
-            let f = renderer.render()?;
-            totals.push(f.timings.total_ms());
-            lists.push(LIST_PASSES.iter().map(|p| f.timings.get(p)).sum());
-            shading.push(SHADING_PASSES.iter().map(|p| f.timings.get(p)).sum());
-            last = Some(f);
-        }
-        let last = last.expect("a timed frame");
-        let (reference, _) = references
-            .get_or_compute(gpu, composer, v, scene)
-            .map_err(|e| StudyError::Usage(e.to_string()))?;
-        let e = metrics::compare(&last, &reference);
-        if let Some(why) = crate::run::meaningless(&reference, Some(&last), None, Some(&e)) {
-            return Err(StudyError::Usage(why));
-        }
-        let stats = renderer.stats()?;
-        row.frame_min_ms = totals.iter().copied().fold(f64::INFINITY, f64::min);
-        row.frame_max_ms = totals.iter().copied().fold(0.0, f64::max);
-        row.frame_ms = crate::measure::median(totals);
-        row.lists_ms = crate::measure::median(lists);
-        row.shading_ms = crate::measure::median(shading);
-        row.max_abs_8bit = e.max_abs_8bit;
-        row.rmse_8bit = e.rmse_8bit;
-        row.relative_mse = e.relative_mse;
-        row.flip_mean = e.flip_mean;
-        row.candidates = stats.light_candidates;
-        row.evaluations = stats.light_evals;
-        row.useful = stats.useful_light_evals;
-        Ok(())
-    })();
-    if let Err(e) = result {
-        row.error = Some(e.to_string());
+    let mut renderer = Renderer::new(gpu, composer, &v.variant, scene)?;
+    renderer.render()?;
+    let (mut totals, mut lists, mut shading) = (Vec::new(), Vec::new(), Vec::new());
+    let mut last = None;
+    for _ in 0..frames.max(1) {
+        let f = renderer.render()?;
+        totals.push(f.timings.total_ms());
+        lists.push(LIST_PASSES.iter().map(|p| f.timings.get(p)).sum());
+        shading.push(SHADING_PASSES.iter().map(|p| f.timings.get(p)).sum());
+        last = Some(f);
     }
-    row
+    let last = last.expect("a timed frame");
+    let (reference, _) = references
+        .get_or_compute(gpu, composer, v, scene)
+        .map_err(|e| StudyError::Usage(e.to_string()))?;
+    let e = metrics::compare(&last, &reference);
+    if let Some(why) = crate::run::meaningless(&reference, Some(&last), None, Some(&e)) {
+        return Err(StudyError::Usage(why));
+    }
+    let stats = renderer.stats()?;
+    row.frame_min_ms = totals.iter().copied().fold(f64::INFINITY, f64::min);
+    row.frame_max_ms = totals.iter().copied().fold(0.0, f64::max);
+    row.frame_ms = crate::measure::median(totals);
+    row.lists_ms = crate::measure::median(lists);
+    row.shading_ms = crate::measure::median(shading);
+    row.max_abs_8bit = e.max_abs_8bit;
+    row.rmse_8bit = e.rmse_8bit;
+    row.relative_mse = e.relative_mse;
+    row.flip_mean = e.flip_mean;
+    row.candidates = stats.light_candidates;
+    row.evaluations = stats.light_evals;
+    row.useful = stats.useful_light_evals;
+    Ok(row)
 }
 
 /// The temporal sampler over a still sequence: each frame's RMSE until it reaches the
@@ -326,53 +437,46 @@ fn temporal_point(
     v: &LoadedVariant,
     params: SceneParams,
     references: &ReferenceCache,
-) -> SamplingRow {
+) -> Result<SamplingRow, StudyError> {
     let mut row = empty_row(v, &params, false);
-    gpu.begin_cell();
-    let result = (|| -> Result<(), StudyError> {
-        let at = crate::sequence::scene_frames(SCENE, params);
-        let scene_at = |i| at(i).map_err(|e| StudyError::Usage(e.to_string()));
-        let first = scene_at(0)?;
-        let (reference, _) = references
-            .get_or_compute(gpu, composer, v, &first)
-            .map_err(|e| StudyError::Usage(e.to_string()))?;
-        let mut renderer = Renderer::new(gpu, composer, &v.variant, &first)?;
-        let mut totals = Vec::new();
-        let mut frame = renderer.render()?;
-        let first_error = metrics::compare(&frame, &reference);
-        row.max_abs_8bit = first_error.max_abs_8bit;
-        row.rmse_8bit = first_error.rmse_8bit;
-        row.relative_mse = first_error.relative_mse;
-        row.flip_mean = first_error.flip_mean;
-        let mut rmse = first_error.rmse_8bit;
-        for i in 1..TEMPORAL_FRAMES {
-            if rmse <= TARGET_RMSE_8BIT {
-                row.frames_to_target = Some(i);
-                break;
-            }
-            // A still scene: every frame's reference is the first's.
-            renderer.advance(&scene_at(i)?)?;
-            frame = renderer.render()?;
-            totals.push(frame.timings.total_ms());
-            rmse = metrics::rmse_8bit(&frame, &reference);
+    let at = crate::sequence::scene_frames(SCENE, params);
+    let scene_at = |i| at(i).map_err(|e| StudyError::Usage(e.to_string()));
+    let first = scene_at(0)?;
+    let (reference, _) = references
+        .get_or_compute(gpu, composer, v, &first)
+        .map_err(|e| StudyError::Usage(e.to_string()))?;
+    let mut renderer = Renderer::new(gpu, composer, &v.variant, &first)?;
+    let mut totals = Vec::new();
+    let mut frame = renderer.render()?;
+    let first_error = metrics::compare(&frame, &reference);
+    row.max_abs_8bit = first_error.max_abs_8bit;
+    row.rmse_8bit = first_error.rmse_8bit;
+    row.relative_mse = first_error.relative_mse;
+    row.flip_mean = first_error.flip_mean;
+    let mut rmse = first_error.rmse_8bit;
+    for i in 1..TEMPORAL_FRAMES {
+        if rmse <= TARGET_RMSE_8BIT {
+            row.frames_to_target = Some(i);
+            break;
         }
-        if row.frames_to_target.is_none() && rmse <= TARGET_RMSE_8BIT {
-            row.frames_to_target = Some(TEMPORAL_FRAMES);
-        }
-        row.last_rmse_8bit = Some(rmse);
-        let stats = renderer.stats()?;
-        row.candidates = stats.light_candidates;
-        row.evaluations = stats.light_evals;
-        row.useful = stats.useful_light_evals;
-        row.frame_min_ms = totals.iter().copied().fold(f64::INFINITY, f64::min);
-        row.frame_max_ms = totals.iter().copied().fold(0.0, f64::max);
-        row.frame_ms = crate::measure::median(totals);
-        Ok(())
-    })();
-    if let Err(e) = result {
-        row.error = Some(e.to_string());
+        // A still scene: every frame's reference is the first's.
+        renderer.advance(&scene_at(i)?)?;
+        frame = renderer.render()?;
+        totals.push(frame.timings.total_ms());
+        rmse = metrics::rmse_8bit(&frame, &reference);
     }
-    row
+    if row.frames_to_target.is_none() && rmse <= TARGET_RMSE_8BIT {
+        row.frames_to_target = Some(TEMPORAL_FRAMES);
+    }
+    row.last_rmse_8bit = Some(rmse);
+    let stats = renderer.stats()?;
+    row.candidates = stats.light_candidates;
+    row.evaluations = stats.light_evals;
+    row.useful = stats.useful_light_evals;
+    row.frame_min_ms = totals.iter().copied().fold(f64::INFINITY, f64::min);
+    row.frame_max_ms = totals.iter().copied().fold(0.0, f64::max);
+    row.frame_ms = crate::measure::median(totals);
+    Ok(row)
 }
 
 /// Each row's speed-up over the fastest exact variant of its point, and its place on the
@@ -402,11 +506,6 @@ fn finish(point: &mut [SamplingRow]) {
     }
 }
 
-/// True when every row ran.
-pub fn all_ran(rows: &[SamplingRow]) -> bool {
-    rows.iter().all(|r| r.error.is_none())
-}
-
 /// The fewest candidates (or the largest threshold) of a shipped sampler's family that
 /// reach the target at a point, as its label says.
 fn reaching_target<'a>(
@@ -426,7 +525,7 @@ fn reaching_target<'a>(
         .min_by(|a, b| a.frame_ms.total_cmp(&b.frame_ms))
 }
 
-pub fn table(rows: &[SamplingRow]) -> Table {
+fn table(rows: &[SamplingRow]) -> Table {
     let mut t = Table::new(
         "Sampling: each light loop's frame at its error against the f64 reference",
         &[
@@ -563,7 +662,7 @@ pub fn table(rows: &[SamplingRow]) -> Table {
 
 /// RMSE against frame time, a series per sampler family (its sweep) and the exact
 /// variants, a panel per point.
-pub fn plot(rows: &[SamplingRow]) -> Option<crate::plot::Plot> {
+fn plot(rows: &[SamplingRow]) -> Option<crate::plot::Plot> {
     use plotters::prelude::*;
     let ok: Vec<&SamplingRow> = rows.iter().filter(|r| r.error.is_none()).collect();
     let mut panels: Vec<(u32, [f32; 2])> = ok.iter().map(|r| (r.lights, r.radius())).collect();

@@ -5,6 +5,8 @@
 //! error against the f64 reference. On a software adapter it runs 640x360 and up to 262,144
 //! lights unless told otherwise (`--size`, `--lights`), and says so.
 
+use std::sync::Arc;
+
 use serde::Serialize;
 
 use super::table::{Table, sig};
@@ -15,7 +17,8 @@ use crate::measure::Frames;
 use crate::plot::Plot;
 use crate::reference::ReferenceCache;
 use crate::run::{CellOptions, run_scene_keeping_renderer};
-use crate::scene::SceneParams;
+use crate::scene::{Scene, SceneParams};
+use crate::variant::LoadedVariant;
 
 /// The methods, as shipped variant files, and their labels.
 pub const METHODS: [(&str, &str); 7] = [
@@ -44,7 +47,7 @@ pub fn radius_range(lights: u32) -> (f32, f32) {
 }
 
 /// One method at one light count.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Default, Serialize)]
 pub struct ScaleRow {
     pub lights: u32,
     pub method: String,
@@ -79,18 +82,56 @@ pub struct ScaleRow {
     pub error: Option<String>,
 }
 
-/// The counts and size the study runs on `gpu` with `options`, and a note when a software
-/// adapter chose smaller ones.
-pub fn plan(gpu: &Gpu, options: &StudyOptions) -> (Vec<u32>, (u32, u32), Option<String>) {
-    let (counts, size) = if gpu.software {
-        (SOFTWARE_COUNTS.to_vec(), SOFTWARE_SIZE)
-    } else {
-        (GPU_COUNTS.to_vec(), GPU_SIZE)
-    };
-    let counts = options.lights.map_or(counts, |n| vec![n]);
-    let size = options.explicit_size.unwrap_or(size);
-    let note =
-        (gpu.software && options.explicit_size.is_none() && options.lights.is_none()).then(|| {
+super::outcome_in_error_field!(ScaleRow);
+
+/// The study: every method at every count, each count's references shared by its methods.
+pub struct ScaleStudy {
+    frames: u32,
+    /// Why the counts and size are smaller than a GPU's, on a software adapter.
+    note: Option<String>,
+}
+
+/// One method at one light count.
+pub struct Point {
+    variant: LoadedVariant,
+    method: &'static str,
+    scene: Arc<Scene>,
+    references: Arc<ReferenceCache>,
+}
+
+/// The row of a point, with no figures yet.
+fn named(p: &Point) -> ScaleRow {
+    let params = &p.scene.params;
+    ScaleRow {
+        lights: params.lights,
+        method: p.method.to_string(),
+        variant: p.variant.name.clone(),
+        width: params.width,
+        height: params.height,
+        radius_min: params.radius_range.0,
+        radius_max: params.radius_range.1,
+        ..Default::default()
+    }
+}
+
+impl super::Study for ScaleStudy {
+    const NAME: &'static str = "scale";
+    const ABOUT: &'static str = "The exact culling methods from 4096 lights to a million on \
+        the atrium (radius scaled with the count): frame, assignment and shading time, \
+        evaluations per useful one, the assignment's work, list bytes and exactness; \
+        1920x1080, or 640x360 and up to 262144 lights on a software adapter (--size, \
+        --lights, --frames)";
+    type Point = Point;
+    type Row = ScaleRow;
+
+    fn plan(gpu: &Gpu, options: &StudyOptions) -> Result<(Self, Vec<Point>), StudyError> {
+        let (counts, size) = if gpu.software {
+            (SOFTWARE_COUNTS.to_vec(), SOFTWARE_SIZE)
+        } else {
+            (GPU_COUNTS.to_vec(), GPU_SIZE)
+        };
+        let chosen = options.size.is_none() && options.lights.is_empty();
+        let note = (gpu.software && chosen).then(|| {
             format!(
                 "{} is a software adapter: {}x{} and up to {} lights (a GPU runs {}x{} to {})",
                 gpu.adapter.name,
@@ -102,123 +143,96 @@ pub fn plan(gpu: &Gpu, options: &StudyOptions) -> (Vec<u32>, (u32, u32), Option<
                 GPU_COUNTS[GPU_COUNTS.len() - 1]
             )
         });
-    (counts, size, note)
-}
-
-/// Run every method at every count. A failing run is reported in its row; the others go on.
-pub fn run(
-    gpu: &Gpu,
-    composer: &Composer,
-    options: &StudyOptions,
-) -> Result<Vec<ScaleRow>, StudyError> {
-    let (counts, size, note) = plan(gpu, options);
-    if let Some(note) = note {
-        eprintln!("{note}");
-    }
-    let variants: Vec<_> = METHODS
-        .iter()
-        .map(|(file, label)| {
-            let path = std::path::Path::new("variants").join(format!("{file}.ron"));
-            crate::variant::load(&path)
-                .map(|v| (v, *label))
-                .map_err(|e| {
-                    StudyError::Usage(format!("{e} (run the study from the project folder)"))
-                })
-        })
-        .collect::<Result<_, _>>()?;
-    let defaults =
-        crate::scene::defaults("atrium").map_err(|e| StudyError::Usage(e.to_string()))?;
-    let mut rows = Vec::new();
-    for &lights in &counts {
-        let radius = radius_range(lights);
-        let params = SceneParams {
-            width: size.0,
-            height: size.1,
-            lights,
-            radius_range: radius,
-            ..defaults
-        };
-        let scene = crate::scene::generate("atrium", params)
-            .map_err(|e| StudyError::Usage(e.to_string()))?;
-        let references = ReferenceCache::default();
-        for (loaded, label) in &variants {
-            eprintln!("  {lights} lights: {label}");
-            let mut row = ScaleRow {
-                lights,
-                method: label.to_string(),
-                variant: loaded.name.clone(),
+        let size = options.size.unwrap_or(size);
+        let files: Vec<&str> = METHODS.iter().map(|(file, _)| *file).collect();
+        let variants = super::shipped(&files)?;
+        let defaults = super::scene_defaults("atrium")?;
+        let mut points = Vec::new();
+        for lights in options.lights_or(&counts) {
+            let params = SceneParams {
                 width: size.0,
                 height: size.1,
-                radius_min: radius.0,
-                radius_max: radius.1,
-                frame_ms: 0.0,
-                assignment_ms: 0.0,
-                shading_ms: 0.0,
-                evaluations: 0,
-                useful_evaluations: 0,
-                evaluations_per_useful: 0.0,
-                list_bytes: 0,
-                light_tests: 0,
-                node_tests: 0,
-                entries_written: 0,
-                lights_rejected: 0,
-                tests_per_light: 0.0,
-                max_abs_8bit: 0,
-                timing_source: String::new(),
-                error: None,
+                lights,
+                radius_range: radius_range(lights),
+                ..defaults
             };
-            let cell = CellOptions {
-                frames: Frames::exact(1, options.frames),
-                stats: true,
-                out: None,
-                references: Some(&references),
-                debug_view: None,
-            };
-            match run_scene_keeping_renderer(gpu, composer, loaded, &scene, cell) {
-                Ok((c, renderer)) => {
-                    let r = &c.report;
-                    let ms = |name: &str| r.gpu_ms.get(name).and_then(|v| v.as_f64());
-                    row.frame_ms = ms("total").unwrap_or(0.0);
-                    row.assignment_ms =
-                        <crate::compose::ClusterPass as strum::IntoEnumIterator>::iter()
-                            .filter_map(|p| ms(p.into()))
-                            .sum();
-                    row.shading_ms = renderer
-                        .shading_pass_names()
-                        .iter()
-                        .filter_map(|p| ms(p))
-                        .sum();
-                    if let Some(s) = &r.stats {
-                        row.evaluations = s.light_evals;
-                        row.useful_evaluations = s.useful_light_evals;
-                        row.evaluations_per_useful =
-                            s.light_evals as f64 / s.useful_light_evals.max(1) as f64;
-                        row.list_bytes = s.cluster_bytes;
-                        let work = s.assignment_work.unwrap_or_default();
-                        row.light_tests = work.light_tests;
-                        row.node_tests = work.node_tests;
-                        row.entries_written = work.entries_written;
-                        row.lights_rejected = work.lights_rejected;
-                        row.tests_per_light = work.tests_per_light(lights as usize);
-                    }
-                    row.max_abs_8bit = r.error.as_ref().map_or(0, |e| e.max_abs_8bit);
-                    row.timing_source = r.timing_source.into();
-                    row.error = r.failure.clone();
-                }
-                Err(e) => row.error = Some(e.to_string()),
+            let scene = Arc::new(super::generate("atrium", params)?);
+            let references = Arc::new(ReferenceCache::default());
+            for (variant, (_, method)) in variants.iter().zip(METHODS) {
+                points.push(Point {
+                    variant: variant.clone(),
+                    method,
+                    scene: scene.clone(),
+                    references: references.clone(),
+                });
             }
-            rows.push(row);
+        }
+        let frames = options.frames;
+        Ok((ScaleStudy { frames, note }, points))
+    }
+
+    fn label(&self, p: &Point) -> String {
+        format!("{} lights: {}", p.scene.params.lights, p.method)
+    }
+
+    fn run(&self, gpu: &Gpu, composer: &Composer, p: &Point) -> Result<Vec<ScaleRow>, StudyError> {
+        let cell = CellOptions {
+            frames: Frames::exact(1, self.frames),
+            stats: true,
+            out: None,
+            references: Some(&p.references),
+            debug_view: None,
+        };
+        let (c, renderer) = run_scene_keeping_renderer(gpu, composer, &p.variant, &p.scene, cell)?;
+        let r = &c.report;
+        let ms = |name: &str| r.gpu_ms.get(name).and_then(|v| v.as_f64());
+        let mut row = named(p);
+        row.frame_ms = ms("total").unwrap_or(0.0);
+        row.assignment_ms = <crate::compose::ClusterPass as strum::IntoEnumIterator>::iter()
+            .filter_map(|p| ms(p.into()))
+            .sum();
+        row.shading_ms = renderer
+            .shading_pass_names()
+            .iter()
+            .filter_map(|p| ms(p))
+            .sum();
+        if let Some(s) = &r.stats {
+            row.evaluations = s.light_evals;
+            row.useful_evaluations = s.useful_light_evals;
+            row.evaluations_per_useful = s.light_evals as f64 / s.useful_light_evals.max(1) as f64;
+            row.list_bytes = s.cluster_bytes;
+            let work = s.assignment_work.unwrap_or_default();
+            row.light_tests = work.light_tests;
+            row.node_tests = work.node_tests;
+            row.entries_written = work.entries_written;
+            row.lights_rejected = work.lights_rejected;
+            row.tests_per_light = work.tests_per_light(row.lights as usize);
+        }
+        row.max_abs_8bit = r.error.as_ref().map_or(0, |e| e.max_abs_8bit);
+        row.timing_source = r.timing_source.into();
+        row.error = r.failure.clone();
+        Ok(vec![row])
+    }
+
+    fn failed(&self, p: &Point, error: String) -> ScaleRow {
+        ScaleRow {
+            error: Some(error),
+            ..named(p)
         }
     }
-    Ok(rows)
+
+    fn table(&self, rows: &[ScaleRow]) -> Table {
+        let mut t = table(rows);
+        t.notes.extend(self.note.clone());
+        t
+    }
+
+    fn plot(&self, rows: &[ScaleRow]) -> Option<Plot> {
+        plot(rows)
+    }
 }
 
-/// Whether every run succeeded within its exactness claim.
-pub fn all_exact(rows: &[ScaleRow]) -> bool {
-    rows.iter().all(|r| r.error.is_none())
-}
-
-pub fn table(rows: &[ScaleRow]) -> Table {
+fn table(rows: &[ScaleRow]) -> Table {
     let title = match rows.first() {
         Some(r) => format!(
             "Scale: the atrium at {}x{}, radius 1..3 x (1024 / lights)^(1/3)",
@@ -272,7 +286,7 @@ pub fn table(rows: &[ScaleRow]) -> Table {
 type Measure = fn(&ScaleRow) -> f64;
 
 /// Frame and assignment time against the light count, log-log, one line per method.
-pub fn plot(rows: &[ScaleRow]) -> Option<Plot> {
+fn plot(rows: &[ScaleRow]) -> Option<Plot> {
     let ok: Vec<&ScaleRow> = rows.iter().filter(|r| r.error.is_none()).collect();
     let mut counts: Vec<u32> = ok.iter().map(|r| r.lights).collect();
     counts.sort_unstable();

@@ -1,10 +1,12 @@
 //! `clusterlab study slicing`: each z-slicing scheme and grid on each built-in scene, ranked
 //! by how well its clusters cull lights.
 
+use std::sync::Arc;
+
 use serde::Serialize;
 
 use super::table::{Table, sig};
-use super::{Measured, StudyError, measure};
+use super::{Measured, StudyError, StudyOptions, measure};
 use crate::compose::Composer;
 use crate::gpu::Gpu;
 use crate::plot::Plot;
@@ -27,7 +29,7 @@ pub fn schemes(near: f64, far: f64) -> Vec<(&'static str, ZSlicing)> {
 }
 
 /// One scheme and grid on one scene.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Default, Serialize)]
 pub struct SlicingRow {
     pub scene: String,
     pub width: u32,
@@ -58,6 +60,8 @@ pub struct SlicingRow {
     /// Set when the run failed; the other figures are then zero.
     pub error: Option<String>,
 }
+
+super::outcome_in_error_field!(SlicingRow);
 
 /// Olsson 2012's slice count for the camera: slices as deep as they are wide.
 pub fn olsson_slices(near: f64, far: f64, fov_y: f64, tiles_y: u32) -> u32 {
@@ -113,87 +117,122 @@ fn configs(size: (u32, u32), near: f64, far: f64) -> Vec<Config> {
     out
 }
 
-/// Run every scheme and grid on each scene (built-in scenes at `size`, with `lights` or
-/// their default lights).
-pub fn run(
-    gpu: &Gpu,
-    composer: &Composer,
-    scenes: &[&str],
-    size: (u32, u32),
-    lights: Option<u32>,
+/// The study: every scheme and grid on each scene.
+pub struct SlicingStudy {
     frames: u32,
-) -> Result<Vec<SlicingRow>, StudyError> {
-    // Every scene first, so that a bad name or size fails before anything runs.
-    let scenes: Vec<Scene> = scenes
-        .iter()
-        .map(|&name| {
-            let defaults =
-                crate::scene::defaults(name).map_err(|e| StudyError::Usage(e.to_string()))?;
-            let params = SceneParams {
-                width: size.0,
-                height: size.1,
-                lights: lights.unwrap_or(defaults.lights),
-                ..defaults
-            };
-            crate::scene::generate(name, params).map_err(|e| StudyError::Usage(e.to_string()))
-        })
-        .collect::<Result<_, _>>()?;
-    let mut rows = Vec::new();
-    for scene in &scenes {
-        let (name, params, cam) = (&scene.name, scene.params, scene.camera);
-        for (label, grid, slicing, explicit_bounds) in configs(size, cam.near, cam.far) {
-            let v = variant(grid, slicing, explicit_bounds);
-            let slices = if slicing == ZSlicing::OlssonCubic {
-                olsson_slices(cam.near, cam.far, cam.fov_y, grid.1).min(grid.2)
-            } else {
-                grid.2
-            };
-            let mut row = SlicingRow {
-                scene: name.to_string(),
-                width: size.0,
-                height: size.1,
-                lights: params.lights,
-                scheme: label,
-                grid: format!("{}x{}x{}", grid.0, grid.1, grid.2),
-                explicit_bounds,
-                clusters: (grid.0 * grid.1 * grid.2) as u64,
-                slices,
-                occupied_clusters: 0,
-                mean_lights_per_occupied: 0.0,
-                max_lights_per_occupied: 0,
-                evaluations: 0,
-                useful_evaluations: 0,
-                efficiency: 0.0,
-                gpu_ms: 0.0,
-                shading_ms: 0.0,
-                timing_source: String::new(),
-                error: None,
-            };
-            // One failing run is reported in its row; the others go on.
-            match measure(gpu, composer, &v, scene, frames) {
-                Ok(Measured {
-                    stats: s,
-                    frame_ms,
-                    shading_ms,
-                    timing_source,
-                    ..
-                }) => {
-                    row.occupied_clusters = s.active_clusters;
-                    row.mean_lights_per_occupied = s.mean_lights_per_visible_cluster;
-                    row.max_lights_per_occupied = s.max_lights_per_visible_cluster;
-                    row.evaluations = s.light_evals;
-                    row.useful_evaluations = s.useful_light_evals;
-                    row.efficiency = s.useful_fraction();
-                    row.gpu_ms = frame_ms;
-                    row.shading_ms = shading_ms;
-                    row.timing_source = timing_source.into();
+}
+
+/// One configuration on one scene.
+pub struct Point {
+    scene: Arc<Scene>,
+    config: Config,
+}
+
+/// The row of a point, with no figures yet.
+fn named(p: &Point) -> SlicingRow {
+    let (scene, (label, grid, slicing, explicit_bounds)) = (&p.scene, &p.config);
+    let (params, cam) = (scene.params, scene.camera);
+    let slices = if *slicing == ZSlicing::OlssonCubic {
+        olsson_slices(cam.near, cam.far, cam.fov_y, grid.1).min(grid.2)
+    } else {
+        grid.2
+    };
+    SlicingRow {
+        scene: scene.name.to_string(),
+        width: params.width,
+        height: params.height,
+        lights: params.lights,
+        scheme: label.clone(),
+        grid: format!("{}x{}x{}", grid.0, grid.1, grid.2),
+        explicit_bounds: *explicit_bounds,
+        clusters: (grid.0 * grid.1 * grid.2) as u64,
+        slices,
+        ..Default::default()
+    }
+}
+
+impl super::Study for SlicingStudy {
+    const NAME: &'static str = "slicing";
+    const ABOUT: &'static str = "Culling efficiency of each z-slicing scheme and grid on each \
+        scene, and Olsson 2012's tiled against clustered comparison (--scenes, --size, \
+        --lights, --frames)";
+    type Point = Point;
+    type Row = SlicingRow;
+
+    fn plan(_gpu: &Gpu, options: &StudyOptions) -> Result<(Self, Vec<Point>), StudyError> {
+        let size = options.size();
+        let mut points = Vec::new();
+        for name in &options.scenes {
+            let defaults = super::scene_defaults(name)?;
+            for lights in options.lights_or(&[defaults.lights]) {
+                let params = SceneParams {
+                    width: size.0,
+                    height: size.1,
+                    lights,
+                    ..defaults
+                };
+                let scene = Arc::new(super::generate(name, params)?);
+                let cam = scene.camera;
+                for config in configs(size, cam.near, cam.far) {
+                    let scene = scene.clone();
+                    points.push(Point { scene, config });
                 }
-                Err(e) => row.error = Some(e.to_string()),
             }
-            rows.push(row);
+        }
+        let frames = options.frames;
+        Ok((SlicingStudy { frames }, points))
+    }
+
+    fn label(&self, p: &Point) -> String {
+        let (label, grid, ..) = &p.config;
+        let lights = p.scene.params.lights;
+        let grid = format!("{}x{}x{}", grid.0, grid.1, grid.2);
+        format!("{} {lights} lights: {label} {grid}", p.scene.name)
+    }
+
+    fn run(
+        &self,
+        gpu: &Gpu,
+        composer: &Composer,
+        p: &Point,
+    ) -> Result<Vec<SlicingRow>, StudyError> {
+        let (_, grid, slicing, explicit_bounds) = &p.config;
+        let v = variant(*grid, *slicing, *explicit_bounds);
+        let Measured {
+            stats: s,
+            frame_ms,
+            shading_ms,
+            timing_source,
+            ..
+        } = measure(gpu, composer, &v, &p.scene, self.frames)?;
+        Ok(vec![SlicingRow {
+            occupied_clusters: s.active_clusters,
+            mean_lights_per_occupied: s.mean_lights_per_visible_cluster,
+            max_lights_per_occupied: s.max_lights_per_visible_cluster,
+            evaluations: s.light_evals,
+            useful_evaluations: s.useful_light_evals,
+            efficiency: s.useful_fraction(),
+            gpu_ms: frame_ms,
+            shading_ms,
+            timing_source: timing_source.into(),
+            ..named(p)
+        }])
+    }
+
+    fn failed(&self, p: &Point, error: String) -> SlicingRow {
+        SlicingRow {
+            error: Some(error),
+            ..named(p)
         }
     }
-    Ok(rows)
+
+    fn table(&self, rows: &[SlicingRow]) -> Table {
+        table(rows)
+    }
+
+    fn plot(&self, rows: &[SlicingRow]) -> Option<Plot> {
+        plot(rows)
+    }
 }
 
 /// Olsson 2012, Fig. 1: shading time of tiled over clustered shading, 17.7 ms / 5.6 ms.
@@ -217,11 +256,11 @@ pub fn tiled_over_clustered(rows: &[SlicingRow], s: &str) -> Option<(f64, f64)> 
 }
 
 /// The table, each scene's rows ranked by culling efficiency (best first).
-pub fn table(rows: &[SlicingRow]) -> Table {
+fn table(rows: &[SlicingRow]) -> Table {
     let mut t = Table::new(
         "Z-slicing: culling efficiency of each scheme and grid (Forward+, depth pre-pass)",
         &[
-            "scene / scheme",
+            "scene / lights / scheme",
             "grid",
             "slices",
             "occupied",
@@ -234,10 +273,13 @@ pub fn table(rows: &[SlicingRow]) -> Table {
             "frame ms",
         ],
     );
-    let mut scenes: Vec<&str> = rows.iter().map(|r| r.scene.as_str()).collect();
-    scenes.dedup();
-    for s in scenes {
-        let mut ranked: Vec<&SlicingRow> = rows.iter().filter(|r| r.scene == s).collect();
+    let mut frames: Vec<(&str, u32)> = rows.iter().map(|r| (r.scene.as_str(), r.lights)).collect();
+    frames.dedup();
+    for (s, lights) in frames {
+        let mut ranked: Vec<&SlicingRow> = rows
+            .iter()
+            .filter(|r| (r.scene.as_str(), r.lights) == (s, lights))
+            .collect();
         ranked.sort_by(|a, b| {
             b.efficiency
                 .total_cmp(&a.efficiency)
@@ -245,11 +287,12 @@ pub fn table(rows: &[SlicingRow]) -> Table {
         });
         for r in ranked {
             if let Some(e) = &r.error {
-                t.failed_row(vec![format!("{s} / {}", r.scheme), r.grid.clone()], e);
+                let name = format!("{s} / {lights} / {}", r.scheme);
+                t.failed_row(vec![name, r.grid.clone()], e);
                 continue;
             }
             t.row(vec![
-                format!("{s} / {}", r.scheme),
+                format!("{s} / {lights} / {}", r.scheme),
                 r.grid.clone(),
                 r.slices.to_string(),
                 r.occupied_clusters.to_string(),
@@ -304,7 +347,7 @@ pub fn table(rows: &[SlicingRow]) -> Table {
 }
 
 /// Useful fraction against shading time, one point per run, coloured by scheme.
-pub fn plot(rows: &[SlicingRow]) -> Option<Plot> {
+fn plot(rows: &[SlicingRow]) -> Option<Plot> {
     use plotters::prelude::*;
     let ok: Vec<&SlicingRow> = rows
         .iter()

@@ -6,9 +6,11 @@
 //! about 100x faster to update than a rebuilt one, under 1 ms a frame) and Bevy (PR #22874:
 //! reusing the last frame's cluster statistics made assignment 28% faster).
 
+use std::sync::Arc;
+
 use serde::Serialize;
 
-use super::{StudyError, Table};
+use super::{StudyError, StudyOptions, Table};
 use crate::compose::Composer;
 use crate::gpu::Gpu;
 use crate::reference::ReferenceCache;
@@ -34,7 +36,7 @@ pub const VARIANTS: [(&str, &str); 5] = [
 ];
 
 /// One strategy's sequence at one light count, camera and moving fraction.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Default, Serialize)]
 pub struct TemporalRow {
     pub lights: u32,
     pub camera_moves: bool,
@@ -66,126 +68,163 @@ pub struct TemporalRow {
     pub error: Option<String>,
 }
 
-/// Run every strategy at every point: `frames` frames after the first, the first and last
-/// checked.
-pub fn run(
-    gpu: &Gpu,
-    composer: &Composer,
-    size: (u32, u32),
-    counts: &[u32],
-    frames: u32,
-) -> Result<Vec<TemporalRow>, StudyError> {
-    let names: Vec<&str> = VARIANTS.iter().map(|(v, _)| *v).collect();
-    let variants = super::msaa::shipped(&names)?;
-    let defaults = crate::scene::defaults(SCENE).map_err(|e| StudyError::Usage(e.to_string()))?;
-    let spec = SequenceSpec {
-        frames: frames + 1,
-        check_every: frames.max(1),
-    };
-    let mut rows = Vec::new();
-    for &lights in counts {
-        for camera_moves in [false, true] {
-            // One cache per point: its references serve every strategy.
-            for &moving in &MOVING {
-                let references = ReferenceCache::default();
-                let params = SceneParams {
-                    width: size.0,
-                    height: size.1,
-                    lights,
-                    motion: Motion {
-                        lights: moving,
-                        camera: camera_moves,
-                        still_at: defaults.time,
-                    },
-                    ..defaults
-                };
-                for v in &variants {
-                    rows.push(run_point(gpu, composer, v, params, spec, &references));
+super::outcome_in_error_field!(TemporalRow);
+
+/// The study: every strategy at every light count, camera and moving fraction, `frames`
+/// frames after the first, the first and last checked.
+pub struct TemporalStudy {
+    spec: SequenceSpec,
+}
+
+/// One strategy's sequence at one point; the point's references serve every strategy.
+pub struct Point {
+    variant: LoadedVariant,
+    params: SceneParams,
+    references: Arc<ReferenceCache>,
+}
+
+/// The row of a point, with no figures yet.
+fn named(p: &Point) -> TemporalRow {
+    TemporalRow {
+        lights: p.params.lights,
+        camera_moves: p.params.motion.camera,
+        moving: p.params.motion.lights,
+        variant: p.variant.name.clone(),
+        update: p.variant.variant.clusters().update.label().into(),
+        ..Default::default()
+    }
+}
+
+impl super::Study for TemporalStudy {
+    const NAME: &'static str = "temporal";
+    const ABOUT: &'static str = "Every list strategy for moving lights (rebuild, static and \
+        dynamic lists, patch, BVH refit) against the fraction of lights moving (0 to 100%), \
+        camera still and moving, at 1024 and 16384 lights on the atrium: a sequence of \
+        --frames frames after the first for each, every checked frame exact (--size, \
+        --lights, --frames)";
+    type Point = Point;
+    type Row = TemporalRow;
+
+    fn plan(_gpu: &Gpu, options: &StudyOptions) -> Result<(Self, Vec<Point>), StudyError> {
+        let names: Vec<&str> = VARIANTS.iter().map(|(v, _)| *v).collect();
+        let variants = super::shipped(&names)?;
+        let defaults = super::scene_defaults(SCENE)?;
+        let size = options.size();
+        let mut points = Vec::new();
+        for lights in options.lights_or(&LIGHT_COUNTS) {
+            for camera_moves in [false, true] {
+                for &moving in &MOVING {
+                    let references = Arc::new(ReferenceCache::default());
+                    let params = SceneParams {
+                        width: size.0,
+                        height: size.1,
+                        lights,
+                        motion: Motion {
+                            lights: moving,
+                            camera: camera_moves,
+                            still_at: defaults.time,
+                        },
+                        ..defaults
+                    };
+                    for v in &variants {
+                        points.push(Point {
+                            variant: v.clone(),
+                            params,
+                            references: references.clone(),
+                        });
+                    }
                 }
             }
         }
+        let frames = options.frames;
+        let spec = SequenceSpec {
+            frames: frames + 1,
+            check_every: frames.max(1),
+        };
+        Ok((TemporalStudy { spec }, points))
     }
-    for i in 0..rows.len() {
-        let r = &rows[i];
-        let base = VARIANTS
-            .iter()
-            .find(|(v, _)| *v == r.variant)
-            .map(|(_, b)| *b);
-        let rebuild = rows.iter().find(|o| {
-            Some(o.variant.as_str()) == base
-                && (o.lights, o.camera_moves, o.moving) == (r.lights, r.camera_moves, r.moving)
-                && o.error.is_none()
-                && o.frame_ms > 0.0
-        });
-        rows[i].vs_rebuild = rebuild
-            .filter(|_| rows[i].error.is_none())
-            .map(|o| rows[i].frame_ms / o.frame_ms);
-    }
-    Ok(rows)
-}
 
-/// One strategy's sequence at one point; a failure is reported in its row.
-fn run_point(
-    gpu: &Gpu,
-    composer: &Composer,
-    v: &LoadedVariant,
-    params: SceneParams,
-    spec: SequenceSpec,
-    references: &ReferenceCache,
-) -> TemporalRow {
-    let mut row = TemporalRow {
-        lights: params.lights,
-        camera_moves: params.motion.camera,
-        moving: params.motion.lights,
-        variant: v.name.clone(),
-        update: v.variant.clusters().update.label().into(),
-        first_ms: 0.0,
-        frame_ms: 0.0,
-        frame_min_ms: 0.0,
-        frame_max_ms: 0.0,
-        lists_ms: 0.0,
-        shading_ms: 0.0,
-        vs_rebuild: None,
-        list_bytes: 0,
-        frames_reused: 0,
-        patch_rebuilds: 0,
-        exact: false,
-        max_abs_8bit: 0,
-        max_temporal_8bit: 0,
-        error: None,
-    };
-    gpu.begin_cell();
-    let frames = scene_frames(SCENE, params);
-    match crate::sequence::run(gpu, composer, v, spec, &frames, references) {
-        Ok(run) => {
-            let s = &run.report.summary;
-            let ms = |passes: &[&str]| -> f64 {
-                passes
-                    .iter()
-                    .filter_map(|p| s.pass_ms.get(*p).and_then(|v| v.as_f64()))
-                    .fold(0.0, |sum, ms| sum + ms)
-            };
-            row.first_ms = s.first_ms;
-            row.frame_ms = s.frame_ms;
-            [row.frame_min_ms, row.frame_max_ms] = s.frame_ms_spread;
-            row.lists_ms = ms(&["light_assign", "moving_assign", "list_patch"]);
-            row.shading_ms = ms(&["forward", "still_shading"]);
-            row.list_bytes = run.report.stats.as_ref().map_or(0, |st| st.cluster_bytes);
-            row.frames_reused = s.frames_reused;
-            row.patch_rebuilds = s.patch_rebuilds;
-            row.exact = s.exact;
-            row.max_abs_8bit = s.max_abs_8bit;
-            row.max_temporal_8bit = s.max_temporal_8bit;
-            row.error = run.report.failure.clone();
+    fn label(&self, p: &Point) -> String {
+        let (lights, motion) = (p.params.lights, p.params.motion);
+        let camera = if motion.camera { "moving" } else { "still" };
+        let moving = motion.lights * 100.0;
+        format!(
+            "{lights} lights, camera {camera}, {moving}% moving: {}",
+            p.variant.name
+        )
+    }
+
+    fn run(
+        &self,
+        gpu: &Gpu,
+        composer: &Composer,
+        p: &Point,
+    ) -> Result<Vec<TemporalRow>, StudyError> {
+        let frames = scene_frames(SCENE, p.params);
+        let references = &p.references;
+        let run = crate::sequence::run(gpu, composer, &p.variant, self.spec, &frames, references)?;
+        let s = &run.report.summary;
+        let ms = |passes: &[&str]| -> f64 {
+            passes
+                .iter()
+                .filter_map(|p| s.pass_ms.get(*p).and_then(|v| v.as_f64()))
+                .fold(0.0, |sum, ms| sum + ms)
+        };
+        let mut row = named(p);
+        row.first_ms = s.first_ms;
+        row.frame_ms = s.frame_ms;
+        [row.frame_min_ms, row.frame_max_ms] = s.frame_ms_spread;
+        row.lists_ms = ms(&["light_assign", "moving_assign", "list_patch"]);
+        row.shading_ms = ms(&["forward", "still_shading"]);
+        row.list_bytes = run.report.stats.as_ref().map_or(0, |st| st.cluster_bytes);
+        row.frames_reused = s.frames_reused;
+        row.patch_rebuilds = s.patch_rebuilds;
+        row.exact = s.exact;
+        row.max_abs_8bit = s.max_abs_8bit;
+        row.max_temporal_8bit = s.max_temporal_8bit;
+        row.error = run.report.failure.clone();
+        Ok(vec![row])
+    }
+
+    fn failed(&self, p: &Point, error: String) -> TemporalRow {
+        TemporalRow {
+            error: Some(error),
+            ..named(p)
         }
-        Err(e) => row.error = Some(e.to_string()),
     }
-    row
-}
 
-/// True when every sequence ran and every checked frame was exact.
-pub fn all_exact(rows: &[TemporalRow]) -> bool {
-    rows.iter().all(|r| r.error.is_none() && r.exact)
+    /// Each frame over its rebuilding variant's at the same point.
+    fn relate(&self, rows: &mut [TemporalRow]) {
+        for i in 0..rows.len() {
+            let r = &rows[i];
+            let base = VARIANTS
+                .iter()
+                .find(|(v, _)| *v == r.variant)
+                .map(|(_, b)| *b);
+            let rebuild = rows.iter().find(|o| {
+                Some(o.variant.as_str()) == base
+                    && (o.lights, o.camera_moves, o.moving) == (r.lights, r.camera_moves, r.moving)
+                    && o.error.is_none()
+                    && o.frame_ms > 0.0
+            });
+            rows[i].vs_rebuild = rebuild
+                .filter(|_| rows[i].error.is_none())
+                .map(|o| rows[i].frame_ms / o.frame_ms);
+        }
+    }
+
+    /// Every checked frame exact.
+    fn keeps(&self, row: &TemporalRow, _: &[TemporalRow]) -> bool {
+        row.exact
+    }
+
+    fn table(&self, rows: &[TemporalRow]) -> Table {
+        table(rows)
+    }
+
+    fn plot(&self, rows: &[TemporalRow]) -> Option<crate::plot::Plot> {
+        plot(rows)
+    }
 }
 
 /// The strategy with the fastest frame at each point where some light moves and the
@@ -202,7 +241,7 @@ pub fn best(rows: &[TemporalRow], lights: u32, moving: f32) -> Option<&TemporalR
         .min_by(|a, b| a.frame_ms.total_cmp(&b.frame_ms))
 }
 
-pub fn table(rows: &[TemporalRow]) -> Table {
+fn table(rows: &[TemporalRow]) -> Table {
     let mut t = Table::new(
         "Temporal: each list strategy's frame against the fraction of the lights that move",
         &[
@@ -276,7 +315,7 @@ pub fn table(rows: &[TemporalRow]) -> Table {
 
 /// Frame time against the moving fraction, a series per strategy, a panel per light count
 /// and camera.
-pub fn plot(rows: &[TemporalRow]) -> Option<crate::plot::Plot> {
+fn plot(rows: &[TemporalRow]) -> Option<crate::plot::Plot> {
     use plotters::prelude::*;
     let ok: Vec<&TemporalRow> = rows.iter().filter(|r| r.error.is_none()).collect();
     let mut panels: Vec<(u32, bool)> = ok.iter().map(|r| (r.lights, r.camera_moves)).collect();

@@ -5,9 +5,11 @@
 //! (one set of lists holds every light that reaches an opaque sample or a pane: "shared
 //! bounds"), beside Billeter, Olsson and Assarsson's figures (GPU Pro 4, 2013).
 
+use std::sync::Arc;
+
 use serde::Serialize;
 
-use super::{StudyError, Table};
+use super::{StudyError, StudyOptions, Table};
 use crate::compose::Composer;
 use crate::gpu::Gpu;
 use crate::measure::Frames;
@@ -17,10 +19,24 @@ use crate::variant::LoadedVariant;
 
 use crate::scene::TRANSPARENCY_SCENE as SCENE;
 
+/// The study: every variant of the matrix's transparency group on the scene, with its panes
+/// and without.
+pub struct TransparencyStudy {
+    frames: u32,
+}
+
+/// One variant on the scene at a light count, with its panes or without.
+pub struct Point {
+    variant: LoadedVariant,
+    scene: Arc<Scene>,
+    panes: bool,
+}
+
 /// One variant on the scene with its panes or without.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Default, Serialize)]
 pub struct TransparencyRow {
     pub variant: String,
+    pub lights: u32,
     /// Whether the scene had its blended panes.
     pub panes: bool,
     pub frame_ms: f64,
@@ -40,112 +56,133 @@ pub struct TransparencyRow {
     pub error: Option<String>,
 }
 
-/// Every variant of the group on the scene (at `size`, with `lights` or its default), with
-/// its panes and without.
-pub fn run(
-    gpu: &Gpu,
-    composer: &Composer,
-    size: (u32, u32),
-    lights: Option<u32>,
-    frames: u32,
-) -> Result<Vec<TransparencyRow>, StudyError> {
-    let usage = |e: crate::scene::SceneError| StudyError::Usage(e.to_string());
-    let defaults = crate::scene::defaults(SCENE).map_err(usage)?;
-    let params = SceneParams {
-        width: size.0,
-        height: size.1,
-        lights: lights.unwrap_or(defaults.lights),
-        ..defaults
-    };
-    let with_panes = crate::scene::generate(SCENE, params).map_err(usage)?;
-    let without: Scene = Scene {
-        blended: Vec::new(),
-        ..with_panes.clone()
-    };
-    let mut rows = Vec::new();
-    for v in &super::msaa::shipped(&crate::matrix::TRANSPARENCY_GROUP)? {
-        for (panes, scene) in [(true, &with_panes), (false, &without)] {
-            rows.push(measure(gpu, composer, v, scene, panes, frames));
-        }
-    }
-    Ok(rows)
-}
+super::outcome_in_error_field!(TransparencyRow);
 
-fn measure(
-    gpu: &Gpu,
-    composer: &Composer,
-    v: &LoadedVariant,
-    scene: &Scene,
-    panes: bool,
-    frames: u32,
-) -> TransparencyRow {
-    let mut row = TransparencyRow {
-        variant: v.name.clone(),
-        panes,
-        frame_ms: 0.0,
-        opaque_shading_ms: 0.0,
-        transparent_ms: 0.0,
-        transparent_depths_ms: 0.0,
-        lists_ms: 0.0,
-        light_list_entries: 0,
-        active_clusters: 0,
-        evaluations: 0,
-        bytes_per_pixel: 0,
-        max_abs_8bit: 0,
-        error: None,
-    };
-    let options = CellOptions {
-        frames: Frames::exact(1, frames),
-        stats: true,
-        ..Default::default()
-    };
-    // One failing run is reported in its row; the others go on.
-    match run_scene(gpu, composer, v, scene, options) {
-        Ok(cell) => {
-            let r = &cell.report;
-            let ms = |pass: &str| r.gpu_ms.get(pass).and_then(|v| v.as_f64()).unwrap_or(0.0);
-            row.frame_ms = ms("total");
-            row.opaque_shading_ms = ms("forward") + ms("resolve") + ms("scissor_lights");
-            row.transparent_ms = ms("transparent");
-            row.transparent_depths_ms = ms("transparent_depths");
-            row.lists_ms = [
-                "depth_range",
-                "mark_active",
-                "cluster_bounds",
-                "light_assign",
-            ]
-            .iter()
-            .map(|p| ms(p))
-            .sum();
-            if let Some(s) = &r.stats {
-                row.light_list_entries = s.light_list_entries;
-                row.active_clusters = s.active_clusters;
-                row.evaluations = s.light_evals;
-                row.bytes_per_pixel = s.frame_bytes_per_pixel;
+impl super::Study for TransparencyStudy {
+    const NAME: &'static str = "transparency";
+    const ABOUT: &'static str = "Every pipeline and culling method on the glass scene with its \
+        blended panes and without: the transparent pass, the blended depths pass, and what \
+        the panes cost the opaque frame through shared list bounds (--size, --lights, \
+        --frames; every exact run within 1 LSB)";
+    type Point = Point;
+    type Row = TransparencyRow;
+
+    fn plan(_gpu: &Gpu, options: &StudyOptions) -> Result<(Self, Vec<Point>), StudyError> {
+        let defaults = super::scene_defaults(SCENE)?;
+        let size = options.size();
+        let variants = super::shipped(&crate::matrix::TRANSPARENCY_GROUP)?;
+        let mut points = Vec::new();
+        for lights in options.lights_or(&[defaults.lights]) {
+            let params = SceneParams {
+                width: size.0,
+                height: size.1,
+                lights,
+                ..defaults
+            };
+            let with_panes = Arc::new(super::generate(SCENE, params)?);
+            let without = Arc::new(Scene {
+                blended: Vec::new(),
+                ..(*with_panes).clone()
+            });
+            for v in &variants {
+                for (panes, scene) in [(true, &with_panes), (false, &without)] {
+                    points.push(Point {
+                        variant: v.clone(),
+                        scene: scene.clone(),
+                        panes,
+                    });
+                }
             }
-            row.max_abs_8bit = r.error.as_ref().map_or(0, |e| e.max_abs_8bit);
-            row.error = r.failure.clone();
         }
-        Err(e) => row.error = Some(e.to_string()),
+        let frames = options.frames;
+        Ok((TransparencyStudy { frames }, points))
     }
-    row
+
+    fn label(&self, p: &Point) -> String {
+        let panes = if p.panes { "panes" } else { "no panes" };
+        let lights = p.scene.params.lights;
+        format!("{lights} lights, {panes}: {}", p.variant.name)
+    }
+
+    fn run(
+        &self,
+        gpu: &Gpu,
+        composer: &Composer,
+        p: &Point,
+    ) -> Result<Vec<TransparencyRow>, StudyError> {
+        let options = CellOptions {
+            frames: Frames::exact(1, self.frames),
+            stats: true,
+            ..Default::default()
+        };
+        let cell = run_scene(gpu, composer, &p.variant, &p.scene, options)?;
+        let r = &cell.report;
+        let ms = |pass: &str| r.gpu_ms.get(pass).and_then(|v| v.as_f64()).unwrap_or(0.0);
+        let mut row = named(p);
+        row.error = r.failure.clone();
+        row.frame_ms = ms("total");
+        row.opaque_shading_ms = ms("forward") + ms("resolve") + ms("scissor_lights");
+        row.transparent_ms = ms("transparent");
+        row.transparent_depths_ms = ms("transparent_depths");
+        row.lists_ms = [
+            "depth_range",
+            "mark_active",
+            "cluster_bounds",
+            "light_assign",
+        ]
+        .iter()
+        .map(|p| ms(p))
+        .sum();
+        if let Some(s) = &r.stats {
+            row.light_list_entries = s.light_list_entries;
+            row.active_clusters = s.active_clusters;
+            row.evaluations = s.light_evals;
+            row.bytes_per_pixel = s.frame_bytes_per_pixel;
+        }
+        row.max_abs_8bit = r.error.as_ref().map_or(0, |e| e.max_abs_8bit);
+        Ok(vec![row])
+    }
+
+    fn failed(&self, p: &Point, error: String) -> TransparencyRow {
+        TransparencyRow {
+            error: Some(error),
+            ..named(p)
+        }
+    }
+
+    /// Within 1 LSB of its reference.
+    fn keeps(&self, row: &TransparencyRow, _: &[TransparencyRow]) -> bool {
+        row.max_abs_8bit <= 1
+    }
+
+    fn table(&self, rows: &[TransparencyRow]) -> Table {
+        table(rows)
+    }
 }
 
-/// True when every run finished within 1 LSB of its reference.
-pub fn all_exact(rows: &[TransparencyRow]) -> bool {
-    rows.iter()
-        .all(|r| r.error.is_none() && r.max_abs_8bit <= 1)
+/// The row of a point, with no figures yet.
+fn named(p: &Point) -> TransparencyRow {
+    TransparencyRow {
+        variant: p.variant.name.clone(),
+        lights: p.scene.params.lights,
+        panes: p.panes,
+        ..Default::default()
+    }
 }
 
 /// A variant's figure with panes over the same without them.
 fn with_over_without(
     rows: &[TransparencyRow],
     variant: &str,
+    lights: u32,
     f: fn(&TransparencyRow) -> f64,
 ) -> Option<f64> {
     let get = |panes: bool| {
         rows.iter()
-            .find(|r| r.variant == variant && r.panes == panes && r.error.is_none())
+            .find(|r| {
+                (r.variant.as_str(), r.lights, r.panes) == (variant, lights, panes)
+                    && r.error.is_none()
+            })
             .map(f)
     };
     match (get(true), get(false)) {
@@ -154,11 +191,12 @@ fn with_over_without(
     }
 }
 
-pub fn table(rows: &[TransparencyRow]) -> Table {
+fn table(rows: &[TransparencyRow]) -> Table {
     let mut t = Table::new(
         "Transparency: the blended panes' cost per pipeline and culling method, with shared list bounds",
         &[
             "variant",
+            "lights",
             "panes",
             "frame ms",
             "opaque shading ms",
@@ -173,14 +211,18 @@ pub fn table(rows: &[TransparencyRow]) -> Table {
         ],
     );
     for r in rows {
-        let names = vec![r.variant.clone(), if r.panes { "yes" } else { "no" }.into()];
+        let names = vec![
+            r.variant.clone(),
+            r.lights.to_string(),
+            if r.panes { "yes" } else { "no" }.into(),
+        ];
         if let Some(e) = &r.error {
             t.failed_row(names, e);
             continue;
         }
         let ratio = |f: fn(&TransparencyRow) -> f64| {
             r.panes
-                .then(|| with_over_without(rows, &r.variant, f))
+                .then(|| with_over_without(rows, &r.variant, r.lights, f))
                 .flatten()
                 .map_or("-".into(), |x| format!("{x:.2}"))
         };
