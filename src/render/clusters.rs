@@ -509,6 +509,29 @@ impl ClusterBuffers {
 
     /// The bytes of `count` elements of buffer `name` as the frame's passes declare it (0
     /// for one no pass declares).
+    /// The most bytes one list entry takes in a buffer sized by the entries (the indices,
+    /// rasterised binning's pair arrays), as the passes declare them: each must bind.
+    pub fn bytes_per_entry(&self) -> u64 {
+        let at = |entries| {
+            let s = Sizing {
+                grid: self.grid,
+                lights: self.lights,
+                entries,
+                proxies: self.proxies,
+                max_storage: u64::MAX,
+            };
+            named_sizes(self.method, self.culling, self.update, &s)
+        };
+        at(0)
+            .into_iter()
+            .zip(at(1))
+            .map(|((name, none), (_, one))| {
+                self.declared_bytes(name, one) - self.declared_bytes(name, none)
+            })
+            .max()
+            .unwrap_or(0)
+    }
+
     pub fn declared_bytes(&self, name: &str, count: u64) -> u64 {
         self.sizes.bytes(name, count).unwrap_or(0)
     }

@@ -73,17 +73,18 @@ pub fn fit(gpu: &Gpu, c: &ClusterBuffers) -> Result<Fit, RenderError> {
         check_walks(gpu, c, &s)?;
         return Ok(Fit::Fits { entries: s.total });
     }
-    Ok(Fit::GrowTo(capacity_for(gpu, s.total as u64)?))
+    Ok(Fit::GrowTo(capacity_for(gpu, c, s.total as u64)?))
 }
 
 /// The index buffer's entries for lists of `entries` entries, with room to spare: an error
 /// where they cannot bind. Every buffer sized by the entries must: the indices, and
-/// rasterised binning's pair arrays, a 32-bit word an entry each.
-pub fn capacity_for(gpu: &Gpu, entries: u64) -> Result<u32, RenderError> {
-    let limit = (gpu.limits.max_storage_buffer_binding_size / 4).min(u32::MAX as u64);
+/// rasterised binning's pair arrays, at their declared bytes an entry.
+pub fn capacity_for(gpu: &Gpu, c: &ClusterBuffers, entries: u64) -> Result<u32, RenderError> {
+    let entry = c.bytes_per_entry().max(1);
+    let limit = (gpu.limits.max_storage_buffer_binding_size / entry).min(u32::MAX as u64);
     if entries > limit {
         return Err(RenderError::Gpu(GpuError::TooLarge(format!(
-            "the light lists need {entries} entries, more than adapter `{}` can bind ({limit} entries of 4 bytes); use fewer lights, a coarser grid or a per-cluster cap",
+            "the light lists need {entries} entries, more than adapter `{}` can bind ({limit} entries of {entry} bytes); use fewer lights, a coarser grid or a per-cluster cap",
             gpu.adapter.name,
         ))));
     }

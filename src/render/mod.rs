@@ -461,7 +461,7 @@ impl<'g> Renderer<'g> {
                         && self.update() == Some(crate::variant::ListUpdate::Patch)
                         && (c.index_capacity as u64) < PATCH_ROOM * entries as u64 =>
                 {
-                    let room = lists::capacity_for(self.gpu, PATCH_ROOM * entries as u64)?;
+                    let room = lists::capacity_for(self.gpu, c, PATCH_ROOM * entries as u64)?;
                     if room > c.index_capacity {
                         self.grow_lists(room)?;
                         continue;
@@ -504,7 +504,8 @@ impl<'g> Renderer<'g> {
         let (lists, ms) = cpu.assign();
         let c = self.res.clusters.as_ref().expect("clustered");
         if !c.upload_lists(self.gpu, &lists) {
-            self.grow_lists(lists::capacity_for(self.gpu, lists.indices.len() as u64)?)?;
+            let room = lists::capacity_for(self.gpu, c, lists.indices.len() as u64)?;
+            self.grow_lists(room)?;
             let c = self.res.clusters.as_ref().expect("clustered");
             c.upload_lists(self.gpu, &lists);
         }

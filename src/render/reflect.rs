@@ -342,4 +342,11 @@ impl BufferSizes {
     pub fn bytes(&self, name: &str, count: u64) -> Option<u64> {
         self.0.get(name).map(|&(fixed, each)| fixed + each * count)
     }
+
+    /// The bytes of buffer `name` holding `count` elements, at least one: the least a
+    /// binding of a runtime-sized array takes. 0 where no pass declares it (nothing binds
+    /// it).
+    pub fn bindable(&self, name: &str, count: u64) -> u64 {
+        self.bytes(name, count.max(1)).unwrap_or(0)
+    }
 }

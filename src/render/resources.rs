@@ -5,7 +5,7 @@ use bytemuck::{Pod, Zeroable};
 use glam::DMat4;
 use wgpu::util::DeviceExt;
 
-use super::reflect::Slot;
+use super::reflect::{BufferSizes, Slot};
 use crate::cpu::depth::DepthMapping;
 use crate::gpu::Gpu;
 use crate::scene::{Light, Scene, Vertex};
@@ -358,11 +358,18 @@ pub struct Counters {
 }
 
 impl Counters {
-    pub fn new(gpu: &Gpu, pixels: u64, multisampled: bool, sampled: bool) -> Self {
-        let buffer = |label| {
+    /// A counter a pixel, each at the size `counters.wesl` declares it.
+    pub fn new(
+        gpu: &Gpu,
+        sizes: &BufferSizes,
+        pixels: u64,
+        multisampled: bool,
+        sampled: bool,
+    ) -> Self {
+        let buffer = |name| {
             gpu.device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some(label),
-                size: pixels * 4,
+                label: Some(name),
+                size: sizes.bindable(name, pixels),
                 usage: wgpu::BufferUsages::STORAGE
                     | wgpu::BufferUsages::COPY_SRC
                     | wgpu::BufferUsages::COPY_DST,
@@ -370,11 +377,11 @@ impl Counters {
             })
         };
         Self {
-            evals: buffer("pixel light evaluations"),
-            useful: buffer("pixel useful evaluations"),
-            clusters: buffer("pixel cluster indices"),
-            shadings: multisampled.then(|| buffer("pixel shadings")),
-            candidates: sampled.then(|| buffer("pixel candidates")),
+            evals: buffer("pixel_evals"),
+            useful: buffer("pixel_useful"),
+            clusters: buffer("pixel_clusters"),
+            shadings: multisampled.then(|| buffer("pixel_shadings")),
+            candidates: sampled.then(|| buffer("pixel_candidates")),
         }
     }
 
@@ -400,36 +407,42 @@ pub struct MovingSet {
 }
 
 impl MovingSet {
-    /// Room for `lights` lights, holding none.
-    fn new(gpu: &Gpu, lights: usize) -> Self {
-        let buffer = |label, bytes: u64| {
+    /// Room for `lights` lights, holding none, at the sizes `clustering/moving.wesl`
+    /// declares.
+    fn new(gpu: &Gpu, sizes: &BufferSizes, lights: usize) -> Self {
+        let buffer = |name, count: usize| {
             gpu.device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some(label),
-                size: bytes.max(16),
+                label: Some(name),
+                size: sizes.bindable(name, count as u64),
                 usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
                 mapped_at_creation: false,
             })
         };
         Self {
-            ids: buffer("moving lights", 4 + 4 * lights as u64),
-            mask: buffer("moving mask", 4 * lights.div_ceil(32) as u64),
+            ids: buffer("moving_lights", lights),
+            mask: buffer("moving_mask", lights.div_ceil(32)),
             lights: Vec::new(),
         }
     }
 
     /// Hold `lights` (ascending indices below the scene's light count).
+    /// A buffer no pass of the variant declares is empty and left so (nothing reads it).
     pub fn set(&mut self, gpu: &Gpu, lights: &[u32]) {
-        let mut ids = Vec::with_capacity(lights.len() + 1);
-        ids.push(lights.len() as u32);
-        ids.extend_from_slice(lights);
-        gpu.queue
-            .write_buffer(&self.ids, 0, bytemuck::cast_slice(&ids));
-        let mut mask = vec![0u32; (self.mask.size() / 4) as usize];
-        for &i in lights {
-            mask[i as usize / 32] |= 1 << (i % 32);
+        if self.ids.size() > 0 {
+            let mut ids = Vec::with_capacity(lights.len() + 1);
+            ids.push(lights.len() as u32);
+            ids.extend_from_slice(lights);
+            gpu.queue
+                .write_buffer(&self.ids, 0, bytemuck::cast_slice(&ids));
         }
-        gpu.queue
-            .write_buffer(&self.mask, 0, bytemuck::cast_slice(&mask));
+        if self.mask.size() > 0 {
+            let mut mask = vec![0u32; self.mask.size() as usize / std::mem::size_of::<u32>()];
+            for &i in lights {
+                mask[i as usize / 32] |= 1 << (i % 32);
+            }
+            gpu.queue
+                .write_buffer(&self.mask, 0, bytemuck::cast_slice(&mask));
+        }
         self.lights = lights.to_vec();
     }
 }
@@ -462,7 +475,7 @@ impl FrameResources {
         variant: &Variant,
         scene: &Scene,
         proxies: Option<super::culling::ProxyLayout>,
-        sizes: &super::reflect::BufferSizes,
+        sizes: &BufferSizes,
     ) -> Self {
         let (w, h) = (scene.params.width, scene.params.height);
         let sampling = variant.shading.lights.sampling();
@@ -494,7 +507,9 @@ impl FrameResources {
             let lights = scene.lights.len() as u32;
             // A first guess, within what one binding holds; a frame whose lists overflow
             // grows the buffer and runs again (or says the lists cannot fit).
-            let bindable = (gpu.limits.max_storage_buffer_binding_size / 4).min(u32::MAX as u64);
+            let entry = sizes.bindable("light_indices", 1).max(1);
+            let bindable =
+                (gpu.limits.max_storage_buffer_binding_size / entry).min(u32::MAX as u64);
             let capacity = (count as u64 * lights.clamp(1, 32) as u64)
                 .max(1024)
                 .min(bindable) as u32;
@@ -519,8 +534,9 @@ impl FrameResources {
         let transparent_depths =
             (scene.has_blend() && variant.pipeline.is_clustered()).then(|| {
                 gpu.device.create_buffer(&wgpu::BufferDescriptor {
-                    label: Some("transparent depths"),
-                    size: w as u64 * h as u64 * 8,
+                    label: Some("transparent_depths"),
+                    // Two words a pixel: its nearest and farthest pane.
+                    size: sizes.bindable("transparent_depths", 2 * w as u64 * h as u64),
                     usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
                     mapped_at_creation: false,
                 })
@@ -530,16 +546,18 @@ impl FrameResources {
             targets,
             clusters,
             moving,
-            moving_set: MovingSet::new(gpu, moving_room),
+            moving_set: MovingSet::new(gpu, sizes, moving_room),
             counters: Counters::new(
                 gpu,
+                sizes,
                 w as u64 * h as u64,
                 variant.msaa.on(),
                 sampling.is_some(),
             ),
             transparent_depths,
             sampling: sampling.map(|s| {
-                super::sampling::SampleBuffers::new(gpu, s, w as u64 * h as u64, scene.params.time)
+                let pixels = w as u64 * h as u64;
+                super::sampling::SampleBuffers::new(gpu, sizes, s, pixels, scene.params.time)
             }),
         }
     }

@@ -1,11 +1,9 @@
 //! What a sampled light loop binds (`common/sampling.wesl`, `shading/light_loop/`): the
 //! frame's seed, and with temporal reuse each pixel's reservoir of this frame and the last.
 
+use super::reflect::BufferSizes;
 use crate::gpu::Gpu;
 use crate::variant::Sampling;
-
-/// A stored reservoir's bytes (`StoredReservoir`: light, weight, count, padding).
-const RESERVOIR_BYTES: u64 = 16;
 
 /// The uniform `sample_frame`.
 #[repr(C)]
@@ -31,23 +29,34 @@ pub struct SampleBuffers {
     frame: wgpu::Buffer,
     /// Temporal reuse: this frame's reservoirs and the last frame's.
     reservoirs: Option<[wgpu::Buffer; 2]>,
+    /// Bytes a pixel keeps across frames (its two reservoirs).
+    kept_per_pixel: u32,
     seed: u32,
     /// The frame's values as last written.
     written: SampleFrame,
 }
 
 impl SampleBuffers {
-    pub fn new(gpu: &Gpu, sampling: &Sampling, pixels: u64, time: f64) -> Self {
+    /// The buffers at the sizes the light loop declares (`restir_temporal.wesl`).
+    pub fn new(
+        gpu: &Gpu,
+        sizes: &BufferSizes,
+        sampling: &Sampling,
+        pixels: u64,
+        time: f64,
+    ) -> Self {
         let frame = gpu.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("sample frame"),
             size: std::mem::size_of::<SampleFrame>() as u64,
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
+        // Both hold `StoredReservoir`s; an instrumented pass declares only the previous.
+        let reservoir_bytes = sizes.bindable("previous_reservoirs", pixels);
         let reservoir = |label| {
             gpu.device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some(label),
-                size: pixels.max(1) * RESERVOIR_BYTES,
+                size: reservoir_bytes,
                 usage: wgpu::BufferUsages::STORAGE
                     | wgpu::BufferUsages::COPY_SRC
                     | wgpu::BufferUsages::COPY_DST,
@@ -57,9 +66,14 @@ impl SampleBuffers {
         let reservoirs = sampling
             .reuses_frames()
             .then(|| [reservoir("reservoirs"), reservoir("previous reservoirs")]);
+        let kept_per_pixel = match &reservoirs {
+            Some(_) => 2 * sizes.bindable("previous_reservoirs", 1) as u32,
+            None => 0,
+        };
         let mut out = Self {
             frame,
             reservoirs,
+            kept_per_pixel,
             seed: sampling.seed,
             written: SampleFrame::default(),
         };
@@ -109,11 +123,7 @@ impl SampleBuffers {
 
     /// Bytes a pixel keeps across frames.
     pub fn bytes_per_pixel(&self) -> u32 {
-        if self.reservoirs.is_some() {
-            2 * RESERVOIR_BYTES as u32
-        } else {
-            0
-        }
+        self.kept_per_pixel
     }
 }
 

@@ -182,8 +182,14 @@ impl<'g> Renderer<'g> {
     }
 
     fn read_pixel_counters(&self) -> Result<PixelCounters, GpuError> {
+        // A counter no pass declares (a loop that looks up no cluster) counted nothing.
+        let pixels = self.width as usize * self.height as usize;
         let read = |b: &wgpu::Buffer| -> Result<Vec<u32>, GpuError> {
-            Ok(bytemuck::cast_slice(&read_buffer(self.gpu, b, 0, b.size())?).to_vec())
+            if b.size() == 0 {
+                return Ok(vec![0; pixels]);
+            }
+            let bytes = read_buffer(self.gpu, b, 0, b.size())?;
+            Ok(bytemuck::pod_collect_to_vec(&bytes))
         };
         let c = &self.res.counters;
         Ok(PixelCounters {

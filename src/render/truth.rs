@@ -12,7 +12,7 @@ use super::error::RenderError;
 use super::passes::{
     ComputePipelines, clear_attachment, color_target, render_pipeline, set_compute_groups,
 };
-use super::reflect::{PassLayout, Slot};
+use super::reflect::{BufferSizes, PassLayout, Slot};
 use super::resources::{DepthSetup, SHADING_DEPTH_FORMAT, SceneBuffers, multisampled_target};
 use crate::common::Vertex;
 use crate::compose::Composer;
@@ -308,10 +308,12 @@ fn record_blended(
         .collect();
     let storage =
         wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC;
-    let buffer = |label: &str, size: u64| {
+    // Each buffer at the size `truth_blended.wesl` declares it.
+    let sizes = BufferSizes::of([draw.pass]);
+    let buffer = |name: &str, count: u64| {
         gpu.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some(label),
-            size: size.max(4),
+            label: Some(name),
+            size: sizes.bindable(name, count),
             usage: storage,
             mapped_at_creation: false,
         })
@@ -323,9 +325,8 @@ fn record_blended(
             contents: bytemuck::cast_slice(&vertices),
             usage: wgpu::BufferUsages::VERTEX,
         });
-    let counts = buffer("truth blended counts", pixels * 4);
-    let offsets = buffer("truth blended offsets", pixels * 4);
-    let fragment_size = std::mem::size_of::<BlendedFragment>() as u64;
+    let counts = buffer("fragment_counts", pixels);
+    let offsets = buffer("fragment_offsets", pixels);
     let vertex = [Some(SceneBuffers::vertex_layout())];
     let pipeline = |fs: &str| {
         render_pipeline(
@@ -379,10 +380,10 @@ fn record_blended(
         gpu.queue.submit([encoder.finish()]);
     };
     // Room for one fragment a pixel to count with; the writing draw gets what it needs.
-    let first = buffer("truth blended fragments", pixels * fragment_size);
+    let first = buffer("fragments", pixels);
     run(&pipeline("fs_count")?, &groups(&first)?);
     let per_pixel: Vec<u32> =
-        bytemuck::cast_slice(&read_buffer(gpu, &counts, 0, pixels * 4)?).to_vec();
+        bytemuck::cast_slice(&read_buffer(gpu, &counts, 0, counts.size())?).to_vec();
     if let Some((i, &n)) = per_pixel.iter().enumerate().max_by_key(|(_, n)| **n)
         && n > MAX_BLENDED_FRAGMENTS
     {
@@ -400,7 +401,7 @@ fn record_blended(
         total += n;
     }
     starts.push(total);
-    let size = total as u64 * fragment_size;
+    let size = sizes.bytes("fragments", total as u64).unwrap_or(0);
     if size > gpu.max_storage_bytes() {
         return Err(RenderError::Scene(format!(
             "scene `{}` has {total} blended fragments in front of its opaque surfaces: {size} bytes to record, more than adapter `{}` binds in one buffer ({})",
@@ -412,7 +413,7 @@ fn record_blended(
     let fragments = if total as u64 <= pixels {
         first
     } else {
-        buffer("truth blended fragments", size)
+        buffer("fragments", total as u64)
     };
     gpu.queue.write_buffer(
         &offsets,
@@ -424,7 +425,7 @@ fn record_blended(
     gpu.queue.submit([clear.finish()]);
     run(&pipeline("fs_record")?, &groups(&fragments)?);
     let mut recorded: Vec<BlendedFragment> =
-        bytemuck::cast_slice(&read_buffer(gpu, &fragments, 0, size.max(4))?[..size as usize])
+        bytemuck::cast_slice(&read_buffer(gpu, &fragments, 0, fragments.size())?[..size as usize])
             .to_vec();
     // Each pixel's fragments in the order they are blended.
     for pixel in starts.windows(2) {
@@ -447,7 +448,8 @@ fn read_samples(
         Default::default(),
     )?;
     let (w, h) = (texture.width(), texture.height());
-    let size = w as u64 * h as u64 * texture.sample_count() as u64 * 16;
+    let samples = w as u64 * h as u64 * texture.sample_count() as u64;
+    let size = BufferSizes::of([&pass]).bindable("truth_samples", samples);
     let buffer = gpu.scoped(
         "reading the truth's samples",
         || -> Result<_, RenderError> {
