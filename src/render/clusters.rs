@@ -507,8 +507,6 @@ impl ClusterBuffers {
         Ok(bytemuck::pod_read_unaligned(&bytes))
     }
 
-    /// The bytes of `count` elements of buffer `name` as the frame's passes declare it (0
-    /// for one no pass declares).
     /// The most bytes one list entry takes in a buffer sized by the entries (the indices,
     /// rasterised binning's pair arrays), as the passes declare them: each must bind.
     pub fn bytes_per_entry(&self) -> u64 {
@@ -532,6 +530,8 @@ impl ClusterBuffers {
             .unwrap_or(0)
     }
 
+    /// The bytes of `count` elements of buffer `name` as the frame's passes declare it (0
+    /// for one no pass declares).
     pub fn declared_bytes(&self, name: &str, count: u64) -> u64 {
         self.sizes.bytes(name, count).unwrap_or(0)
     }

@@ -425,8 +425,8 @@ impl MovingSet {
         }
     }
 
-    /// Hold `lights` (ascending indices below the scene's light count).
-    /// A buffer no pass of the variant declares is empty and left so (nothing reads it).
+    /// Hold `lights` (ascending indices below the scene's light count). A buffer no pass of
+    /// the variant declares is empty and left so (nothing reads it).
     pub fn set(&mut self, gpu: &Gpu, lights: &[u32]) {
         if self.ids.size() > 0 {
             let mut ids = Vec::with_capacity(lights.len() + 1);

@@ -242,26 +242,28 @@ pub fn run_points<S: Study>(
     progress: &mut dyn FnMut(&str),
 ) -> Result<Finished<S>, StudyError> {
     let (study, points) = S::plan(gpu, options)?;
+    let count = points.len();
     let mut rows = Vec::new();
-    for (i, point) in points.iter().enumerate() {
+    // Each point is dropped once it ran: a scene and its references go with the last point
+    // that shares them.
+    for (i, point) in points.into_iter().enumerate() {
         let started = std::time::Instant::now();
         gpu.begin_cell();
-        let outcome = match study.run(gpu, composer, point) {
+        let outcome = match study.run(gpu, composer, &point) {
             Ok(ran) => {
                 let failure = ran.iter().find_map(|r| r.failure().map(str::to_string));
                 rows.extend(ran);
                 failure
             }
             Err(e) => {
-                rows.push(study.failed(point, e.to_string()));
+                rows.push(study.failed(&point, e.to_string()));
                 Some(e.to_string())
             }
         };
         progress(&format!(
-            "[{}/{}] {}, {:.1} s{}",
+            "[{}/{count}] {}, {:.1} s{}",
             i + 1,
-            points.len(),
-            study.label(point),
+            study.label(&point),
             started.elapsed().as_secs_f64(),
             outcome.map_or(String::new(), |e| format!(": FAILED: {e}"))
         ));
