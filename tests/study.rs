@@ -350,6 +350,47 @@ fn culling_counts_what_shading_does() {
     assert!(notes.contains("medians of the timed frames. "), "{notes}");
 }
 
+/// A point whose run fails leaves the row that names it, with why, and the other points
+/// run: with the light BVH's assignment broken (an import of nothing), the culling study's
+/// BVH rows fail naming the module, every other method's rows are whole, the progress
+/// says which points failed, and the study is not ok. The same run with the shipped shaders
+/// is `culling_counts_what_shading_does`.
+#[test]
+fn a_failing_point_leaves_its_named_row_and_the_others_run() {
+    let gpu = common::gpu();
+    let broken = common::EditedShaders::of(
+        "passes/assign_bvh.wesl",
+        "study-bvh-broken",
+        &[(
+            "import package::clustering::clusters::cluster_count;",
+            "import package::clustering::clusters::cluster_count_nowhere;",
+        )],
+    );
+    let mut lines = Vec::new();
+    let options = small((48, 27), &[64]);
+    let done =
+        study::run_points::<culling::CullingStudy>(&gpu, &broken.composer, &options, &mut |line| {
+            lines.push(line.to_string())
+        })
+        .expect("the study runs");
+    let methods = culling::methods().len();
+    assert_eq!(done.rows.len(), culling::SPOT_FRACTIONS.len() * methods);
+    assert_eq!(lines.len(), done.rows.len());
+    assert!(!done.ok);
+    let bvh = "Olsson light BVH";
+    for (r, line) in done.rows.iter().zip(&lines) {
+        if r.method == bvh {
+            let e = r.error.as_deref().unwrap_or_default();
+            assert!(e.contains("assign_bvh"), "{e}");
+            assert!(line.contains(bvh) && line.contains("FAILED"), "{line}");
+        } else {
+            assert!(r.error.is_none() && r.evaluations > 0, "{r:#?}");
+            assert!(!line.contains("FAILED"), "{line}");
+        }
+    }
+    assert!(done.table().terminal().contains("FAILED"));
+}
+
 #[test]
 fn the_study_command_writes_every_file() {
     let dir = scratch("codecs").join("results");

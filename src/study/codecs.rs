@@ -355,14 +355,10 @@ impl super::Study for CodecStudy {
         ])
     }
 
-    fn failed(&self, p: &Point, error: String) -> CodecRow {
-        let named = match p {
+    fn named(&self, p: &Point) -> CodecRow {
+        match p {
             Point::Codec { set, codec } => set.named(codec.label(), codec.bits(), "gpu"),
             Point::F32 { set } => set.named("xyz f32", 96, "cpu"),
-        };
-        CodecRow {
-            error: Some(error),
-            ..named
         }
     }
 

@@ -149,11 +149,8 @@ impl super::Study for ConeStudy {
         }])
     }
 
-    fn failed(&self, p: &Point, error: String) -> ConeRow {
-        ConeRow {
-            error: Some(error),
-            ..named(p)
-        }
+    fn named(&self, p: &Point) -> ConeRow {
+        named(p)
     }
 
     /// Each test's evaluations over the sphere test's on the same frame.

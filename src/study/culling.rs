@@ -222,7 +222,7 @@ pub struct Point {
 
 impl CullingStudy {
     /// The row of a point, with no figures yet.
-    fn named(&self, p: &Point) -> CullingRow {
+    fn row_of(&self, p: &Point) -> CullingRow {
         let params = &p.scene.params;
         let m = &self.methods[p.method];
         let g = m.variant((params.width, params.height)).clusters().grid;
@@ -307,15 +307,12 @@ impl super::Study for CullingStudy {
             frame_ms: r.frame_ms,
             list_bytes: s.cluster_bytes,
             timing_source: r.timing_source.into(),
-            ..self.named(p)
+            ..self.row_of(p)
         }])
     }
 
-    fn failed(&self, p: &Point, error: String) -> CullingRow {
-        CullingRow {
-            error: Some(error),
-            ..self.named(p)
-        }
+    fn named(&self, p: &Point) -> CullingRow {
+        self.row_of(p)
     }
 
     /// The same useful evaluations as every other method on the same frame: each is exact,

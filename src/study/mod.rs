@@ -153,7 +153,7 @@ impl Default for StudyOptions {
 }
 
 /// A study: the points it runs, how one point runs, and how its rows read. Running every
-/// point (a failed one leaves its row and the others go on), the check that every row keeps
+/// point (a failed one leaves its named row with the error, and the others go on), the check that every row keeps
 /// the study's promise, the files and the command's dispatch are written once (`conduct`,
 /// `write`, `STUDIES`): adding a study is its file, its line in `STUDIES` and its page.
 pub trait Study: Sized {
@@ -178,8 +178,9 @@ pub trait Study: Sized {
         composer: &Composer,
         point: &Self::Point,
     ) -> Result<Vec<Self::Row>, StudyError>;
-    /// The row of a point whose run failed: what names it, and the error.
-    fn failed(&self, point: &Self::Point, error: String) -> Self::Row;
+    /// The row that names a point (its variant, scene, count...) with no figures yet: a
+    /// failed point's row, with its error.
+    fn named(&self, point: &Self::Point) -> Self::Row;
     /// Figures a row takes from the others (ratios, a front), once every point ran.
     fn relate(&self, _rows: &mut [Self::Row]) {}
     /// Whether a row that ran keeps the study's promise (exact, no light missed), seen
@@ -196,6 +197,8 @@ pub trait Study: Sized {
 /// Whether a row's point failed, and why.
 pub trait Outcome {
     fn failure(&self) -> Option<&str>;
+    /// Mark the row failed, with why.
+    fn fail(&mut self, error: String);
 }
 
 /// Implements `Outcome` for rows whose `error` field holds why their point failed.
@@ -204,6 +207,10 @@ macro_rules! outcome_in_error_field {
         impl $crate::study::Outcome for $row {
             fn failure(&self) -> Option<&str> {
                 self.error.as_deref()
+            }
+
+            fn fail(&mut self, error: String) {
+                self.error = Some(error);
             }
         }
     )*};
@@ -256,7 +263,9 @@ pub fn run_points<S: Study>(
                 failure
             }
             Err(e) => {
-                rows.push(study.failed(&point, e.to_string()));
+                let mut row = study.named(&point);
+                row.fail(e.to_string());
+                rows.push(row);
                 Some(e.to_string())
             }
         };

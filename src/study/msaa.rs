@@ -152,11 +152,8 @@ impl super::Study for MsaaStudy {
         Ok(vec![row])
     }
 
-    fn failed(&self, p: &Point, error: String) -> MsaaRow {
-        MsaaRow {
-            error: Some(error),
-            ..named(p)
-        }
+    fn named(&self, p: &Point) -> MsaaRow {
+        named(p)
     }
 
     /// Each run's evaluations over the same variant's with one sample.

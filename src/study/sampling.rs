@@ -256,11 +256,8 @@ impl super::Study for SamplingStudy {
         }
     }
 
-    fn failed(&self, p: &Point, error: String) -> SamplingRow {
-        SamplingRow {
-            error: Some(error),
-            ..empty_row(p.variant(), p.params(), false)
-        }
+    fn named(&self, p: &Point) -> SamplingRow {
+        empty_row(p.variant(), p.params(), false)
     }
 
     /// Each row's speed-up and place on the front, among the rows of its light count and

@@ -186,11 +186,8 @@ impl super::Study for TemporalStudy {
         Ok(vec![row])
     }
 
-    fn failed(&self, p: &Point, error: String) -> TemporalRow {
-        TemporalRow {
-            error: Some(error),
-            ..named(p)
-        }
+    fn named(&self, p: &Point) -> TemporalRow {
+        named(p)
     }
 
     /// Each frame over its rebuilding variant's at the same point.

@@ -143,11 +143,8 @@ impl super::Study for TransparencyStudy {
         Ok(vec![row])
     }
 
-    fn failed(&self, p: &Point, error: String) -> TransparencyRow {
-        TransparencyRow {
-            error: Some(error),
-            ..named(p)
-        }
+    fn named(&self, p: &Point) -> TransparencyRow {
+        named(p)
     }
 
     /// Within 1 LSB of its reference.
