@@ -91,22 +91,14 @@ impl super::Study for ConeStudy {
 
     /// Scenes with no lights are left out: they have no spots to cull.
     fn plan(_gpu: &Gpu, options: &StudyOptions) -> Result<(Self, Vec<Point>), StudyError> {
-        let size = options.size();
         let mut points = Vec::new();
         for name in &options.scenes {
-            let defaults = super::scene_defaults(name)?;
-            for lights in options.lights_or(&[defaults.lights]) {
-                if lights == 0 {
+            for params in options.params_for(name, &[])? {
+                if params.lights == 0 {
                     continue;
                 }
                 for spots in FRACTIONS {
-                    let params = SceneParams {
-                        width: size.0,
-                        height: size.1,
-                        lights,
-                        spots,
-                        ..defaults
-                    };
+                    let params = SceneParams { spots, ..params };
                     let scene = Arc::new(super::generate(name, params)?);
                     // The schema's list, the sphere test first: the others are measured
                     // against it.

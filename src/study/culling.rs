@@ -250,20 +250,12 @@ impl super::Study for CullingStudy {
     type Row = CullingRow;
 
     fn plan(_gpu: &Gpu, options: &StudyOptions) -> Result<(Self, Vec<Point>), StudyError> {
-        let size = options.size();
         let methods = methods();
         let mut points = Vec::new();
         for name in &options.scenes {
-            let defaults = super::scene_defaults(name)?;
-            for lights in options.lights_or(&LIGHT_COUNTS) {
+            for params in options.params_for(name, &LIGHT_COUNTS)? {
                 for spots in SPOT_FRACTIONS {
-                    let params = SceneParams {
-                        width: size.0,
-                        height: size.1,
-                        lights,
-                        spots,
-                        ..defaults
-                    };
+                    let params = SceneParams { spots, ..params };
                     let scene = Arc::new(super::generate(name, params)?);
                     for method in 0..methods.len() {
                         let (name, scene) = (name.clone(), scene.clone());

@@ -132,6 +132,33 @@ impl StudyOptions {
             self.lights.clone()
         }
     }
+
+    /// Scene `name`'s parameters at the size asked for, one set per light count asked for
+    /// or, where none was, per count of `own` (empty: the scene's own count). A bad name
+    /// fails here, before anything runs.
+    pub fn params_for(
+        &self,
+        name: &str,
+        own: &[u32],
+    ) -> Result<Vec<crate::scene::SceneParams>, StudyError> {
+        let defaults = scene_defaults(name)?;
+        let own = if own.is_empty() {
+            vec![defaults.lights]
+        } else {
+            own.to_vec()
+        };
+        let (width, height) = self.size();
+        Ok(self
+            .lights_or(&own)
+            .into_iter()
+            .map(|lights| crate::scene::SceneParams {
+                width,
+                height,
+                lights,
+                ..defaults
+            })
+            .collect())
+    }
 }
 
 impl Default for StudyOptions {

@@ -14,7 +14,7 @@ use crate::compose::Composer;
 use crate::gpu::Gpu;
 use crate::measure::Frames;
 use crate::run::{CellOptions, run_scene};
-use crate::scene::{Scene, SceneParams};
+use crate::scene::Scene;
 use crate::variant::LoadedVariant;
 
 /// Lights in every scene unless `--lights` says otherwise (GPU Pro 4 measured 1024).
@@ -89,18 +89,10 @@ impl super::Study for MsaaStudy {
 
     fn plan(gpu: &Gpu, options: &StudyOptions) -> Result<(Self, Vec<Point>), StudyError> {
         let counts = gpu.multisample_counts();
-        let size = options.size();
         let variants = super::shipped(&crate::matrix::MSAA_GROUP)?;
         let mut points = Vec::new();
         for name in &options.scenes {
-            let defaults = super::scene_defaults(name)?;
-            for lights in options.lights_or(&[DEFAULT_LIGHTS]) {
-                let params = SceneParams {
-                    width: size.0,
-                    height: size.1,
-                    lights,
-                    ..defaults
-                };
+            for params in options.params_for(name, &[DEFAULT_LIGHTS])? {
                 let scene = Arc::new(super::generate(name, params)?);
                 for v in &variants {
                     for &samples in &counts {

@@ -154,17 +154,12 @@ impl super::Study for SamplingStudy {
         let exact = super::shipped(&EXACT)?;
         let samplers = super::shipped(&SAMPLERS)?;
         let temporal = super::shipped(&TEMPORAL)?;
-        let defaults = super::scene_defaults(SCENE)?;
-        let size = options.size();
         let mut points = Vec::new();
-        for lights in options.lights_or(&LIGHT_COUNTS) {
+        for at_count in options.params_for(SCENE, &LIGHT_COUNTS)? {
             for &radius_range in &RADII {
                 let params = SceneParams {
-                    width: size.0,
-                    height: size.1,
-                    lights,
                     radius_range,
-                    ..defaults
+                    ..at_count
                 };
                 let scene = Arc::new(super::generate(SCENE, params)?);
                 let references = Arc::new(ReferenceCache::default());
@@ -184,7 +179,7 @@ impl super::Study for SamplingStudy {
                     motion: Motion {
                         lights: 0.0,
                         camera: false,
-                        still_at: defaults.time,
+                        still_at: params.time,
                     },
                     ..params
                 };

@@ -10,7 +10,7 @@ use super::{Measured, StudyError, StudyOptions, measure};
 use crate::compose::Composer;
 use crate::gpu::Gpu;
 use crate::plot::Plot;
-use crate::scene::{Scene, SceneParams};
+use crate::scene::Scene;
 use crate::variant::{Clusters, Pipeline, Variant, ZSlicing};
 
 /// Grids the study runs: coarse, the default, the default with enough slices for Olsson's
@@ -163,14 +163,7 @@ impl super::Study for SlicingStudy {
         let size = options.size();
         let mut points = Vec::new();
         for name in &options.scenes {
-            let defaults = super::scene_defaults(name)?;
-            for lights in options.lights_or(&[defaults.lights]) {
-                let params = SceneParams {
-                    width: size.0,
-                    height: size.1,
-                    lights,
-                    ..defaults
-                };
+            for params in options.params_for(name, &[])? {
                 let scene = Arc::new(super::generate(name, params)?);
                 let cam = scene.camera;
                 for config in configs(size, cam.near, cam.far) {

@@ -108,23 +108,18 @@ impl super::Study for TemporalStudy {
     fn plan(_gpu: &Gpu, options: &StudyOptions) -> Result<(Self, Vec<Point>), StudyError> {
         let names: Vec<&str> = VARIANTS.iter().map(|(v, _)| *v).collect();
         let variants = super::shipped(&names)?;
-        let defaults = super::scene_defaults(SCENE)?;
-        let size = options.size();
         let mut points = Vec::new();
-        for lights in options.lights_or(&LIGHT_COUNTS) {
+        for at_count in options.params_for(SCENE, &LIGHT_COUNTS)? {
             for camera_moves in [false, true] {
                 for &moving in &MOVING {
                     let references = Arc::new(ReferenceCache::default());
                     let params = SceneParams {
-                        width: size.0,
-                        height: size.1,
-                        lights,
                         motion: Motion {
                             lights: moving,
                             camera: camera_moves,
-                            still_at: defaults.time,
+                            still_at: at_count.time,
                         },
-                        ..defaults
+                        ..at_count
                     };
                     for v in &variants {
                         points.push(Point {

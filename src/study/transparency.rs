@@ -14,7 +14,7 @@ use crate::compose::Composer;
 use crate::gpu::Gpu;
 use crate::measure::Frames;
 use crate::run::{CellOptions, run_scene};
-use crate::scene::{Scene, SceneParams};
+use crate::scene::Scene;
 use crate::variant::LoadedVariant;
 
 use crate::scene::TRANSPARENCY_SCENE as SCENE;
@@ -68,17 +68,9 @@ impl super::Study for TransparencyStudy {
     type Row = TransparencyRow;
 
     fn plan(_gpu: &Gpu, options: &StudyOptions) -> Result<(Self, Vec<Point>), StudyError> {
-        let defaults = super::scene_defaults(SCENE)?;
-        let size = options.size();
         let variants = super::shipped(&crate::matrix::TRANSPARENCY_GROUP)?;
         let mut points = Vec::new();
-        for lights in options.lights_or(&[defaults.lights]) {
-            let params = SceneParams {
-                width: size.0,
-                height: size.1,
-                lights,
-                ..defaults
-            };
+        for params in options.params_for(SCENE, &[])? {
             let with_panes = Arc::new(super::generate(SCENE, params)?);
             let without = Arc::new(Scene {
                 blended: Vec::new(),
