@@ -10,6 +10,7 @@ pub mod common;
 pub mod compose;
 pub mod cpu;
 pub mod efficiency;
+pub mod environment;
 pub mod explain;
 pub mod files;
 pub mod flip;

@@ -13,7 +13,8 @@ use crate::cpu::frame::ReferenceFrame;
 use crate::efficiency::Efficiency;
 use crate::gpu::{AdapterSummary, Gpu, Timings};
 use crate::measure::{
-    CpuClock, DISTURBED_RETRIES, DISTURBED_SHARE, FrameCount, Frames, JUDGED_FRAME_MS, median,
+    CpuClock, DISTURBED_RETRIES, DISTURBED_SHARE, FrameCount, Frames, JUDGED_FRAME_MS, Stop,
+    median, median_interval,
 };
 use crate::metrics::{self, ErrorMetrics};
 use crate::reference::{ReferenceCache, ReferenceError, ReferenceJob};
@@ -40,6 +41,11 @@ pub struct RenderReport {
     pub gpu_ms: Map<String, Value>,
     /// [min, max] milliseconds per pass over the timed frames, `total` included.
     pub gpu_ms_spread: Map<String, Value>,
+    /// [lo, hi]: each pass's confidence interval for its median, `total` included, at
+    /// `interval_level` (`measure::median_interval`); empty with too few frames for one.
+    pub gpu_ms_interval: Map<String, Value>,
+    /// The probability that each interval holds its median (at least `measure::LEVEL`).
+    pub interval_level: Option<f64>,
     /// "gpu timestamps", or "wall clock" (each pass submitted alone and waited for) on
     /// adapters without timestamp queries and on software adapters (see `gpu`).
     pub timing_source: &'static str,
@@ -70,6 +76,9 @@ pub struct RenderReport {
     pub images: Vec<PathBuf>,
     /// Where the cell's wall-clock time went.
     pub cost_ms: CellCost,
+    /// The variant claims to be within `EXACT_LSB` of the reference on this adapter
+    /// (`exact_claim`): a frame over it fails.
+    pub exact_claim: bool,
     /// Why the frame means nothing, when it does not (NaN pixels, no geometry in view, no
     /// light evaluated where the reference is lit): the cell fails, whatever its error figures.
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -236,101 +245,251 @@ pub fn gpu_half<'g>(
     options: CellOptions<'_>,
     references: &ReferenceCache,
 ) -> Result<(GpuHalf, Renderer<'g>), RunError> {
-    let params = scene.params;
-    gpu.check_size(params.width, params.height)?;
-    scene.check()?;
-    let mut cost = CellCost::default();
-    let mut clock = Instant::now();
-    let mut lap = || {
-        let ms = clock.elapsed().as_secs_f64() * 1e3;
-        clock = Instant::now();
-        round3(ms)
-    };
-    let mut renderer = Renderer::new(gpu, composer, &variant.variant, scene)?;
-    cost.setup = lap();
-    let software = gpu.software;
-    let (mut runs, frame_count, without_lights) =
-        timed_frames(&mut renderer, options.frames, software)?;
-    cost.frames = lap();
-    // A debug view is an extra: a cell whose view cannot be drawn still has its figures.
-    let debug = options
-        .debug_view
-        .and_then(|view| renderer.debug_image(composer, view).ok());
-    let wall_ms = median(runs.iter().map(|f| f.wall_ms).collect());
-    let timings = median_timings(&runs);
-    let gpu_ms_spread = spread(&runs, &timings);
-    let runs_total_ms: Vec<f64> = runs.iter().map(|r| r.timings.total_ms()).collect();
-    let frame = runs.pop().expect("at least one frame");
-    let mut cpu_ms = Map::new();
-    if let Some(ms) = frame.cpu_assign_ms {
-        cpu_ms.insert("light_assign".into(), round3(ms).into());
+    let mut timing = Timing::start(gpu, composer, variant, scene, options.frames)?;
+    while !timing.done() {
+        timing.next_frame()?;
     }
-    let stats = options
-        .stats
-        .then(|| {
-            renderer.prepare_counting(composer, scene);
-            renderer.stats()
+    timing.finish(composer, variant, scene, options, references)
+}
+
+/// A cell between its set-up and its counters: a renderer timing frames, one at a time, so
+/// that the matrix can time a group's cells in interleaved rounds (`next_frame` on each in
+/// turn) and drift of the machine hits each alike.
+pub struct Timing<'g> {
+    gpu: &'g Gpu,
+    renderer: Renderer<'g>,
+    policy: Frames,
+    count: FrameCount,
+    runs: Vec<FrameOutput>,
+    /// Frames set aside as disturbed by other processes (`judged_frame`).
+    disturbed: Vec<FrameOutput>,
+    /// The frame without lights the efficiency is measured from (`efficiency`), timed after
+    /// a first draw has compiled and touched what the frame uses.
+    without_lights: Timings,
+    untimed_ms: f64,
+    cost: CellCost,
+}
+
+impl<'g> Timing<'g> {
+    /// Set the cell up and draw its untimed frames: `warmup` frames, or with frames by
+    /// budget one without lights (`measure::Budget`); then the frame without lights.
+    pub fn start(
+        gpu: &'g Gpu,
+        composer: &Composer,
+        variant: &LoadedVariant,
+        scene: &Scene,
+        policy: Frames,
+    ) -> Result<Self, RunError> {
+        let params = scene.params;
+        gpu.check_size(params.width, params.height)?;
+        scene.check()?;
+        let clock = Instant::now();
+        let mut renderer = Renderer::new(gpu, composer, &variant.variant, scene)?;
+        let mut cost = CellCost {
+            setup: round3(clock.elapsed().as_secs_f64() * 1e3),
+            ..Default::default()
+        };
+        let clock = Instant::now();
+        let mut count = FrameCount::default();
+        let mut untimed_ms = 0.0;
+        match policy {
+            Frames::Exact { warmup, .. } => {
+                for _ in 0..warmup {
+                    renderer.render()?;
+                }
+                count.warmup = warmup;
+            }
+            Frames::Budget(_) => {
+                untimed_ms += renderer.draw_without_lights()?.total_ms();
+                count.frame_without_lights = true;
+            }
+        }
+        let without_lights = renderer.draw_without_lights()?;
+        if count.frame_without_lights {
+            untimed_ms += without_lights.total_ms();
+        }
+        cost.frames = clock.elapsed().as_secs_f64() * 1e3;
+        Ok(Self {
+            gpu,
+            renderer,
+            policy,
+            count,
+            runs: Vec::new(),
+            disturbed: Vec::new(),
+            without_lights,
+            untimed_ms,
+            cost,
         })
-        .transpose()?;
-    cost.counters = lap();
-    // Last: nothing after it may fail, so the job it begins is always finished.
-    let reference = references.begin(gpu, composer, variant, scene)?;
-    cost.reference = lap();
-    let mut gpu_ms = Map::new();
-    // The median of the frames' totals, not the sum of the passes' medians: a sum of medians
-    // of different frames can lie outside every frame's total (it did: 6.9 ms against frames
-    // of 7.6-13.2 ms), and the spread beside it is of the totals.
-    let fastest = runs_total_ms.iter().copied().fold(f64::INFINITY, f64::min);
-    let slowest = runs_total_ms.iter().copied().fold(0.0, f64::max);
-    let total = median(runs_total_ms);
-    gpu_ms.insert("total".into(), round3(total).into());
-    let efficiency = stats.as_ref().and_then(|s| {
-        let shading = renderer.shading_pass_names();
-        let counts = (s.light_evals, s.useful_light_evals);
-        let frames = (total, fastest, slowest);
-        Efficiency::of(frames, &timings, &without_lights, &shading, counts)
-    });
-    for (name, ms) in &timings.passes {
-        gpu_ms.insert(name.clone(), round3(*ms).into());
     }
-    let report = RenderReport {
-        variant: variant.name.clone(),
-        scene: scene.name.clone(),
-        scene_file: scene.file.clone(),
-        scene_notes: scene.notes.clone(),
-        adapter: gpu.adapter.clone(),
-        size: [params.width, params.height],
-        lights: scene.lights.len() as u32,
-        seed: params.seed,
-        gpu_ms,
-        gpu_ms_spread,
-        timing_source: if timings.gpu_timestamps {
-            "gpu timestamps"
-        } else {
-            "wall clock"
-        },
-        frames: frame_count.timed,
-        frame_count,
-        hdr_format: format!("{:?}", gpu.hdr_format).to_lowercase(),
-        wall_ms: round3(wall_ms),
-        reference_ms: 0.0,
-        error: None,
-        stats,
-        efficiency,
-        cpu_ms,
-        skipped_passes: frame.skipped.clone(),
-        images: Vec::new(),
-        cost_ms: cost,
-        failure: None,
-    };
-    let half = GpuHalf {
-        report,
-        frame,
-        debug,
-        reference,
-        exact: exact_claim(&variant.variant, gpu),
-    };
-    Ok((half, renderer))
+
+    /// Whether the cell has timed enough frames (`count.stop` says why).
+    pub fn done(&self) -> bool {
+        self.count.stop.is_some()
+    }
+
+    /// Time one more frame. On a software adapter a long frame that other processes
+    /// disturbed (`measure::CpuClock`) is set aside and another taken, up to
+    /// `DISTURBED_RETRIES` more in all.
+    pub fn next_frame(&mut self) -> Result<(), RenderError> {
+        if self.done() {
+            return Ok(());
+        }
+        let clock = Instant::now();
+        let (frame, disturbed) = judged_frame(&mut self.renderer, self.gpu.software)?;
+        self.cost.frames += clock.elapsed().as_secs_f64() * 1e3;
+        let retries = DISTURBED_RETRIES as usize;
+        match self.policy {
+            Frames::Exact { timed, .. } => {
+                if disturbed && self.disturbed.len() < retries {
+                    self.disturbed.push(frame);
+                } else {
+                    self.runs.push(frame);
+                }
+                if self.runs.len() >= timed.max(1) as usize {
+                    self.count.stop = Some(Stop::Count);
+                }
+            }
+            Frames::Budget(budget) => {
+                if disturbed {
+                    self.disturbed.push(frame);
+                } else {
+                    self.runs.push(frame);
+                }
+                if self.runs.is_empty() {
+                    // Every frame disturbed: past the retries, they are the timed ones.
+                    if self.disturbed.len() > retries {
+                        self.runs = std::mem::take(&mut self.disturbed);
+                        self.count.stop = Some(Stop::Budget);
+                    }
+                } else {
+                    let times: Vec<f64> = self.runs.iter().map(|f| f.timings.total_ms()).collect();
+                    let set_aside: f64 = self.disturbed.iter().map(|f| f.timings.total_ms()).sum();
+                    self.count.stop = budget.enough(&times, self.untimed_ms + set_aside);
+                }
+            }
+        }
+        self.count.disturbed = self.disturbed.len() as u32;
+        Ok(())
+    }
+
+    /// After the timed frames: the debug view, the counters and the reference's raster
+    /// truth. `references` must finish this cell's job (`finish_cell`) before any job
+    /// begun after it.
+    pub fn finish(
+        self,
+        composer: &Composer,
+        variant: &LoadedVariant,
+        scene: &Scene,
+        options: CellOptions<'_>,
+        references: &ReferenceCache,
+    ) -> Result<(GpuHalf, Renderer<'g>), RunError> {
+        let Timing {
+            gpu,
+            mut renderer,
+            mut count,
+            mut runs,
+            without_lights,
+            mut cost,
+            ..
+        } = self;
+        count.timed = runs.len() as u32;
+        let params = scene.params;
+        let mut clock = Instant::now();
+        let mut lap = || {
+            let ms = clock.elapsed().as_secs_f64() * 1e3;
+            clock = Instant::now();
+            round3(ms)
+        };
+        cost.frames = round3(cost.frames);
+        let frame_count = count;
+        // A debug view is an extra: a cell whose view cannot be drawn still has its figures.
+        let debug = options
+            .debug_view
+            .and_then(|view| renderer.debug_image(composer, view).ok());
+        let wall_ms = median(runs.iter().map(|f| f.wall_ms).collect());
+        let timings = median_timings(&runs);
+        let gpu_ms_spread = spread(&runs, &timings);
+        let (gpu_ms_interval, interval_level) = intervals(&runs, &timings);
+        let runs_total_ms: Vec<f64> = runs.iter().map(|r| r.timings.total_ms()).collect();
+        let frame = runs.pop().expect("at least one frame");
+        let mut cpu_ms = Map::new();
+        if let Some(ms) = frame.cpu_assign_ms {
+            cpu_ms.insert("light_assign".into(), round3(ms).into());
+        }
+        let stats = options
+            .stats
+            .then(|| {
+                renderer.prepare_counting(composer, scene);
+                renderer.stats()
+            })
+            .transpose()?;
+        cost.counters = lap();
+        // Last: nothing after it may fail, so the job it begins is always finished.
+        let reference = references.begin(gpu, composer, variant, scene)?;
+        cost.reference = lap();
+        let mut gpu_ms = Map::new();
+        // The median of the frames' totals, not the sum of the passes' medians: a sum of
+        // medians of different frames can lie outside every frame's total (it did: 6.9 ms
+        // against frames of 7.6-13.2 ms), and the spread beside it is of the totals.
+        let interval = median_interval(&runs_total_ms);
+        let total = median(runs_total_ms);
+        gpu_ms.insert("total".into(), round3(total).into());
+        let efficiency = stats.as_ref().and_then(|s| {
+            let shading = renderer.shading_pass_names();
+            let counts = (s.light_evals, s.useful_light_evals);
+            Efficiency::of(
+                (total, interval),
+                &timings,
+                &without_lights,
+                &shading,
+                counts,
+            )
+        });
+        for (name, ms) in &timings.passes {
+            gpu_ms.insert(name.clone(), round3(*ms).into());
+        }
+        let report = RenderReport {
+            variant: variant.name.clone(),
+            scene: scene.name.clone(),
+            scene_file: scene.file.clone(),
+            scene_notes: scene.notes.clone(),
+            adapter: gpu.adapter.clone(),
+            size: [params.width, params.height],
+            lights: scene.lights.len() as u32,
+            seed: params.seed,
+            gpu_ms,
+            gpu_ms_spread,
+            gpu_ms_interval,
+            interval_level,
+            timing_source: if timings.gpu_timestamps {
+                "gpu timestamps"
+            } else {
+                "wall clock"
+            },
+            frames: frame_count.timed,
+            frame_count,
+            hdr_format: format!("{:?}", gpu.hdr_format).to_lowercase(),
+            wall_ms: round3(wall_ms),
+            reference_ms: 0.0,
+            error: None,
+            stats,
+            efficiency,
+            cpu_ms,
+            skipped_passes: frame.skipped.clone(),
+            images: Vec::new(),
+            cost_ms: cost,
+            exact_claim: exact_claim(&variant.variant, gpu),
+            failure: None,
+        };
+        let half = GpuHalf {
+            exact: report.exact_claim,
+            report,
+            frame,
+            debug,
+            reference,
+        };
+        Ok((half, renderer))
+    }
 }
 
 /// The CPU half of a cell: its reference shaded in f64 (or taken from the cell that
@@ -481,68 +640,6 @@ pub fn exact_claim(variant: &Variant, gpu: &Gpu) -> bool {
         && !toon_on_rounded
 }
 
-/// Render the frames `policy` asks for; returns the timed ones. On a `software` adapter a
-/// long frame that other processes disturbed (`measure::CpuClock`) is set aside and another
-/// taken, up to `DISTURBED_RETRIES` more in all.
-fn timed_frames(
-    renderer: &mut Renderer<'_>,
-    policy: Frames,
-    software: bool,
-) -> Result<(Vec<FrameOutput>, FrameCount, Timings), RenderError> {
-    let mut count = FrameCount::default();
-    let mut runs: Vec<FrameOutput> = Vec::new();
-    // The frame without lights the efficiency is measured from (`efficiency`), timed after
-    // a first draw has compiled and touched what the frame uses.
-    let without_lights;
-    match policy {
-        Frames::Exact { warmup, timed } => {
-            for _ in 0..warmup {
-                renderer.render()?;
-            }
-            count.warmup = warmup;
-            without_lights = renderer.draw_without_lights()?;
-            let mut disturbed = Vec::new();
-            while runs.len() < timed.max(1) as usize {
-                match judged_frame(renderer, software)? {
-                    (frame, true) if disturbed.len() < DISTURBED_RETRIES as usize => {
-                        disturbed.push(frame)
-                    }
-                    (frame, _) => runs.push(frame),
-                }
-            }
-            count.disturbed = disturbed.len() as u32;
-        }
-        Frames::Budget(budget) => {
-            let first = renderer.draw_without_lights()?;
-            without_lights = renderer.draw_without_lights()?;
-            let untimed_ms = first.total_ms() + without_lights.total_ms();
-            count.frame_without_lights = true;
-            let mut disturbed: Vec<FrameOutput> = Vec::new();
-            loop {
-                match judged_frame(renderer, software)? {
-                    (frame, true) => disturbed.push(frame),
-                    (frame, false) => runs.push(frame),
-                }
-                count.disturbed = disturbed.len() as u32;
-                if runs.is_empty() {
-                    if count.disturbed > DISTURBED_RETRIES {
-                        runs = std::mem::take(&mut disturbed);
-                        break;
-                    }
-                    continue;
-                }
-                let times: Vec<f64> = runs.iter().map(|f| f.timings.total_ms()).collect();
-                let set_aside: f64 = disturbed.iter().map(|f| f.timings.total_ms()).sum();
-                if budget.enough(&times, untimed_ms + set_aside) {
-                    break;
-                }
-            }
-        }
-    }
-    count.timed = runs.len() as u32;
-    Ok((runs, count, without_lights))
-}
-
 /// One timed frame, and whether other processes disturbed it: on a `software` adapter, a
 /// frame of at least `JUDGED_FRAME_MS` during which they took more than `DISTURBED_SHARE`
 /// of the machine's CPU time.
@@ -598,6 +695,25 @@ fn spread(runs: &[FrameOutput], medians: &Timings) -> Map<String, Value> {
         );
     }
     out
+}
+
+/// The interval at `measure::LEVEL` of each pass of `medians` (and of the total) over the
+/// frames, and its level; empty (and None) where the frames are too few for one.
+fn intervals(runs: &[FrameOutput], medians: &Timings) -> (Map<String, Value>, Option<f64>) {
+    let mut out = Map::new();
+    let totals: Vec<f64> = runs.iter().map(|r| r.timings.total_ms()).collect();
+    let Some(total) = median_interval(&totals) else {
+        return (out, None);
+    };
+    let pair = |i: crate::measure::Interval| Value::from(vec![round3(i.lo), round3(i.hi)]);
+    out.insert("total".into(), pair(total));
+    for (name, _) in &medians.passes {
+        let samples: Vec<f64> = runs.iter().map(|r| r.timings.get(name)).collect();
+        if let Some(i) = median_interval(&samples) {
+            out.insert(name.clone(), pair(i));
+        }
+    }
+    (out, Some(total.level))
 }
 
 /// Per-pass medians over several frames, by pass name in order of first appearance. A pass

@@ -5,11 +5,11 @@
 /// `commands/` is the binary's (the bodies `main.rs` dispatches to); `main.rs` stands above
 /// them all.
 const LAYERS: &[&[&str]] = &[
-    &["common", "files"],
+    &["common", "files", "environment", "measure"],
     &["cpu", "variant", "scene", "flip"],
     &["compose", "gpu", "explain"],
     &["render", "efficiency"],
-    &["reference", "metrics", "measure"],
+    &["reference", "metrics"],
     &["run", "bias", "plot"],
     &["sequence"],
     &["kernels", "stress", "matrix"],

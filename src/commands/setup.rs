@@ -15,7 +15,7 @@ pub(crate) fn end_quietly_on_closed_pipe() {
 /// variable is unset (headless machines, CI). Point it at the temp folder so real errors stand
 /// out.
 pub(crate) fn quiet_mesa_wsi() {
-    if std::env::var_os("XDG_RUNTIME_DIR").is_none() {
+    if clusterlab::environment::var_os("XDG_RUNTIME_DIR").is_none() {
         // SAFETY: called first thing in main, before any other thread exists.
         unsafe { std::env::set_var("XDG_RUNTIME_DIR", std::env::temp_dir()) };
     }
@@ -27,7 +27,7 @@ pub(crate) fn quiet_mesa_wsi() {
 /// pass. Twice as many threads as cores halved the spread of the matrix's frame times
 /// (README). A value the user set is kept; other drivers ignore the variable.
 pub(crate) fn spread_software_gpu_threads() {
-    if std::env::var_os(clusterlab::gpu::SOFTWARE_GPU_THREADS).is_none() {
+    if clusterlab::environment::var_os(clusterlab::gpu::SOFTWARE_GPU_THREADS).is_none() {
         let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
         // SAFETY: called in main before any other thread exists.
         unsafe {

@@ -102,8 +102,7 @@ pub const MAX_PERTURB_DEPTH_ULPS: u32 = 1 << 16;
 /// N of [`PERTURB_DEPTH_VAR`] (0 when unset or not a number: `check_environment` refuses
 /// such a value before anything runs).
 pub fn perturbed_depth_ulps() -> u32 {
-    std::env::var(PERTURB_DEPTH_VAR)
-        .ok()
+    crate::environment::var(PERTURB_DEPTH_VAR)
         .and_then(|v| v.parse().ok())
         .unwrap_or(0)
 }

@@ -14,7 +14,7 @@ mod resolver;
 pub use diagnostics::SourceLocation;
 pub use features::{
     CLUSTERS_PER_LANE, LIGHTS_PER_ROW, SCAN_BLOCK, SCAN_LANES, SceneFeatures, WALK_CUT_SHORT,
-    constants_module, feature_flags, features_with, frame_features,
+    constants_module, feature_flags, features_with, frame_features, perturbed_depth_ulps,
 };
 pub use light_loop::LightLoop;
 pub use passes::{
@@ -119,6 +119,36 @@ pub struct Recipe {
     pub light_loop: LightLoop,
 }
 
+/// Most files and folders a shader folder may hold (this project's has about 70).
+pub const MAX_SHADER_FILES: usize = 4096;
+
+/// The shaders a run composed from (`Composer::shader_tree`).
+#[derive(Clone, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub struct ShaderTree {
+    pub folder: PathBuf,
+    /// Named by `CLUSTERLAB_SHADERS` rather than built in.
+    pub from_environment: bool,
+    pub files: usize,
+    /// SHA-256 over every shader file's relative path and content.
+    pub sha256: String,
+}
+
+impl ShaderTree {
+    pub fn describe(&self) -> String {
+        format!(
+            "{} ({}{} files, SHA-256 {})",
+            self.folder.display(),
+            if self.from_environment {
+                "from CLUSTERLAB_SHADERS, "
+            } else {
+                ""
+            },
+            self.files,
+            &self.sha256[..16.min(self.sha256.len())]
+        )
+    }
+}
+
 /// A composition: its recipe and the SHA-256 of the WGSL it gave.
 #[derive(Clone, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub struct Composition {
@@ -135,7 +165,7 @@ pub fn sha256_hex(text: &str) -> String {
 impl Default for Composer {
     /// The shader folder named by `CLUSTERLAB_SHADERS`, or this crate's `shaders/`.
     fn default() -> Self {
-        match std::env::var_os("CLUSTERLAB_SHADERS") {
+        match crate::environment::var_os("CLUSTERLAB_SHADERS") {
             Some(dir) => Self::new(Path::new(&dir)),
             None => Self::new(&Path::new(env!("CARGO_MANIFEST_DIR")).join("shaders")),
         }
@@ -145,7 +175,7 @@ impl Default for Composer {
 /// Refuse `CLUSTERLAB_SHADERS` when it does not name a folder, and a depth perturbation
 /// (`features::PERTURB_DEPTH_VAR`) that is not a number of steps.
 pub fn check_environment() -> Result<(), String> {
-    if let Ok(value) = std::env::var(features::PERTURB_DEPTH_VAR)
+    if let Some(value) = crate::environment::var(features::PERTURB_DEPTH_VAR)
         && !value
             .parse::<u32>()
             .is_ok_and(|n| n <= features::MAX_PERTURB_DEPTH_ULPS)
@@ -156,7 +186,7 @@ pub fn check_environment() -> Result<(), String> {
             features::MAX_PERTURB_DEPTH_ULPS
         ));
     }
-    let Some(dir) = std::env::var_os("CLUSTERLAB_SHADERS") else {
+    let Some(dir) = crate::environment::var_os("CLUSTERLAB_SHADERS") else {
         return Ok(());
     };
     let path = Path::new(&dir);
@@ -185,6 +215,54 @@ impl Composer {
             composed: Default::default(),
             log: Default::default(),
         }
+    }
+
+    /// The shader folder this composer reads, and the SHA-256 of its content: every
+    /// `.wesl` and `.wgsl` file under it, by path relative to it, in order (at most
+    /// `MAX_SHADER_FILES`, each read as `files::read::SHADER` reads). Results record it, so
+    /// that figures from edited shaders are told from stock ones.
+    pub fn shader_tree(&self) -> Result<ShaderTree, String> {
+        use sha2::Digest;
+        let mut files = Vec::new();
+        let mut folders = vec![self.shader_root.clone()];
+        while let Some(folder) = folders.pop() {
+            let entries = std::fs::read_dir(&folder)
+                .map_err(|e| format!("{}: {}", folder.display(), crate::files::describe(&e)))?;
+            for entry in entries {
+                let entry = entry.map_err(|e| format!("{}: {e}", folder.display()))?;
+                let kind = entry.file_type().map_err(|e| e.to_string())?;
+                let path = entry.path();
+                let shader = path.extension().is_some_and(|x| x == "wesl" || x == "wgsl");
+                if kind.is_dir() {
+                    folders.push(path);
+                } else if kind.is_file() && shader {
+                    files.push(path);
+                }
+                if files.len() + folders.len() > MAX_SHADER_FILES {
+                    return Err(format!(
+                        "{}: more than {MAX_SHADER_FILES} files and folders: not a shader folder",
+                        self.shader_root.display()
+                    ));
+                }
+            }
+        }
+        files.sort();
+        let mut hash = sha2::Sha256::new();
+        for path in &files {
+            let bytes =
+                crate::files::read(path, crate::files::read::SHADER).map_err(|e| e.to_string())?;
+            let relative = path.strip_prefix(&self.shader_root).unwrap_or(path);
+            hash.update(relative.to_string_lossy().as_bytes());
+            hash.update([0]);
+            hash.update((bytes.len() as u64).to_le_bytes());
+            hash.update(&bytes);
+        }
+        Ok(ShaderTree {
+            folder: self.shader_root.clone(),
+            from_environment: crate::environment::var_os("CLUSTERLAB_SHADERS").is_some(),
+            files: files.len(),
+            sha256: format!("{:x}", hash.finalize()),
+        })
     }
 
     /// Log every composition from now on (`logged_since`).

@@ -26,8 +26,8 @@ impl Request {
                 parse_backends(b, "--backend")?,
             ));
         }
-        match std::env::var("WGPU_BACKEND") {
-            Ok(b) if !b.trim().is_empty() => {
+        match crate::environment::var("WGPU_BACKEND") {
+            Some(b) if !b.trim().is_empty() => {
                 let backends = parse_backends(&b, "WGPU_BACKEND")?;
                 Ok(Request::Env(b, backends))
             }
@@ -192,7 +192,7 @@ pub const OPTIONAL_FEATURES: [(&str, wgpu::Features, &str); 4] = [
 /// The features `CLUSTERLAB_WITHOUT` (a comma list of `OPTIONAL_FEATURES`' names) masks;
 /// an unknown name is an error that lists the valid ones (`Gpu::new` refuses it).
 pub fn masked_features() -> Result<wgpu::Features, String> {
-    let Ok(list) = std::env::var(WITHOUT) else {
+    let Some(list) = crate::environment::var(WITHOUT) else {
         return Ok(wgpu::Features::empty());
     };
     let mut masked = wgpu::Features::empty();
@@ -274,9 +274,9 @@ pub fn timestamps_are_per_pass(device: wgpu::DeviceType) -> bool {
 /// `CLUSTERLAB_TIMING`: Some(true) for `timestamps`, Some(false) for `wall`, None when
 /// unset; any other value is an error that names it (`Gpu::new` refuses it).
 pub fn timing_override() -> Result<Option<bool>, String> {
-    match std::env::var("CLUSTERLAB_TIMING") {
-        Err(_) => Ok(None),
-        Ok(v) => match v.as_str() {
+    match crate::environment::var("CLUSTERLAB_TIMING") {
+        None => Ok(None),
+        Some(v) => match v.as_str() {
             "timestamps" => Ok(Some(true)),
             "wall" => Ok(Some(false)),
             other => Err(format!(
@@ -533,7 +533,7 @@ pub fn survey(backend: Option<&str>) -> Survey {
         WITHOUT,
         "WGPU_ADAPTER_NAME",
     ] {
-        if let Ok(v) = std::env::var(var) {
+        if let Some(v) = crate::environment::var(var) {
             notes.push(format!("{var}={v}"));
         }
     }

@@ -34,7 +34,7 @@ pub struct DiskCache {
 /// The folder caches live in: `CLUSTERLAB_CACHE` (`off`: none), else the user's cache
 /// folder (`$XDG_CACHE_HOME/clusterlab`, `~/.cache/clusterlab`); None when there is none.
 pub fn folder() -> Option<PathBuf> {
-    let var = |name| std::env::var_os(name).filter(|v| !v.is_empty());
+    let var = |name| crate::environment::var_os(name).filter(|v| !v.is_empty());
     match var(CACHE_VAR) {
         Some(v) if v == "off" => None,
         Some(v) => Some(PathBuf::from(v)),

@@ -71,7 +71,7 @@ pub const SOFTWARE_GPU_THREADS: &str = "LP_NUM_THREADS";
 /// The software GPU's thread count as this process has it, for the record: the variable's
 /// value, or None when unset (one thread per core).
 pub fn software_gpu_threads() -> Option<String> {
-    std::env::var(SOFTWARE_GPU_THREADS).ok()
+    crate::environment::var(SOFTWARE_GPU_THREADS)
 }
 
 /// Bytes per pixel of the largest per-pixel storage buffer a frame binds: the counters of
@@ -547,7 +547,7 @@ pub const MAX_BUFFER_SIZE_VAR: &str = "CLUSTERLAB_MAX_BUFFER_SIZE";
 
 /// `CLUSTERLAB_MAX_BUFFER_SIZE` in bytes, when set.
 fn buffer_cap() -> Result<Option<u64>, String> {
-    let Some(value) = std::env::var_os(MAX_BUFFER_SIZE_VAR) else {
+    let Some(value) = crate::environment::var_os(MAX_BUFFER_SIZE_VAR) else {
         return Ok(None);
     };
     let value = value.to_string_lossy();
@@ -573,7 +573,7 @@ const MAX_SOFTWARE_GPU_THREADS: u32 = 256;
 /// `LP_NUM_THREADS` without a word).
 pub fn check_environment() -> Result<(), String> {
     buffer_cap()?;
-    if let Some(value) = std::env::var_os(SOFTWARE_GPU_THREADS) {
+    if let Some(value) = crate::environment::var_os(SOFTWARE_GPU_THREADS) {
         let value = value.to_string_lossy();
         if !value
             .trim()

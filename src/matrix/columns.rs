@@ -15,8 +15,15 @@ pub struct Measured<'a> {
     pub gpu_ms: &'a Map<String, Value>,
     /// [min, max] milliseconds per pass over the timed frames, with `total`.
     pub gpu_ms_spread: &'a Map<String, Value>,
+    /// [lo, hi] milliseconds per pass: the median's interval at `interval_level`.
+    pub gpu_ms_interval: &'a Map<String, Value>,
+    pub interval_level: Option<f64>,
     pub speedup_vs_naive: Option<f64>,
+    pub speedup_interval: Option<[f64; 2]>,
     pub pareto: bool,
+    pub rank: Option<super::Rank>,
+    /// The earlier run a reused cell was taken from.
+    pub reused_from: Option<&'a str>,
     pub error: Option<&'a ErrorMetrics>,
     pub stats: Option<&'a FrameStats>,
     pub efficiency: Option<&'a crate::efficiency::Efficiency>,
@@ -39,6 +46,26 @@ impl Measured<'_> {
             .get(i)?
             .as_f64()
     }
+
+    /// The total's interval: its low (0) or high (1) end.
+    fn interval(&self, i: usize) -> Option<f64> {
+        self.gpu_ms_interval
+            .get("total")?
+            .as_array()?
+            .get(i)?
+            .as_f64()
+    }
+
+    /// The speed-up over naive forward, "tie" where its range holds 1.
+    pub(crate) fn speedup_text(&self) -> String {
+        let tie = self
+            .speedup_interval
+            .is_none_or(|[lo, hi]| lo <= 1.0 && 1.0 <= hi);
+        or_dash(self.speedup_vs_naive, |x| match tie {
+            true => format!("{x:.1}x tie"),
+            false => format!("{x:.1}x"),
+        })
+    }
 }
 
 impl CellRecord {
@@ -46,8 +73,13 @@ impl CellRecord {
         Measured {
             gpu_ms: &self.gpu_ms,
             gpu_ms_spread: &self.gpu_ms_spread,
+            gpu_ms_interval: &self.gpu_ms_interval,
+            interval_level: self.interval_level,
             speedup_vs_naive: self.speedup_vs_naive,
+            speedup_interval: self.speedup_interval,
             pareto: self.pareto,
+            rank: self.rank,
+            reused_from: self.reused_from.as_deref(),
             error: self.error.as_ref(),
             stats: self.stats.as_ref(),
             efficiency: self.efficiency.as_ref(),
@@ -58,6 +90,7 @@ impl CellRecord {
                 timed: self.frames,
                 frame_without_lights: self.frame_without_lights,
                 disturbed: self.disturbed_frames,
+                stop: self.timing_stop,
             }),
         }
     }
@@ -68,8 +101,13 @@ impl RenderReport {
         Measured {
             gpu_ms: &self.gpu_ms,
             gpu_ms_spread: &self.gpu_ms_spread,
+            gpu_ms_interval: &self.gpu_ms_interval,
+            interval_level: self.interval_level,
             speedup_vs_naive: None,
+            speedup_interval: None,
             pareto: false,
+            rank: None,
+            reused_from: None,
             error: self.error.as_ref(),
             stats: self.stats.as_ref(),
             efficiency: self.efficiency.as_ref(),
@@ -167,6 +205,8 @@ pub struct Column {
     pub key: &'static str,
     /// The heading of the terminal and HTML tables.
     pub heading: &'static str,
+    /// What the figure is, for the page's glossary.
+    pub meaning: &'static str,
     pub shown: Shown,
     /// The value the CSV holds.
     pub value: fn(&Measured) -> Cell,
@@ -198,13 +238,58 @@ pub const COLUMNS: &[Column] = &[
     Column {
         key: "gpu_ms",
         heading: "GPU ms",
+        meaning: "median GPU milliseconds of the cell's timed frames, every pass summed (the median of the frames' totals)",
         shown: EVERYWHERE,
         value: |m| m.total_ms().into(),
         text: |m| or_dash(m.total_ms(), |t| format!("{t:.2}")),
     },
     Column {
+        key: "gpu_ms_interval",
+        heading: "95% CI ms",
+        meaning: "the confidence interval of the median frame: the order statistics [x(k), x(n+1-k)] of the n timed frames that hold the true median with probability at least 95% (the exact level is in `interval_level`); a cell needs 6 frames for one. Two cells whose intervals overlap cannot be told apart",
+        shown: TABLES_ONLY,
+        value: |_| Cell::Missing,
+        text: |m| match (m.interval(0), m.interval(1)) {
+            (Some(a), Some(b)) => format!("{a:.2}-{b:.2}"),
+            _ => "-".into(),
+        },
+    },
+    Column {
+        key: "gpu_ms_lo",
+        heading: "CI lo ms",
+        meaning: "the low end of the median frame's confidence interval",
+        shown: CSV_ONLY,
+        value: |m| m.interval(0).into(),
+        text: |m| or_dash(m.interval(0), |t| format!("{t:.2}")),
+    },
+    Column {
+        key: "gpu_ms_hi",
+        heading: "CI hi ms",
+        meaning: "the high end of the median frame's confidence interval",
+        shown: CSV_ONLY,
+        value: |m| m.interval(1).into(),
+        text: |m| or_dash(m.interval(1), |t| format!("{t:.2}")),
+    },
+    Column {
+        key: "interval_level",
+        heading: "CI level",
+        meaning: "the probability that the confidence interval holds the median (at least 0.95)",
+        shown: CSV_ONLY,
+        value: |m| m.interval_level.into(),
+        text: |m| or_dash(m.interval_level, |l| format!("{:.1}%", l * 100.0)),
+    },
+    Column {
+        key: "rank",
+        heading: "vs fastest",
+        meaning: "where the cell's time stands in its group: `fastest` (the lowest median), `tie` (its interval overlaps the fastest's, or either has none: they cannot be told apart) or `slower` (its interval lies wholly above)",
+        shown: EVERYWHERE,
+        value: |m| m.rank.map(|r| r.label().to_string()).into(),
+        text: |m| or_dash(m.rank, |r| r.label().to_string()),
+    },
+    Column {
         key: "gpu_ms_min",
         heading: "min ms",
+        meaning: "the fastest timed frame, milliseconds",
         shown: CSV_ONLY,
         value: |m| m.spread(0).into(),
         text: |m| or_dash(m.spread(0), |t| format!("{t:.2}")),
@@ -212,6 +297,7 @@ pub const COLUMNS: &[Column] = &[
     Column {
         key: "gpu_ms_max",
         heading: "max ms",
+        meaning: "the slowest timed frame, milliseconds",
         shown: CSV_ONLY,
         value: |m| m.spread(1).into(),
         text: |m| or_dash(m.spread(1), |t| format!("{t:.2}")),
@@ -219,6 +305,7 @@ pub const COLUMNS: &[Column] = &[
     Column {
         key: "gpu_ms_spread",
         heading: "spread",
+        meaning: "the fastest and the slowest timed frame, milliseconds",
         shown: HTML_ONLY,
         value: |_| Cell::Missing,
         text: |m| match (m.spread(0), m.spread(1)) {
@@ -229,6 +316,7 @@ pub const COLUMNS: &[Column] = &[
     Column {
         key: "frames",
         heading: "frames",
+        meaning: "timed frames (untimed ones first as U+T), why timing stopped (`precise`, `budget`, `max frames`, `count`), and how many frames were set aside as disturbed: frames of 250 ms or more during which other processes took over 25% of the machine's CPU time (software GPUs only), each replaced by another",
         shown: CSV_AND_HTML,
         value: |m| m.frames.map(|f| f.timed).into(),
         text: |m| {
@@ -237,9 +325,10 @@ pub const COLUMNS: &[Column] = &[
                     0 => f.timed.to_string(),
                     w => format!("{w}+{}", f.timed),
                 };
+                let stop = f.stop.map_or(String::new(), |s| format!(" {}", s.label()));
                 match f.disturbed {
-                    0 => timed,
-                    d => format!("{timed} ({d} disturbed)"),
+                    0 => format!("{timed}{stop}"),
+                    d => format!("{timed}{stop} ({d} disturbed)"),
                 }
             })
         },
@@ -247,25 +336,53 @@ pub const COLUMNS: &[Column] = &[
     Column {
         key: "speedup_vs_naive",
         heading: "x naive",
+        meaning: "naive forward's median over the cell's, same scene and parameters, same adapter and timing source; `tie` where the range from the two intervals holds 1",
         shown: EVERYWHERE,
         value: |m| m.speedup_vs_naive.into(),
-        text: |m| or_dash(m.speedup_vs_naive, |x| format!("{x:.1}x")),
+        text: |m| m.speedup_text(),
+    },
+    Column {
+        key: "speedup_lo",
+        heading: "x naive lo",
+        meaning: "the low end of the speed-up's range: naive forward's interval low over the cell's high",
+        shown: CSV_ONLY,
+        value: |m| m.speedup_interval.map(|r| r[0]).into(),
+        text: |m| or_dash(m.speedup_interval, |r| format!("{:.2}", r[0])),
+    },
+    Column {
+        key: "speedup_hi",
+        heading: "x naive hi",
+        meaning: "the high end of the speed-up's range: naive forward's interval high over the cell's low",
+        shown: CSV_ONLY,
+        value: |m| m.speedup_interval.map(|r| r[1]).into(),
+        text: |m| or_dash(m.speedup_interval, |r| format!("{:.2}", r[1])),
     },
     Column {
         key: "efficiency",
         heading: "efficiency",
+        meaning: "distance from perfect culling: the bound (the frame without lights plus the useful evaluations at the cell's cost per evaluation) over the frame. Never clamped: a bound past the frame inside its interval is `within noise`; past the interval, `bound above frame` (mistimed, means nothing)",
         shown: CSV_AND_HTML,
         value: |m| m.efficiency.map(|e| e.efficiency).into(),
         text: |m| {
-            or_dash(m.efficiency, |e| match e.within_noise {
-                true => "100% (within noise)".into(),
-                false => format!("{:.0}%", e.efficiency * 100.0),
+            or_dash(m.efficiency, |e| {
+                if e.bound_above_frame {
+                    format!(
+                        "bound above frame ({:.2} > {:.2} ms)",
+                        e.bound_ms,
+                        m.total_ms().unwrap_or(f64::NAN)
+                    )
+                } else if e.within_noise {
+                    format!("{:.0}% (within noise)", e.efficiency * 100.0)
+                } else {
+                    format!("{:.0}%", e.efficiency * 100.0)
+                }
             })
         },
     },
     Column {
         key: "ns_per_useful_evaluation",
         heading: "ns/useful",
+        meaning: "nanoseconds of the frame over its frame without lights per useful evaluation (a pair where the light reaches the surface)",
         shown: CSV_AND_HTML,
         value: |m| m.efficiency.map(|e| e.ns_per_useful_evaluation).into(),
         text: |m| {
@@ -277,6 +394,7 @@ pub const COLUMNS: &[Column] = &[
     Column {
         key: "bound_ms",
         heading: "bound ms",
+        meaning: "the perfect-culling bound, milliseconds",
         shown: CSV_ONLY,
         value: |m| m.efficiency.map(|e| e.bound_ms).into(),
         text: |m| or_dash(m.efficiency, |e| format!("{:.2}", e.bound_ms)),
@@ -284,6 +402,7 @@ pub const COLUMNS: &[Column] = &[
     Column {
         key: "frame_without_lights_ms",
         heading: "no-light ms",
+        meaning: "the frame drawn with no light, milliseconds: every pass runs, nothing is shaded",
         shown: CSV_ONLY,
         value: |m| m.efficiency.map(|e| e.frame_without_lights_ms).into(),
         text: |m| {
@@ -295,6 +414,7 @@ pub const COLUMNS: &[Column] = &[
     Column {
         key: "ns_per_evaluation",
         heading: "ns/eval",
+        meaning: "nanoseconds of the shading passes per light evaluated",
         shown: CSV_ONLY,
         value: |m| m.efficiency.map(|e| e.ns_per_evaluation).into(),
         text: |m| or_dash(m.efficiency, |e| format!("{:.2}", e.ns_per_evaluation)),
@@ -302,6 +422,7 @@ pub const COLUMNS: &[Column] = &[
     Column {
         key: "pareto",
         heading: "Pareto",
+        meaning: "on the time-error (RMSE) Pareto front of its group: no other cell is faster (their intervals apart) and at least as accurate",
         shown: CSV_ONLY,
         value: |m| m.pareto.into(),
         text: |m| if m.pareto { "*" } else { "" }.into(),
@@ -309,6 +430,7 @@ pub const COLUMNS: &[Column] = &[
     Column {
         key: "max_abs_8bit",
         heading: "max8",
+        meaning: "max8: the largest 8-bit difference from the CPU f64 reference, in LSB (an exact variant is within 1)",
         shown: EVERYWHERE,
         value: |m| m.error.map(|e| e.max_abs_8bit).into(),
         text: |m| or_dash(m.error, |e| e.max_abs_8bit.to_string()),
@@ -316,6 +438,7 @@ pub const COLUMNS: &[Column] = &[
     Column {
         key: "rmse_8bit",
         heading: "RMSE8",
+        meaning: "RMSE8: root mean square 8-bit difference from the reference, LSB",
         shown: CSV_AND_HTML,
         value: |m| m.error.map(|e| e.rmse_8bit).into(),
         text: |m| or_dash(m.error, |e| format!("{:.3}", e.rmse_8bit)),
@@ -323,6 +446,7 @@ pub const COLUMNS: &[Column] = &[
     Column {
         key: "pixels_over_1lsb",
         heading: "px over 1 LSB",
+        meaning: "pixels differing from the reference by more than 1 LSB",
         shown: CSV_ONLY,
         value: |m| m.error.map(|e| e.pixels_over_1lsb).into(),
         text: |m| or_dash(m.error, |e| e.pixels_over_1lsb.to_string()),
@@ -330,6 +454,7 @@ pub const COLUMNS: &[Column] = &[
     Column {
         key: "relative_mse",
         heading: "relMSE",
+        meaning: "relMSE: mean of (frame - reference)^2 / (reference^2 + 0.01) over HDR channels, the sampling literature's error",
         shown: CSV_AND_HTML,
         value: |m| m.error.map(|e| e.relative_mse).into(),
         text: |m| or_dash(m.error, |e| format!("{:.2e}", e.relative_mse)),
@@ -337,6 +462,7 @@ pub const COLUMNS: &[Column] = &[
     Column {
         key: "rmse_hdr",
         heading: "HDR RMSE",
+        meaning: "root mean square difference from the reference in HDR (linear) units",
         shown: CSV_ONLY,
         value: |m| m.error.map(|e| e.rmse).into(),
         text: |m| or_dash(m.error, |e| format!("{:.3e}", e.rmse)),
@@ -344,6 +470,7 @@ pub const COLUMNS: &[Column] = &[
     Column {
         key: "psnr_db",
         heading: "PSNR",
+        meaning: "peak signal-to-noise ratio of the 8-bit image against the reference, dB (inf: identical)",
         shown: EVERYWHERE,
         value: |m| match m.error {
             Some(e) => e.psnr_db.map_or(Cell::Text("inf".into()), Cell::Float),
@@ -358,6 +485,7 @@ pub const COLUMNS: &[Column] = &[
     Column {
         key: "flip_mean",
         heading: "FLIP",
+        meaning: "mean FLIP (NVIDIA's perceptual difference, 0 to 1) against the reference",
         shown: EVERYWHERE,
         value: |m| m.error.map(|e| e.flip_mean).into(),
         text: |m| or_dash(m.error, |e| format!("{:.4}", e.flip_mean)),
@@ -365,6 +493,7 @@ pub const COLUMNS: &[Column] = &[
     Column {
         key: "nan_pixels",
         heading: "NaN px",
+        meaning: "pixels that are NaN or infinite: any fails the cell",
         shown: EVERYWHERE,
         value: |m| m.error.map(|e| e.nan_pixels).into(),
         text: |m| or_dash(m.error, |e| e.nan_pixels.to_string()),
@@ -372,6 +501,7 @@ pub const COLUMNS: &[Column] = &[
     Column {
         key: "light_evals",
         heading: "evaluated",
+        meaning: "light evaluations the shading performed (instrumented frame)",
         shown: CSV_ONLY,
         value: |m| m.stats.map(|s| s.light_evals).into(),
         text: |m| or_dash(m.stats, |s| count(s.light_evals)),
@@ -379,6 +509,7 @@ pub const COLUMNS: &[Column] = &[
     Column {
         key: "useful_light_evals",
         heading: "useful/evaluated",
+        meaning: "useful evaluations (the surface inside the light's radius) over those performed",
         shown: EVERYWHERE,
         value: |m| m.stats.map(|s| s.useful_light_evals).into(),
         text: |m| {
@@ -395,6 +526,7 @@ pub const COLUMNS: &[Column] = &[
     Column {
         key: "light_candidates",
         heading: "candidates",
+        meaning: "lights looked at in the lists, performed or not",
         shown: CSV_ONLY,
         value: |m| m.stats.map(|s| s.light_candidates).into(),
         text: |m| or_dash(m.stats, |s| count(s.light_candidates)),
@@ -402,6 +534,7 @@ pub const COLUMNS: &[Column] = &[
     Column {
         key: "sampler",
         heading: "sampler",
+        meaning: "the sampled light loop and whether it is unbiased",
         shown: CSV_AND_HTML,
         value: |m| Cell::Text(m.stats.and_then(|s| s.sampler.clone()).unwrap_or_default()),
         text: |m| m.stats.and_then(|s| s.sampler.clone()).unwrap_or_default(),
@@ -409,6 +542,7 @@ pub const COLUMNS: &[Column] = &[
     Column {
         key: "edge_fraction",
         heading: "edge px",
+        meaning: "edge px: multisampled frames, the share of pixels shaded more than once (edge pixels)",
         shown: CSV_AND_HTML,
         value: |m| m.stats.map(|s| s.edge_fraction).into(),
         text: |m| or_dash(m.stats, |s| format!("{:.1}%", 100.0 * s.edge_fraction)),
@@ -416,6 +550,7 @@ pub const COLUMNS: &[Column] = &[
     Column {
         key: "frame_bytes_per_pixel",
         heading: "B/px",
+        meaning: "B/px: bytes per pixel of every full-size image the frame keeps (depth, G-buffer, HDR colour, post images, the 8-bit output)",
         shown: EVERYWHERE,
         value: |m| m.stats.map(|s| s.frame_bytes_per_pixel).into(),
         text: |m| or_dash(m.stats, |s| s.frame_bytes_per_pixel.to_string()),
@@ -423,6 +558,7 @@ pub const COLUMNS: &[Column] = &[
     Column {
         key: "cluster_bytes",
         heading: "cluster KiB",
+        meaning: "bytes of the cluster buffers (bounds, lists, indices), KiB",
         shown: CSV_AND_HTML,
         value: |m| m.stats.map(|s| s.cluster_bytes).into(),
         text: |m| {
@@ -434,6 +570,7 @@ pub const COLUMNS: &[Column] = &[
     Column {
         key: "assign_light_tests",
         heading: "assign tests",
+        meaning: "assign tests: light-against-cluster tests of the light assignment",
         shown: CSV_AND_HTML,
         value: |m| work(m).map(|w| w.light_tests).into(),
         text: |m| or_dash(work(m), |w| count(w.light_tests)),
@@ -441,6 +578,7 @@ pub const COLUMNS: &[Column] = &[
     Column {
         key: "assign_node_tests",
         heading: "node tests",
+        meaning: "tree or tile node tests of the light assignment",
         shown: CSV_ONLY,
         value: |m| work(m).map(|w| w.node_tests).into(),
         text: |m| or_dash(work(m), |w| count(w.node_tests)),
@@ -448,6 +586,7 @@ pub const COLUMNS: &[Column] = &[
     Column {
         key: "assign_entries_written",
         heading: "entries written",
+        meaning: "list entries the assignment wrote",
         shown: CSV_ONLY,
         value: |m| work(m).map(|w| w.entries_written).into(),
         text: |m| or_dash(work(m), |w| count(w.entries_written)),
@@ -455,6 +594,7 @@ pub const COLUMNS: &[Column] = &[
     Column {
         key: "assign_lights_rejected",
         heading: "lights rejected",
+        meaning: "lights whose range holds no cluster, rejected before any per-cluster work",
         shown: CSV_ONLY,
         value: |m| work(m).map(|w| w.lights_rejected).into(),
         text: |m| or_dash(work(m), |w| count(w.lights_rejected)),
@@ -462,6 +602,7 @@ pub const COLUMNS: &[Column] = &[
     Column {
         key: "dropped_lights",
         heading: "dropped",
+        meaning: "lights a capped list dropped (counted, never silent)",
         shown: EVERYWHERE,
         value: |m| m.stats.map(|s| s.dropped_lights).into(),
         text: |m| or_dash(m.stats, |s| s.dropped_lights.to_string()),
@@ -469,6 +610,7 @@ pub const COLUMNS: &[Column] = &[
     Column {
         key: "passes",
         heading: "passes",
+        meaning: "each pass's median milliseconds",
         shown: CSV_ONLY,
         value: |m| {
             let passes: Vec<String> = m
@@ -492,13 +634,36 @@ pub const COLUMNS: &[Column] = &[
     Column {
         key: "skipped_passes",
         heading: "skipped",
+        meaning: "passes the frame did not need and did not run",
         shown: CSV_AND_HTML,
         value: |m| Cell::Text(m.skipped_passes.join(";")),
         text: |m| m.skipped_passes.join(", "),
     },
     Column {
+        key: "reused_from",
+        heading: "reused from",
+        meaning: "the cell was taken unchanged from an earlier run (`--reuse`): that run's date and revision; its provenance is listed with this run's",
+        shown: CSV_AND_HTML,
+        value: |m| m.reused_from.map(str::to_string).into(),
+        text: |m| m.reused_from.unwrap_or_default().to_string(),
+    },
+    Column {
+        key: "timing_stop",
+        heading: "stopped by",
+        meaning: "why the cell stopped timing frames: `precise` (its interval came within the precision asked), `max frames`, `budget` (its time budget was spent first) or `count` (`--frames`)",
+        shown: CSV_ONLY,
+        value: |m| {
+            m.frames
+                .and_then(|f| f.stop)
+                .map(|s| s.label().to_string())
+                .into()
+        },
+        text: |m| or_dash(m.frames.and_then(|f| f.stop), |s| s.label().to_string()),
+    },
+    Column {
         key: "vs_baseline",
         heading: "vs baseline",
+        meaning: "change against `--baseline`: time ratio, max8 and RMSE8 differences",
         shown: TABLES_ONLY,
         value: |_| Cell::Missing,
         text: |m| {

@@ -6,6 +6,7 @@ use std::fmt::Write as _;
 use super::columns::{self, Measured};
 use super::report::{grouped, label};
 use super::{CellRecord, Results};
+use crate::measure::{Interval, Verdict};
 use crate::plot::Plot;
 
 fn esc(s: &str) -> String {
@@ -52,9 +53,12 @@ pub fn page(results: &Results, plots: &[Plot]) -> String {
     let _ = write!(
         h,
         "<h1>clusterlab variant matrix</h1><p>{}. Times are medians over \
-         the timed frames; speed-up is naive forward's time over the cell's, on the same scene \
+         the timed frames, each with its 95% confidence interval; a group's cells were timed \
+         in interleaved rounds. Two times whose intervals overlap are a <b>tie</b>: neither is \
+         called faster. Speed-up is naive forward's time over the cell's, on the same scene \
          and parameters; error is against the CPU f64 reference. Highlighted rows are on the \
-         time-error (RMSE) Pareto front of their group.</p>",
+         time-error (RMSE) Pareto front of their group. The glossary below says what each \
+         column holds.</p>",
         results.tally()
     );
     at_a_glance(&mut h, results);
@@ -72,11 +76,31 @@ pub fn page(results: &Results, plots: &[Plot]) -> String {
         let _ = write!(h, "</div>");
     }
     summary(&mut h, results);
+    glossary(&mut h);
     sequences(&mut h, results);
     images(&mut h, results);
     provenance(&mut h, results);
     let _ = writeln!(h, "</body></html>");
     h
+}
+
+/// Every column of the tables and the CSV, with what it holds.
+fn glossary(h: &mut String) {
+    let _ = write!(
+        h,
+        "<h2 id=\"glossary\">Glossary</h2><table class=\"meta\"><tr><th class=\"name\">column</th>\
+         <th class=\"name\">CSV</th><th class=\"name\">what it holds</th></tr>"
+    );
+    for c in columns::COLUMNS {
+        let _ = write!(
+            h,
+            "<tr><td>{}</td><td><code>{}</code></td><td>{}</td></tr>",
+            esc(c.heading),
+            if c.shown.csv { c.key } else { "-" },
+            esc(c.meaning)
+        );
+    }
+    let _ = write!(h, "</table>");
 }
 
 fn provenance(h: &mut String, results: &Results) {
@@ -106,6 +130,17 @@ fn provenance(h: &mut String, results: &Results) {
             ("command", p.command.join(" ")),
             ("shard", p.shard.clone().unwrap_or_else(|| "all".into())),
             ("frames", p.frames.clone()),
+            ("shaders", p.shaders.describe()),
+            ("environment", p.environment.join(", ")),
+            (
+                "perturbed depths",
+                match p.perturbed_depth_ulps {
+                    0 => "no".into(),
+                    n => format!(
+                        "{n} units in the last place (a test mode: figures are not a stock run's)"
+                    ),
+                },
+            ),
             (
                 "run cost",
                 p.cost.as_ref().map_or_else(|| "-".into(), |c| c.line()),
@@ -148,24 +183,46 @@ fn at_a_glance(h: &mut String, results: &Results) {
             c.error.as_ref().is_some_and(|e| e.max_abs_8bit <= 1)
                 && c.stats.as_ref().is_none_or(|s| s.dropped_lights == 0)
         };
-        // Groups are fastest first.
-        let fastest = cells
-            .iter()
-            .find(|c| shown(c) && exact(c))
-            .map_or("-".into(), |c| {
-                format!(
-                    "{} ({:.2} ms{})",
-                    label(c),
-                    c.total_ms().unwrap_or(f64::NAN),
-                    c.speedup_vs_naive
-                        .map_or(String::new(), |x| format!(", {x:.1}x naive"))
-                )
-            });
+        // Groups are fastest first; the cells whose intervals overlap the fastest's tie.
+        let exact_cells: Vec<&&CellRecord> =
+            cells.iter().filter(|c| shown(c) && exact(c)).collect();
+        let fastest = exact_cells.first().map_or("-".into(), |c| {
+            let interval = c.total_interval();
+            let tied: Vec<String> = exact_cells[1..]
+                .iter()
+                .filter(|o| {
+                    Interval::compare(o.total_interval().as_ref(), interval.as_ref())
+                        == Verdict::Tie
+                })
+                .map(|o| label(o))
+                .collect();
+            let m = c.measured();
+            format!(
+                "{} ({:.2} ms, 95% CI {}{}){}",
+                label(c),
+                c.total_ms().unwrap_or(f64::NAN),
+                interval.map_or("none: too few frames".into(), |i| format!(
+                    "{:.2}-{:.2}",
+                    i.lo, i.hi
+                )),
+                c.speedup_vs_naive
+                    .map_or(String::new(), |_| format!(", {} naive", m.speedup_text())),
+                match tied.len() {
+                    0 => String::new(),
+                    n => format!("; tied with it ({n}): {}", tied.join(", ")),
+                }
+            )
+        });
         let efficient = cells
             .iter()
             .filter(|c| shown(c) && exact(c))
-            // A cell at its bound within noise says nothing about which culls best.
-            .filter_map(|c| Some((c.efficiency.filter(|e| !e.within_noise)?, c)))
+            // A bound within noise or above its frame says nothing about which culls best.
+            .filter_map(|c| {
+                let e = c
+                    .efficiency
+                    .filter(|e| !e.within_noise && !e.bound_above_frame)?;
+                Some((e, c))
+            })
             .max_by(|a, b| a.0.efficiency.total_cmp(&b.0.efficiency))
             .map_or("-".into(), |(e, c)| {
                 format!(

@@ -29,15 +29,15 @@ use serde::{Deserialize, Serialize};
 use serde_json::{Map, Value};
 use sha2::{Digest, Sha256};
 
-use crate::compose::Composer;
+use std::sync::Arc;
+
+use crate::compose::{Composer, Composition};
 use crate::gpu::{AdapterSummary, Gpu, PipelineStats};
-use crate::measure::Frames;
+use crate::measure::{Frames, Interval, Stop, Verdict};
 use crate::metrics::ErrorMetrics;
 use crate::reference::ReferenceCache;
 use crate::render::FrameStats;
-use crate::run::{
-    CellCost, CellOptions, GpuHalf, RunError, finish_cell, gpu_half, write_images, write_png,
-};
+use crate::run::{CellCost, CellOptions, GpuHalf, RunError, finish_cell, write_images, write_png};
 use crate::scene::SCENES;
 use crate::sequence::SequenceSummary;
 use crate::variant::DebugView;
@@ -57,6 +57,16 @@ pub struct CellRecord {
     pub gpu_ms: Map<String, Value>,
     /// [min, max] milliseconds per pass over the timed frames.
     pub gpu_ms_spread: Map<String, Value>,
+    /// [lo, hi] milliseconds per pass: the median's confidence interval at
+    /// `interval_level` (`measure::median_interval`); empty with too few frames for one.
+    #[serde(default)]
+    pub gpu_ms_interval: Map<String, Value>,
+    /// The probability that each interval holds its median (at least `measure::LEVEL`).
+    #[serde(default)]
+    pub interval_level: Option<f64>,
+    /// Why the cell stopped timing frames.
+    #[serde(default)]
+    pub timing_stop: Option<Stop>,
     pub timing_source: Option<String>,
     pub frames: u32,
     pub wall_ms: Option<f64>,
@@ -70,8 +80,27 @@ pub struct CellRecord {
     pub images: Images,
     /// Naive forward's total time over this cell's, on the same scene and parameters.
     pub speedup_vs_naive: Option<f64>,
-    /// On the time-error Pareto front of its scene and parameters.
+    /// [lo, hi] of that speed-up, from the two times' intervals (absent where either has
+    /// none); a range holding 1 is a tie.
+    #[serde(default)]
+    pub speedup_interval: Option<[f64; 2]>,
+    /// On the time-error Pareto front of its scene and parameters: no other cell is both
+    /// faster (their intervals separate) and at least as accurate.
     pub pareto: bool,
+    /// Where its time stands in its group: the fastest, tied with it, or slower.
+    #[serde(default)]
+    pub rank: Option<Rank>,
+    /// The run that made this record: its index in `provenance` (0 for this run's own
+    /// cells; a reused or merged cell keeps its own run's).
+    #[serde(default)]
+    pub run: usize,
+    /// The variant claimed to be within 1 LSB of the reference on its adapter
+    /// (`run::exact_claim`): a record over it that says it passed is refused.
+    #[serde(default)]
+    pub exact_claim: bool,
+    /// Taken unchanged from an earlier run (`--reuse`): that run's date and revision.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reused_from: Option<String>,
     /// Change against `--baseline` (a cell with the same id there).
     pub vs_baseline: Option<BaselineChange>,
     /// Passes the last timed frame skipped (not needed by this scene and variant).
@@ -94,6 +123,29 @@ pub struct CellRecord {
     /// the worst checked frame's, its counters and images the last frame's).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub sequence_summary: Option<SequenceSummary>,
+}
+
+/// Where a cell's time stands in its group (scene and parameters), told apart only where
+/// the intervals separate (`measure::Interval::compare`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Rank {
+    /// The lowest median of the group.
+    Fastest,
+    /// Its interval overlaps the fastest's (or either has none): they cannot be told apart.
+    TiedWithFastest,
+    /// Its interval lies wholly above the fastest's.
+    Slower,
+}
+
+impl Rank {
+    pub fn label(self) -> &'static str {
+        match self {
+            Rank::Fastest => "fastest",
+            Rank::TiedWithFastest => "tie",
+            Rank::Slower => "slower",
+        }
+    }
 }
 
 #[derive(Clone, Debug, Default, Serialize, Deserialize)]
@@ -128,6 +180,16 @@ impl CellRecord {
         self.gpu_ms.get("total").and_then(Value::as_f64)
     }
 
+    /// The total's confidence interval (`gpu_ms_interval.total`).
+    pub fn total_interval(&self) -> Option<Interval> {
+        let pair = self.gpu_ms_interval.get("total")?.as_array()?;
+        Some(Interval {
+            lo: pair.first()?.as_f64()?,
+            hi: pair.get(1)?.as_f64()?,
+            level: self.interval_level?,
+        })
+    }
+
     /// A cell that did not run: refused when the adapter cannot run it (`RunError::refused`).
     fn not_run(spec: CellSpec, e: &RunError) -> Self {
         let mut record = Self::failed(spec, e.to_string());
@@ -142,6 +204,9 @@ impl CellRecord {
             refused: false,
             gpu_ms: Map::new(),
             gpu_ms_spread: Map::new(),
+            gpu_ms_interval: Map::new(),
+            interval_level: None,
+            timing_stop: None,
             timing_source: None,
             frames: 0,
             wall_ms: None,
@@ -151,7 +216,12 @@ impl CellRecord {
             efficiency: None,
             images: Images::default(),
             speedup_vs_naive: None,
+            speedup_interval: None,
             pareto: false,
+            rank: None,
+            run: 0,
+            reused_from: None,
+            exact_claim: false,
             vs_baseline: None,
             skipped_passes: Vec::new(),
             warmup_frames: 0,
@@ -191,6 +261,17 @@ pub struct Provenance {
     /// one per core, and in results written before it was recorded).
     #[serde(default)]
     pub software_gpu_threads: Option<String>,
+    /// The shader folder composed from and its content's hash.
+    #[serde(default)]
+    pub shaders: crate::compose::ShaderTree,
+    /// Every environment variable that can change a figure, as it was
+    /// (`environment::recorded`).
+    #[serde(default)]
+    pub environment: Vec<String>,
+    /// `CLUSTERLAB_PERTURB_DEPTH_ULPS`: every depth marking read was moved by this many
+    /// units in the last place (0: a stock run).
+    #[serde(default)]
+    pub perturbed_depth_ulps: u32,
 }
 
 /// What a run spent: wall-clock seconds over its cells, split as each cell's cost is, and
@@ -339,10 +420,17 @@ pub struct MatrixOptions {
     pub overlap: bool,
 }
 
-/// Run every cell, one at a time, and return the results with speed-ups and the Pareto
-/// front filled in. A cell that fails (or panics) is recorded and the others still run: after
-/// a failure the device is checked and, when it is unusable (lost, still busy past the cell
-/// limit, failing a read-back), replaced by a new one before the next cell.
+/// Cells timed together in interleaved rounds at most: each holds its renderer (its
+/// targets and buffers) until its group's rounds end.
+pub const INTERLEAVED_CELLS: usize = 64;
+
+/// Run every cell and return the results with speed-ups, ranks and the Pareto front
+/// filled in. The cells of a group (scene and parameters) are timed together, one frame
+/// each in turn (`run::Timing`), so that drift of the machine hits each alike; at most
+/// [`INTERLEAVED_CELLS`] at a time. A cell that fails (or panics) is recorded and the others
+/// still run: after a failure the device is checked and, when it is unusable (lost, still
+/// busy past the cell limit, failing a read-back), replaced by a new one, and the cells of
+/// the group that had not finished run again on it.
 pub fn run(
     gpu: &mut Gpu,
     composer: &Composer,
@@ -357,18 +445,7 @@ pub fn run(
             eprintln!("warning: {e}");
         }
     }
-    let bar = if options.progress {
-        indicatif::ProgressBar::new(cells.len() as u64)
-    } else {
-        indicatif::ProgressBar::hidden()
-    };
-    bar.set_style(
-        indicatif::ProgressStyle::with_template(
-            "{elapsed_precise} [{bar:30}] {pos}/{len} {wide_msg}",
-        )
-        .expect("valid template")
-        .progress_chars("=> "),
-    );
+    let bar = progress_bar(options.progress, cells.len());
     let start = std::time::Instant::now();
     // Pipeline counts of devices replaced during the run.
     let mut replaced = PipelineStats::default();
@@ -382,7 +459,7 @@ pub fn run(
         .ok();
     let mut index = ReuseIndex::default();
     let mut recomposed = std::collections::HashMap::new();
-    let mut reused = std::collections::HashSet::new();
+    let mut reused: Vec<(String, CellRecord, usize)> = Vec::new();
     let mut records: Vec<Option<CellRecord>> = vec![None; cells.len()];
     std::thread::scope(|scope| {
         // With overlap, the cells' CPU halves run on one thread of their own, in order, while
@@ -397,30 +474,36 @@ pub fn run(
                 }
             })
         });
-        for (i, cell) in cells.iter().enumerate() {
-            bar.set_message(cell.spec.id.clone());
-            let inputs = run_inputs.as_deref().map(|run| {
-                let variant = options.variant_files.get(&cell.spec.variant);
-                reuse::cell_inputs(run, &cell.spec, variant.map(|f| f.sha256.as_str()))
-            });
-            if let (Some(previous), Some(inputs)) = (&options.reuse, &inputs)
-                && let Some((record, used)) =
-                    previous.unchanged(&cell.spec.id, inputs, composer, &mut recomposed)
-            {
-                match copy_images(&previous.dir, record, &options.out) {
-                    Ok(()) => {
-                        index.add(&cell.spec.id, inputs.clone(), &used);
-                        reused.insert(cell.spec.id.clone());
-                        records[i] = Some(record.clone());
-                        bar.inc(1);
-                        continue;
-                    }
-                    Err(e) => {
-                        bar.suspend(|| eprintln!("{}: not reused, run again: {e}", cell.spec.id))
+        let mut queue: std::collections::VecDeque<Vec<usize>> = batches(cells).into();
+        while let Some(batch) = queue.pop_front() {
+            let mut todo = Vec::new();
+            for i in batch {
+                let cell = &cells[i];
+                let inputs = run_inputs.as_deref().map(|run| {
+                    let variant = options.variant_files.get(&cell.spec.variant);
+                    reuse::cell_inputs(run, &cell.spec, variant.map(|f| f.sha256.as_str()))
+                });
+                if let (Some(previous), Some(inputs)) = (&options.reuse, &inputs)
+                    && let Some((record, used, run)) =
+                        previous.unchanged(cell, inputs, composer, gpu, &mut recomposed)
+                {
+                    match copy_images(&previous.dir, record, &options.out) {
+                        Ok(()) => {
+                            index.add(&cell.spec.id, inputs.clone(), &used);
+                            reused.push((cell.spec.id.clone(), record.clone(), run));
+                            records[i] = Some(record.clone());
+                            bar.inc(1);
+                            continue;
+                        }
+                        Err(e) => bar
+                            .suspend(|| eprintln!("{}: not reused, run again: {e}", cell.spec.id)),
                     }
                 }
+                todo.push((i, inputs));
             }
-            let mark = composer.log_mark();
+            if todo.is_empty() {
+                continue;
+            }
             if no_device.is_some() {
                 let before = gpu.pipeline_stats();
                 no_device = gpu
@@ -432,37 +515,64 @@ pub fn run(
                     .err()
                     .map(no_usable_device);
             }
-            let ran = match &no_device {
-                Some(why) => Ran::done(CellRecord::failed(cell.spec.clone(), why.clone())),
-                None => run_guarded(gpu, composer, cell, options, references),
+            let ids: Vec<usize> = todo.iter().map(|(i, _)| *i).collect();
+            let ended = match &no_device {
+                Some(why) => BatchEnd {
+                    ran: ids
+                        .iter()
+                        .map(|&i| {
+                            let failed = CellRecord::failed(cells[i].spec.clone(), why.clone());
+                            (i, Ran::done(failed), Vec::new())
+                        })
+                        .collect(),
+                    again: Vec::new(),
+                },
+                None => run_batch(gpu, composer, cells, &ids, options, references, &bar),
             };
-            if let Some(inputs) = inputs {
-                index.add(&cell.spec.id, inputs, &composer.logged_since(mark));
-            }
-            let mut record = match ran {
-                Ran::Pending(pending) if worker.is_some() => {
-                    // The worker only ends when the queue closes.
-                    let _ = to_worker.send((i, pending));
-                    bar.inc(1);
-                    continue;
-                }
-                Ran::Pending(pending) => finish_guarded(*pending, options, references),
-                Ran::Done(record) => *record,
-            };
-            let before = gpu.pipeline_stats();
-            if let Some(why) = &mut record.failure
-                && no_device.is_none()
-                && let Some(note) = renew_if_unusable(gpu, &mut no_device)
-            {
-                if no_device.is_none() {
+            // The failure that ended the batch is its last.
+            let culprit = ended
+                .ran
+                .iter()
+                .rev()
+                .find(|(_, r, _)| r.failed())
+                .map(|c| c.0);
+            // After a failure: keep the device if it still works, else open a new one; the
+            // group's cells that had not finished run again on it.
+            let mut note = None;
+            if culprit.is_some() && no_device.is_none() {
+                let before = gpu.pipeline_stats();
+                note = renew_if_unusable(gpu, &mut no_device);
+                if note.is_some() && no_device.is_none() {
                     // Replaced by a new device: keep what the old one compiled in the count.
                     replaced = add_pipelines(replaced, before);
                 }
-                bar.println(format!("{}: {note}", cell.spec.id));
-                why.push_str(&format!(" [{note}]"));
             }
-            records[i] = Some(record);
-            bar.inc(1);
+            if !ended.again.is_empty() {
+                queue.push_front(ended.again);
+            }
+            for (i, ran, compositions) in ended.ran {
+                if let Some((_, Some(inputs))) = todo.iter().find(|(j, _)| *j == i) {
+                    index.add(&cells[i].spec.id, inputs.clone(), &compositions);
+                }
+                let mut record = match ran {
+                    Ran::Pending(pending) if worker.is_some() => {
+                        // The worker only ends when the queue closes.
+                        let _ = to_worker.send((i, pending));
+                        bar.inc(1);
+                        continue;
+                    }
+                    Ran::Pending(pending) => finish_guarded(*pending, options, references),
+                    Ran::Done(record) => *record,
+                };
+                if let (Some(why), Some(note)) = (&mut record.failure, &note)
+                    && culprit == Some(i)
+                {
+                    bar.println(format!("{}: {note}", cells[i].spec.id));
+                    why.push_str(&format!(" [{note}]"));
+                }
+                records[i] = Some(record);
+                bar.inc(1);
+            }
         }
         drop(to_worker);
         if let Some(worker) = worker {
@@ -492,6 +602,7 @@ pub fn run(
     }
     bar.finish_and_clear();
     let (reference_frames, reference_shadings) = references.counts();
+    let reused_ids: Vec<&str> = reused.iter().map(|(id, _, _)| id.as_str()).collect();
     let mut cost = RunCost {
         wall_s: start.elapsed().as_secs_f64(),
         pipelines: add_pipelines(replaced, gpu.pipeline_stats()),
@@ -505,7 +616,10 @@ pub fn run(
     {
         eprintln!("warning: no {REUSE_FILE} for a later --reuse: {e}");
     }
-    for r in records.iter().filter(|r| !reused.contains(&r.spec.id)) {
+    for r in records
+        .iter()
+        .filter(|r| !reused_ids.contains(&r.spec.id.as_str()))
+    {
         if let Some(c) = &r.cost_ms {
             let t = &mut cost.cells_ms;
             t.setup += c.setup;
@@ -517,43 +631,277 @@ pub fn run(
         cost.warmup_frames += r.warmup_frames;
         cost.timed_frames += r.frames;
     }
-    let mut provenance = provenance(gpu, options);
+    let mut provenance = provenance(gpu, composer, options);
     provenance.cost = Some(cost);
     let mut results = Results {
         provenance: vec![provenance],
-        reused: records
-            .iter()
-            .filter(|r| reused.contains(&r.spec.id))
-            .map(|r| r.spec.id.clone())
-            .collect(),
         cells: records,
+        reused: reused_ids.iter().map(|s| s.to_string()).collect(),
     };
-    derive(&mut results.cells, None);
+    if let Some(previous) = &options.reuse {
+        previous.mark_reused(&mut results);
+    }
+    derive(&mut results.cells, &results.provenance, None);
     results
 }
 
-/// Run one cell's GPU half with its time limit started, turning a panic into a failed cell.
-fn run_guarded(
+fn progress_bar(shown: bool, cells: usize) -> indicatif::ProgressBar {
+    let bar = if shown {
+        indicatif::ProgressBar::new(cells as u64)
+    } else {
+        indicatif::ProgressBar::hidden()
+    };
+    bar.set_style(
+        indicatif::ProgressStyle::with_template(
+            "{elapsed_precise} [{bar:30}] {pos}/{len} {wide_msg}",
+        )
+        .expect("valid template")
+        .progress_chars("=> "),
+    );
+    bar
+}
+
+/// The order cells run in: the cells of one group (scene and parameters) together, in
+/// batches of at most [`INTERLEAVED_CELLS`] timed in interleaved rounds, groups in the
+/// order the plan first names them; a sequence cell alone.
+fn batches(cells: &[PlannedCell]) -> Vec<Vec<usize>> {
+    let mut groups: Vec<(String, Vec<usize>)> = Vec::new();
+    let mut alone = Vec::new();
+    for (i, c) in cells.iter().enumerate() {
+        if c.spec.sequence.is_some() {
+            alone.push(vec![i]);
+            continue;
+        }
+        let g = c.spec.group();
+        match groups.iter_mut().find(|(k, _)| *k == g) {
+            Some((_, v)) => v.push(i),
+            None => groups.push((g, vec![i])),
+        }
+    }
+    groups
+        .into_iter()
+        .flat_map(|(_, v)| {
+            v.chunks(INTERLEAVED_CELLS)
+                .map(<[usize]>::to_vec)
+                .collect::<Vec<_>>()
+        })
+        .chain(alone)
+        .collect()
+}
+
+/// What a batch of cells came to: each cell that ended (done, or waiting for its CPU half),
+/// with the compositions it used, in the order they ran; and the cells that must run again
+/// on a new device (the device became unusable while they were timed).
+struct BatchEnd {
+    ran: Vec<(usize, Ran, Vec<Arc<Composition>>)>,
+    again: Vec<usize>,
+}
+
+/// A cell of a batch being timed.
+struct Live<'g> {
+    i: usize,
+    scene: crate::scene::Scene,
+    timing: crate::run::Timing<'g>,
+    compositions: Vec<Arc<Composition>>,
+}
+
+/// Run the cells `batch` of one group: each set up, then timed one frame each in turn
+/// until each has enough, then each counted and its reference's raster truth read back.
+/// After a failure that left the device unusable the batch ends there, and the cells that
+/// had not finished are returned to run again.
+fn run_batch(
     gpu: &Gpu,
+    composer: &Composer,
+    cells: &[PlannedCell],
+    batch: &[usize],
+    options: &MatrixOptions,
+    references: &ReferenceCache,
+    bar: &indicatif::ProgressBar,
+) -> BatchEnd {
+    let mut ran: Vec<(usize, Ran, Vec<Arc<Composition>>)> = Vec::new();
+    let mut live: Vec<Live> = Vec::new();
+    let failed = |i: usize, why: String| CellRecord::failed(cells[i].spec.clone(), why);
+    let panicked = |panic: Box<dyn std::any::Any + Send>| {
+        format!("panicked: {}", crate::common::panic_message(panic.as_ref()))
+    };
+    let stop_here = |ran, live: &[Live], rest: &[usize]| BatchEnd {
+        ran,
+        again: live
+            .iter()
+            .map(|l| l.i)
+            .chain(rest.iter().copied())
+            .collect(),
+    };
+    for (k, &i) in batch.iter().enumerate() {
+        let cell = &cells[i];
+        bar.set_message(format!("setting up {}", cell.spec.id));
+        gpu.begin_cell();
+        if let Some(hook) = options.before_cell {
+            hook(gpu, &cell.spec);
+        }
+        let mark = composer.log_mark();
+        let started = catch_unwind(AssertUnwindSafe(|| {
+            start_cell(gpu, composer, cell, options, references)
+        }))
+        .unwrap_or_else(|panic| Started::Done(Ran::done(failed(i, panicked(panic)))));
+        let compositions = composer.logged_since(mark);
+        match started {
+            Started::Timing(started) => {
+                let (scene, timing) = *started;
+                live.push(Live {
+                    i,
+                    scene,
+                    timing,
+                    compositions,
+                })
+            }
+            Started::Done(done) => {
+                let broke = done.failed();
+                ran.push((i, done, compositions));
+                if broke && gpu.check_health().is_err() {
+                    return stop_here(ran, &live, &batch[k + 1..]);
+                }
+            }
+        }
+    }
+    let mut round = 0;
+    while live.iter().any(|l| !l.timing.done()) {
+        round += 1;
+        bar.set_message(format!(
+            "timing {} cells of {}, round {round}",
+            live.iter().filter(|l| !l.timing.done()).count(),
+            cells[batch[0]].spec.group()
+        ));
+        let mut k = 0;
+        while k < live.len() {
+            if live[k].timing.done() {
+                k += 1;
+                continue;
+            }
+            gpu.begin_cell();
+            let timing = &mut live[k].timing;
+            let why = match catch_unwind(AssertUnwindSafe(|| timing.next_frame())) {
+                Ok(Ok(())) => None,
+                Ok(Err(e)) => Some(CellRecord::not_run(
+                    cells[live[k].i].spec.clone(),
+                    &RunError::from(e),
+                )),
+                Err(panic) => Some(failed(live[k].i, panicked(panic))),
+            };
+            let Some(record) = why else {
+                k += 1;
+                continue;
+            };
+            let l = live.remove(k);
+            ran.push((l.i, Ran::done(record), l.compositions));
+            if gpu.check_health().is_err() {
+                return stop_here(ran, &live, &[]);
+            }
+        }
+    }
+    let mut unfinished = live.into_iter();
+    while let Some(Live {
+        i,
+        scene,
+        timing,
+        mut compositions,
+    }) = unfinished.next()
+    {
+        let cell = &cells[i];
+        bar.set_message(format!("counting {}", cell.spec.id));
+        gpu.begin_cell();
+        let mark = composer.log_mark();
+        let done = catch_unwind(AssertUnwindSafe(|| {
+            finish_gpu(timing, composer, cell, scene, options, references)
+        }))
+        .unwrap_or_else(|panic| Ran::done(failed(i, panicked(panic))));
+        compositions.extend(composer.logged_since(mark));
+        let broke = done.failed();
+        ran.push((i, done, compositions));
+        if broke && gpu.check_health().is_err() {
+            let rest: Vec<Live> = unfinished.collect();
+            return stop_here(ran, &rest, &[]);
+        }
+    }
+    BatchEnd {
+        ran,
+        again: Vec::new(),
+    }
+}
+
+/// A cell after its set-up: timing frames, or done (failed, refused, a sequence).
+enum Started<'g> {
+    Timing(Box<(crate::scene::Scene, crate::run::Timing<'g>)>),
+    Done(Ran),
+}
+
+/// Set a cell up and draw its untimed frames; a sequence runs whole here.
+fn start_cell<'g>(
+    gpu: &'g Gpu,
     composer: &Composer,
     cell: &PlannedCell,
     options: &MatrixOptions,
     references: &ReferenceCache,
-) -> Ran {
-    gpu.begin_cell();
-    if let Some(hook) = options.before_cell {
-        hook(gpu, &cell.spec);
+) -> Started<'g> {
+    let spec = cell.spec.clone();
+    let loaded = match &cell.variant {
+        Ok(v) => v,
+        Err(why) => return Started::Done(Ran::done(CellRecord::failed(spec, why.clone()))),
+    };
+    if let Some(sequence) = spec.sequence {
+        let record = run_sequence(gpu, composer, loaded, sequence, spec, options, references);
+        return Started::Done(Ran::done(record));
     }
-    catch_unwind(AssertUnwindSafe(|| {
-        run_one(gpu, composer, cell, options, references)
-    }))
-    .unwrap_or_else(|panic| {
-        let why = crate::common::panic_message(panic.as_ref());
-        Ran::done(CellRecord::failed(
-            cell.spec.clone(),
-            format!("panicked: {why}"),
-        ))
-    })
+    let params = spec.params.into();
+    let started = gpu
+        .check_size(spec.params.width, spec.params.height)
+        .map_err(RunError::from)
+        .and_then(|()| crate::scene::generate(&spec.scene, params).map_err(RunError::Scene))
+        .and_then(|scene| {
+            let timing = crate::run::Timing::start(gpu, composer, loaded, &scene, options.frames)?;
+            Ok((scene, timing))
+        });
+    match started {
+        Ok(started) => Started::Timing(Box::new(started)),
+        Err(e) => Started::Done(Ran::done(CellRecord::not_run(spec, &e))),
+    }
+}
+
+/// After a cell's timed frames: its debug view, counters and raster truth.
+fn finish_gpu(
+    timing: crate::run::Timing<'_>,
+    composer: &Composer,
+    cell: &PlannedCell,
+    scene: crate::scene::Scene,
+    options: &MatrixOptions,
+    references: &ReferenceCache,
+) -> Ran {
+    let spec = cell.spec.clone();
+    let loaded = match &cell.variant {
+        Ok(v) => v,
+        Err(why) => return Ran::done(CellRecord::failed(spec, why.clone())),
+    };
+    let v = &loaded.variant;
+    // The lights-per-cluster view shows where a clustered variant spends its time.
+    let debug_view =
+        (v.pipeline.is_clustered() && spec.sweep.is_empty() && v.debug_view == DebugView::Off)
+            .then_some(DebugView::LightsPerCluster);
+    let cell_options = CellOptions {
+        frames: options.frames,
+        stats: true,
+        out: None,
+        references: Some(references),
+        debug_view,
+    };
+    match timing.finish(composer, loaded, &scene, cell_options, references) {
+        Ok((half, _)) => Ran::Pending(Box::new(Pending {
+            spec,
+            loaded: loaded.clone(),
+            scene,
+            half,
+        })),
+        Err(e) => Ran::done(CellRecord::not_run(spec, &e)),
+    }
 }
 
 /// A cell after its GPU half: done (failed, refused, a sequence), or waiting for its CPU
@@ -566,6 +914,10 @@ enum Ran {
 impl Ran {
     fn done(record: CellRecord) -> Self {
         Ran::Done(Box::new(record))
+    }
+
+    fn failed(&self) -> bool {
+        matches!(self, Ran::Done(r) if r.failure.is_some())
     }
 }
 
@@ -603,61 +955,6 @@ fn add_pipelines(a: PipelineStats, b: PipelineStats) -> PipelineStats {
 
 fn no_usable_device(e: crate::gpu::GpuError) -> String {
     format!("no usable GPU device: opening a new one failed: {e}")
-}
-
-fn run_one(
-    gpu: &Gpu,
-    composer: &Composer,
-    cell: &PlannedCell,
-    options: &MatrixOptions,
-    references: &ReferenceCache,
-) -> Ran {
-    let spec = cell.spec.clone();
-    let loaded = match &cell.variant {
-        Ok(v) => v,
-        Err(why) => return Ran::done(CellRecord::failed(spec, why.clone())),
-    };
-    if let Some(spec) = spec.sequence {
-        return Ran::done(run_sequence(
-            gpu,
-            composer,
-            loaded,
-            spec,
-            cell.spec.clone(),
-            options,
-            references,
-        ));
-    }
-    let v = &loaded.variant;
-    // The lights-per-cluster view shows where a clustered variant spends its time.
-    let debug_view =
-        (v.pipeline.is_clustered() && spec.sweep.is_empty() && v.debug_view == DebugView::Off)
-            .then_some(DebugView::LightsPerCluster);
-    let params = spec.params.into();
-    let half = gpu
-        .check_size(spec.params.width, spec.params.height)
-        .map_err(RunError::from)
-        .and_then(|()| crate::scene::generate(&spec.scene, params).map_err(RunError::Scene))
-        .and_then(|scene| {
-            let options = CellOptions {
-                frames: options.frames,
-                stats: true,
-                out: None,
-                references: Some(references),
-                debug_view,
-            };
-            let (half, _) = gpu_half(gpu, composer, loaded, &scene, options, references)?;
-            Ok((scene, half))
-        });
-    match half {
-        Ok((scene, half)) => Ran::Pending(Box::new(Pending {
-            spec,
-            loaded: loaded.clone(),
-            scene,
-            half,
-        })),
-        Err(e) => Ran::done(CellRecord::not_run(spec, &e)),
-    }
 }
 
 /// A cell's CPU half (`run::finish_cell`) and its images; a panic fails the cell alone.
@@ -719,6 +1016,9 @@ fn finish(pending: Pending, options: &MatrixOptions, references: &ReferenceCache
         refused: false,
         gpu_ms: r.gpu_ms,
         gpu_ms_spread: r.gpu_ms_spread,
+        gpu_ms_interval: r.gpu_ms_interval,
+        interval_level: r.interval_level,
+        timing_stop: r.frame_count.stop,
         timing_source: Some(r.timing_source.to_string()),
         frames: r.frames,
         wall_ms: Some(r.wall_ms),
@@ -728,7 +1028,12 @@ fn finish(pending: Pending, options: &MatrixOptions, references: &ReferenceCache
         efficiency: r.efficiency,
         images: files,
         speedup_vs_naive: None,
+        speedup_interval: None,
         pareto: false,
+        rank: None,
+        run: 0,
+        reused_from: None,
+        exact_claim: r.exact_claim,
         vs_baseline: None,
         skipped_passes: r.skipped_passes,
         warmup_frames: r.frame_count.warmup,
@@ -796,6 +1101,12 @@ fn run_sequence(
     gpu_ms.insert("total".into(), m.frame_ms.into());
     let mut gpu_ms_spread = Map::new();
     gpu_ms_spread.insert("total".into(), m.frame_ms_spread.to_vec().into());
+    // The frames after the first, as the median and spread are.
+    let interval = crate::measure::median_interval(m.totals_ms.get(1..).unwrap_or_default());
+    let mut gpu_ms_interval = Map::new();
+    if let Some(i) = interval {
+        gpu_ms_interval.insert("total".into(), vec![i.lo, i.hi].into());
+    }
     // The worst checked frame's error stands for the sequence.
     let error = r
         .frames
@@ -814,6 +1125,9 @@ fn run_sequence(
         refused: false,
         gpu_ms,
         gpu_ms_spread,
+        gpu_ms_interval,
+        interval_level: interval.map(|i| i.level),
+        timing_stop: Some(Stop::Count),
         timing_source: Some(r.timing_source.to_string()),
         frames,
         wall_ms: None,
@@ -823,7 +1137,12 @@ fn run_sequence(
         efficiency: None,
         images: files,
         speedup_vs_naive: None,
+        speedup_interval: None,
         pareto: false,
+        rank: None,
+        run: 0,
+        reused_from: None,
+        exact_claim: false,
         vs_baseline: None,
         skipped_passes: r
             .frames
@@ -844,37 +1163,70 @@ fn run_sequence(
     }
 }
 
-/// Fill in speed-ups against naive forward and the Pareto front (per group of scene and
-/// parameters), and the change against a baseline run.
-pub fn derive(cells: &mut [CellRecord], baseline: Option<&Results>) {
+/// Fill in speed-ups against naive forward, each cell's rank in its group and the Pareto
+/// front (per group of scene and parameters), and the change against a baseline run. Times
+/// are compared only where their intervals separate, and only between cells timed on one
+/// adapter with one timing source (`provenance` of each cell's `run`).
+pub fn derive(cells: &mut [CellRecord], provenance: &[Provenance], baseline: Option<&Results>) {
     let groups: Vec<String> = cells.iter().map(|c| c.spec.group()).collect();
+    let clocks: Vec<(Option<&AdapterSummary>, Option<String>)> = cells
+        .iter()
+        .map(|c| {
+            let adapter = provenance.get(c.run).map(|p| &p.adapter);
+            (adapter, c.timing_source.clone())
+        })
+        .collect();
+    let timed = |c: &CellRecord| c.ok() && !c.spec.debug_view && c.total_ms().is_some();
+    let mut derived = Vec::with_capacity(cells.len());
     for i in 0..cells.len() {
-        let group = &groups[i];
-        let in_group = |j: usize| &groups[j] == group && cells[j].ok();
+        let peer = |j: usize| groups[j] == groups[i] && clocks[j] == clocks[i] && cells[j].ok();
         let naive = (0..cells.len())
-            .filter(|&j| in_group(j) && cells[j].spec.is_naive_baseline())
+            .filter(|&j| peer(j) && cells[j].spec.is_naive_baseline())
             // The variant named naive_forward first, then any plain naive one.
-            .min_by_key(|&j| cells[j].spec.variant != "naive_forward")
-            .and_then(|j| cells[j].total_ms());
-        let speedup = match (naive, cells[i].total_ms()) {
-            (Some(n), Some(t)) if t > 0.0 && cells[i].ok() => Some(round3(n / t)),
-            _ => None,
+            .min_by_key(|&j| cells[j].spec.variant != "naive_forward");
+        let (speedup, speedup_interval) = match (naive, cells[i].total_ms()) {
+            (Some(n), Some(t)) if t > 0.0 && cells[i].ok() => {
+                let ratio = cells[n].total_ms().map(|n| round3(n / t));
+                let range = cells[n]
+                    .total_interval()
+                    .zip(cells[i].total_interval())
+                    .filter(|(_, c)| c.lo > 0.0)
+                    .map(|(n, c)| [round3(n.lo / c.hi), round3(n.hi / c.lo)]);
+                (ratio, range)
+            }
+            _ => (None, None),
         };
-        // Pareto: no other cell of the group is at least as fast and as accurate, and
-        // strictly better in one. Debug views show no scene and take no part.
-        let point = |j: usize| -> Option<(f64, f64)> {
+        // Pareto: no other cell of the group is faster (intervals apart) and at least as
+        // accurate. Debug views show no scene and take no part.
+        let point = |j: usize| -> Option<(Option<Interval>, f64)> {
             let c = &cells[j];
-            if !c.ok() || c.spec.debug_view {
+            if !timed(c) {
                 return None;
             }
-            Some((c.total_ms()?, c.error.as_ref()?.rmse_8bit))
+            Some((c.total_interval(), c.error.as_ref()?.rmse_8bit))
         };
         let pareto = point(i).is_some_and(|(t, e)| {
             !(0..cells.len()).any(|j| {
                 j != i
-                    && in_group(j)
-                    && point(j).is_some_and(|(tj, ej)| tj <= t && ej <= e && (tj < t || ej < e))
+                    && peer(j)
+                    && point(j).is_some_and(|(tj, ej)| {
+                        Interval::compare(tj.as_ref(), t.as_ref()) == Verdict::Faster && ej <= e
+                    })
             })
+        });
+        let fastest = (0..cells.len())
+            .filter(|&j| peer(j) && timed(&cells[j]))
+            .min_by(|&a, &b| {
+                let t = |j: usize| cells[j].total_ms().unwrap_or(f64::INFINITY);
+                t(a).total_cmp(&t(b)).then(a.cmp(&b))
+            });
+        let rank = fastest.filter(|_| timed(&cells[i])).map(|f| {
+            let this = cells[i].total_interval();
+            match Interval::compare(this.as_ref(), cells[f].total_interval().as_ref()) {
+                _ if f == i => Rank::Fastest,
+                Verdict::Slower => Rank::Slower,
+                _ => Rank::TiedWithFastest,
+            }
         });
         let vs_baseline = baseline.and_then(|b| {
             let old = b
@@ -889,9 +1241,14 @@ pub fn derive(cells: &mut [CellRecord], baseline: Option<&Results>) {
                 rmse_8bit_change: e_new.rmse_8bit - e_old.rmse_8bit,
             })
         });
-        cells[i].speedup_vs_naive = speedup;
-        cells[i].pareto = pareto;
-        cells[i].vs_baseline = vs_baseline;
+        derived.push((speedup, speedup_interval, pareto, rank, vs_baseline));
+    }
+    for (c, (speedup, range, pareto, rank, vs_baseline)) in cells.iter_mut().zip(derived) {
+        c.speedup_vs_naive = speedup;
+        c.speedup_interval = range;
+        c.pareto = pareto;
+        c.rank = rank;
+        c.vs_baseline = vs_baseline;
     }
 }
 
@@ -943,14 +1300,16 @@ pub fn merge(
     crate::files::write::create_folder(&out.join("images"))?;
     crate::files::write::create_folder(&out.join("plots"))?;
     for (dir, r) in loaded {
+        let runs_before = merged.provenance.len();
         merged.provenance.extend(r.provenance);
-        for cell in r.cells {
+        for mut cell in r.cells {
+            cell.run += runs_before;
             copy_images(dir, &cell, out)?;
             merged.cells.retain(|c| c.spec.id != cell.spec.id);
             merged.cells.push(cell);
         }
     }
-    derive(&mut merged.cells, None);
+    derive(&mut merged.cells, &merged.provenance, None);
     Ok(merged)
 }
 
@@ -1091,21 +1450,21 @@ pub fn variant_files(cells: &[PlannedCell]) -> BTreeMap<String, VariantFile> {
     files
 }
 
-fn provenance(gpu: &Gpu, options: &MatrixOptions) -> Provenance {
-    let git = |args: &[&str]| {
-        std::process::Command::new("git")
-            .args(args)
-            .output()
-            .ok()
-            .filter(|o| o.status.success())
-            .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string())
-    };
+fn provenance(gpu: &Gpu, composer: &Composer, options: &MatrixOptions) -> Provenance {
     Provenance {
         tool: format!("clusterlab {}", env!("CARGO_PKG_VERSION")),
         date: humantime::format_rfc3339_seconds(std::time::SystemTime::now()).to_string(),
-        git_revision: git(&["rev-parse", "HEAD"]).unwrap_or_else(|| "unknown".into()),
-        git_dirty: git(&["status", "--porcelain", "--untracked-files=no"])
-            .is_some_and(|s| !s.is_empty()),
+        // The revision the binary was built from (`build.rs`), wherever it runs.
+        git_revision: env!("CLUSTERLAB_GIT_REVISION").into(),
+        git_dirty: env!("CLUSTERLAB_GIT_DIRTY") == "true",
+        shaders: composer
+            .shader_tree()
+            .unwrap_or_else(|e| crate::compose::ShaderTree {
+                sha256: format!("unreadable: {e}"),
+                ..Default::default()
+            }),
+        environment: crate::environment::recorded(),
+        perturbed_depth_ulps: crate::compose::perturbed_depth_ulps(),
         adapter: gpu.adapter.clone(),
         hdr_format: format!("{:?}", gpu.hdr_format).to_lowercase(),
         timing_source: if gpu.timestamps {

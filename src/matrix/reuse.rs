@@ -1,11 +1,17 @@
 //! `matrix --reuse PREVIOUS`: a cell runs again only when something it depends on changed.
 //!
 //! A cell depends on its spec (scene, parameters, sweep), its variant file, the WGSL of
-//! every pass it composed (its reference's raster truth included), the adapter and the
-//! device asked of it, how frames are chosen, and clusterlab's own build. All but the WGSL
-//! hash into the cell's `inputs`. The compositions are kept as recipes (root, features,
-//! constants) in the run's `reuse.json`, and a later run composes them again from the
-//! shaders of now: an edited module reruns exactly the cells whose WGSL it changed.
+//! every pass it composed (its reference's raster truth included), the adapter, its driver
+//! and the device asked of it, the timing source, how frames are chosen, every environment
+//! variable that can change a figure (`environment::figure_inputs`) and clusterlab's own
+//! build. All but the WGSL hash into the cell's `inputs`. The compositions are kept as
+//! recipes (root, features, constants) in the run's `reuse.json`, and a later run composes
+//! them again from the shaders of now: an edited module reruns exactly the cells whose WGSL
+//! it changed (the shader tree's hash is in the provenance, not the key, for that reason).
+//!
+//! A record taken is checked as a fresh one would be: its spec equal to the plan's, its
+//! figures whole, and its verdict derived from them (`Previous::unchanged`); it keeps its
+//! own run's provenance (`mark_reused`).
 
 use std::collections::{BTreeMap, HashMap};
 use std::path::{Path, PathBuf};
@@ -13,7 +19,7 @@ use std::sync::Arc;
 
 use serde::{Deserialize, Serialize};
 
-use super::{CellRecord, CellSpec, Results};
+use super::{CellRecord, CellSpec, PlannedCell, Results};
 use crate::compose::{Composer, Composition, Recipe, sha256_hex};
 use crate::gpu::Gpu;
 use crate::measure::Frames;
@@ -47,12 +53,25 @@ pub struct Previous {
 }
 
 impl Previous {
-    /// The result folder `dir` (written by a matrix run with its `reuse.json`).
+    /// The result folder `dir` (written by a matrix run with its `reuse.json`), or its
+    /// `results.json`.
     pub fn load(dir: &Path) -> Result<Self, String> {
+        let dir = match dir.file_name() {
+            Some(name) if name == "results.json" && !dir.is_dir() => {
+                dir.parent().unwrap_or(Path::new("."))
+            }
+            _ => dir,
+        };
         let results = Results::load(dir)?;
         let path = dir.join(FILE);
         let text = crate::files::read_text(&path, crate::files::read::RESULTS).map_err(|e| {
-            if e.missing {
+            if e.missing && results.provenance.len() > 1 {
+                format!(
+                    "--reuse {}: a folder `merge` made from {} runs, which records no {FILE}: give the folder of one of those runs",
+                    dir.display(),
+                    results.provenance.len()
+                )
+            } else if e.missing {
                 format!(
                     "--reuse {}: no {FILE} there (a run before clusterlab recorded what its cells depend on): run the matrix once without --reuse",
                     dir.display()
@@ -76,22 +95,26 @@ impl Previous {
         })
     }
 
-    /// The earlier record of cell `id` when it ran with the same `inputs` and every shader
-    /// it composed still composes to the same WGSL (`wgsl` remembers recipes composed
-    /// before); None when anything differs, or the cell failed there.
+    /// The earlier record of `cell` when it ran with the same `inputs`, its spec is the
+    /// plan's, its figures hold as a fresh cell's would (`stale`), and every shader it
+    /// composed still composes to the same WGSL (`wgsl` remembers recipes composed
+    /// before); with the compositions and the index of its run in the earlier results'
+    /// provenance. None when anything differs, or the cell failed there.
     pub fn unchanged(
         &self,
-        id: &str,
+        cell: &PlannedCell,
         inputs: &str,
         composer: &Composer,
+        gpu: &Gpu,
         wgsl: &mut HashMap<String, Option<String>>,
-    ) -> Option<(&CellRecord, Vec<Arc<Composition>>)> {
+    ) -> Option<(&CellRecord, Vec<Arc<Composition>>, usize)> {
+        let id = &cell.spec.id;
         let shaders = self.index.cells.get(id)?;
         if shaders.inputs != inputs {
             return None;
         }
-        let record = self.results.cells.iter().find(|c| c.spec.id == id)?;
-        if !record.ok() {
+        let record = self.results.cells.iter().find(|c| &c.spec.id == id)?;
+        if !record.ok() || stale(record, cell, gpu).is_some() {
             return None;
         }
         let mut used = Vec::with_capacity(shaders.compositions.len());
@@ -114,8 +137,61 @@ impl Previous {
                 wgsl_sha256: now.clone(),
             }));
         }
-        Some((record, used))
+        Some((record, used, record.run))
     }
+
+    /// Give the cells of `results` taken from this run (`results.reused`) their own runs'
+    /// provenance: each earlier run's entry is added once, and the cell points to it.
+    pub fn mark_reused(&self, results: &mut Results) {
+        let mut added: BTreeMap<usize, usize> = BTreeMap::new();
+        for cell in results.cells.iter_mut() {
+            if !results.reused.contains(&cell.spec.id) {
+                continue;
+            }
+            let Some(earlier) = self.results.provenance.get(cell.run) else {
+                continue;
+            };
+            let index = *added.entry(cell.run).or_insert_with(|| {
+                results.provenance.push(earlier.clone());
+                results.provenance.len() - 1
+            });
+            cell.run = index;
+            cell.reused_from = Some(format!(
+                "{} ({})",
+                earlier.date,
+                &earlier.git_revision[..12.min(earlier.git_revision.len())]
+            ));
+        }
+    }
+}
+
+/// Why an earlier record cannot stand for `cell` now, judged as a fresh cell's figures
+/// would be (`run::meaningless`, `run::inexact`): a spec other than the plan's, a shaded
+/// frame without error figures, NaN pixels, or an exact variant over its 1 LSB, each
+/// recorded as passing.
+pub fn stale(record: &CellRecord, cell: &PlannedCell, gpu: &Gpu) -> Option<String> {
+    let spec = |s: &CellSpec| serde_json::to_string(s).unwrap_or_default();
+    if spec(&record.spec) != spec(&cell.spec) {
+        return Some("its spec is not the plan's".into());
+    }
+    let loaded = cell.variant.as_ref().ok()?;
+    if record.ok() {
+        let shaded = loaded.variant.debug_view == crate::variant::DebugView::Off;
+        if shaded && record.error.is_none() {
+            return Some("a shaded frame without error figures".into());
+        }
+        if let Some(e) = &record.error
+            && e.nan_pixels > 0
+        {
+            return Some(format!("{} NaN pixels recorded as passing", e.nan_pixels));
+        }
+        if record.sequence_summary.is_none()
+            && let Some(why) = crate::run::inexact(&loaded.variant, gpu, record.error.as_ref())
+        {
+            return Some(format!("recorded as passing: {why}"));
+        }
+    }
+    None
 }
 
 impl ReuseIndex {
@@ -172,8 +248,10 @@ pub fn reuse_summary(results: &Results, dir: &Path) -> String {
 }
 
 /// What every cell of a run on `gpu` depends on alike: clusterlab's build (the SHA-256 of
-/// its executable), the adapter and the device asked of it, the threads a software GPU
-/// splits its work among, and how frames are chosen.
+/// its executable), the adapter (name, backend, driver) and the device asked of it, the
+/// timing source, how frames are chosen, and every environment variable that can change a
+/// figure (`environment::figure_inputs`: the depth perturbation, the shader folder, masked
+/// features, the software GPU's threads, ...).
 pub fn run_inputs(gpu: &Gpu, frames: &Frames) -> Result<String, String> {
     let exe =
         std::env::current_exe().map_err(|e| format!("finding clusterlab's executable: {e}"))?;
@@ -184,10 +262,11 @@ pub fn run_inputs(gpu: &Gpu, frames: &Frames) -> Result<String, String> {
         format!("{:x}", sha2::Sha256::digest(&bytes))
     };
     Ok(sha256_hex(&format!(
-        "{build}|{:?}|{:?}|{:?}|{frames:?}",
+        "{build}|{:?}|{:?}|timestamps {}|{frames:?}|{:?}",
         gpu.adapter,
         gpu.request,
-        std::env::var("LP_NUM_THREADS").ok()
+        gpu.timestamps,
+        crate::environment::figure_inputs()
     )))
 }
 

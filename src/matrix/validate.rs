@@ -29,10 +29,128 @@ impl Results {
             if !ids.insert(cell.spec.id.as_str()) {
                 return Err(format!("cell `{}` appears twice", cell.spec.id));
             }
-            check_cell(cell).map_err(|e| format!("cell `{}`: {e}", cell.spec.id))?;
+            check_cell(cell)
+                .and_then(|()| {
+                    if cell.run < self.provenance.len() {
+                        Ok(())
+                    } else {
+                        Err(format!(
+                            "`run` is {}, but the file records {} runs in `provenance`",
+                            cell.run,
+                            self.provenance.len()
+                        ))
+                    }
+                })
+                .map_err(|e| format!("cell `{}`: {e}", cell.spec.id))?;
         }
         Ok(())
     }
+}
+
+/// A cell that passed has the figures a passing cell has: a shaded frame (not a debug view)
+/// has its error figures, no NaN pixels, and an exact variant's frame (or a sequence marked
+/// exact) is within 1 LSB. Pass or fail is derived from the figures, never taken as written.
+fn check_verdict(c: &CellRecord) -> Result<(), String> {
+    let lsb = crate::run::EXACT_LSB;
+    if let Some(s) = &c.sequence_summary
+        && s.exact
+        && s.max_abs_8bit > lsb
+    {
+        return Err(format!(
+            "`sequence_summary.exact` is true at {} LSB: an exact sequence is within {lsb} LSB",
+            s.max_abs_8bit
+        ));
+    }
+    if !c.ok() {
+        return Ok(());
+    }
+    let Some(e) = &c.error else {
+        if c.spec.debug_view {
+            return Ok(());
+        }
+        return Err("it passed (no `failure`) without `error` figures: a shaded frame is measured against the reference".into());
+    };
+    if e.nan_pixels > 0 {
+        return Err(format!(
+            "it passed (no `failure`) with {} NaN pixels (`error.nan_pixels`): a frame with NaN pixels fails",
+            e.nan_pixels
+        ));
+    }
+    if c.exact_claim && e.max_abs_8bit > lsb {
+        return Err(format!(
+            "it passed (no `failure`) at {} LSB (`error.max_abs_8bit`), but its variant claims to be exact (`exact_claim`): within {lsb} LSB",
+            e.max_abs_8bit
+        ));
+    }
+    Ok(())
+}
+
+/// Each interval is [lo, hi] in milliseconds at a level between `measure::LEVEL` and 1,
+/// and holds its median.
+fn check_intervals(c: &CellRecord) -> Result<(), String> {
+    if c.gpu_ms_interval.is_empty() {
+        return Ok(());
+    }
+    let level = c.interval_level.unwrap_or(f64::NAN);
+    if !(crate::measure::LEVEL..=1.0).contains(&level) {
+        return Err(format!(
+            "`interval_level` is {level}: an interval's level is in {}..=1",
+            crate::measure::LEVEL
+        ));
+    }
+    for (name, v) in &c.gpu_ms_interval {
+        let field = format!("gpu_ms_interval.{name}");
+        let pair = v.as_array().filter(|a| a.len() == 2);
+        let Some([lo, hi]) = pair.map(|a| [a[0].as_f64(), a[1].as_f64()]) else {
+            return Err(format!(
+                "`{field}` is {v}: an interval is [lo, hi] in milliseconds"
+            ));
+        };
+        let (lo, hi) = (time(&field, lo)?, time(&field, hi)?);
+        let median = c.gpu_ms.get(name).and_then(serde_json::Value::as_f64);
+        if lo > hi || median.is_some_and(|m| !(lo <= m && m <= hi)) {
+            return Err(format!(
+                "`{field}` is [{lo}, {hi}]: an interval has lo <= hi and holds its median ({})",
+                median.map_or("none".into(), |m| m.to_string())
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// A distance from perfect culling is its bound over its frame: a ratio above 1 is flagged
+/// (within the frame's noise, or a bound above its frame), and never both.
+fn check_efficiency(
+    e: &crate::efficiency::Efficiency,
+    frame_ms: Option<f64>,
+) -> Result<(), String> {
+    if e.within_noise && e.bound_above_frame {
+        return Err("`efficiency` is both `within_noise` and `bound_above_frame`: a bound past its frame is one or the other".into());
+    }
+    if e.efficiency > 1.0 && !(e.within_noise || e.bound_above_frame) {
+        return Err(format!(
+            "`efficiency.efficiency` is {}: a bound above its frame is flagged `within_noise` (inside the frame's interval) or `bound_above_frame`, never a plain ratio above 1",
+            e.efficiency
+        ));
+    }
+    if e.bound_above_frame && e.efficiency <= 1.0 {
+        return Err(format!(
+            "`efficiency.bound_above_frame` is set, but `efficiency.efficiency` is {}: the bound is not above its frame",
+            e.efficiency
+        ));
+    }
+    if let Some(frame) = frame_ms.filter(|&f| f > 0.0) {
+        // Rounded figures: the bound and the frame to 0.0005 ms each, the ratio to 0.00005.
+        let ratio = e.bound_ms / frame;
+        let slack = ratio * (0.0005 / e.bound_ms.max(1e-3) + 0.0005 / frame) + 0.00005;
+        if (e.efficiency - ratio).abs() > slack + 1e-12 {
+            return Err(format!(
+                "`efficiency.efficiency` is {}, but `efficiency.bound_ms` over `gpu_ms.total` is {} / {frame} = {ratio:.4}",
+                e.efficiency, e.bound_ms
+            ));
+        }
+    }
+    Ok(())
 }
 
 fn check_cell(c: &CellRecord) -> Result<(), String> {
@@ -77,6 +195,8 @@ fn check_cell(c: &CellRecord) -> Result<(), String> {
             return Err("it ran (no `failure`) but timed 0 `frames`".into());
         }
     }
+    check_intervals(c)?;
+    check_verdict(c)?;
     if let Some(s) = c.speedup_vs_naive
         && !(s.is_finite() && s > 0.0)
     {
@@ -193,13 +313,13 @@ fn check_cell(c: &CellRecord) -> Result<(), String> {
                 "efficiency.ns_per_useful_evaluation",
                 e.ns_per_useful_evaluation,
             ),
-            // Results written before the bound was capped hold ratios above 1.
             ("efficiency.efficiency", e.efficiency),
         ] {
             if !(v.is_finite() && v >= 0.0) {
                 return Err(format!("`{field}` is {v}: it is finite and 0 or more"));
             }
         }
+        check_efficiency(e, c.total_ms())?;
     }
     for (field, path) in [
         ("images.image", &c.images.image),

@@ -42,7 +42,7 @@ pub fn missing_display() -> Option<String> {
     ));
     let display = ["DISPLAY", "WAYLAND_DISPLAY"]
         .iter()
-        .any(|v| std::env::var_os(v).is_some_and(|d| !d.is_empty()));
+        .any(|v| crate::environment::var_os(v).is_some_and(|d| !d.is_empty()));
     (unix_desktop && !display).then(|| {
         "`view` opens a window and this machine has no display (neither DISPLAY nor WAYLAND_DISPLAY is set): run it under a virtual one, `xvfb-run -a clusterlab view ...` (Debian's package xvfb); every other command needs none".to_string()
     })
