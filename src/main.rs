@@ -567,6 +567,9 @@ fn main() -> ExitCode {
         eprintln!("error: {message}");
         return ExitCode::FAILURE;
     }
+    if let Some(note) = clusterlab::compose::perturbation_note() {
+        eprintln!("{note}");
+    }
     spread_software_gpu_threads();
     let result = match cli.command {
         Command::Validate { paths, json } => validate(&paths, json),

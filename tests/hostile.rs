@@ -754,6 +754,26 @@ fn merge_and_baseline_refuse_figures_no_run_could_write() {
         ("merge_flip_over_one", |r| {
             r["cells"][0]["error"]["flip_mean"] = 1.5.into()
         }),
+        // Figures that fail a cell, recorded as passing: pass or fail is derived from the
+        // figures, never taken as written.
+        ("merge_exact_cell_at_200_lsb", |r| {
+            r["cells"][0]["error"]["max_abs_8bit"] = 200.into()
+        }),
+        ("merge_nan_pixels_passing", |r| {
+            r["cells"][0]["error"]["nan_pixels"] = 3.into()
+        }),
+        ("merge_error_null", |r| r["cells"][0]["error"] = Value::Null),
+        ("merge_efficiency_above_one", |r| {
+            r["cells"][0]["efficiency"] = json!({
+                "frame_without_lights_ms": 0.5, "ns_per_evaluation": 1.0,
+                "ns_per_useful_evaluation": 1.0, "bound_ms": 2.0, "efficiency": 2.0,
+                "spread": [2.0, 2.0], "within_noise": false, "bound_above_frame": false
+            });
+            r["cells"][0]["gpu_ms"]["total"] = 1.0.into();
+        }),
+        ("merge_run_out_of_range", |r| {
+            r["cells"][0]["run"] = 7.into()
+        }),
         ("merge_no_provenance", |r| r["provenance"] = json!([])),
         ("merge_no_cells", |r| r["cells"] = json!([])),
     ];
@@ -763,6 +783,29 @@ fn merge_and_baseline_refuse_figures_no_run_could_write() {
         edit_results(&s, edit);
         case(name, &["merge", "shard", "--out", "merged"], 1).check(&s);
     }
+    // The same records are refused by `--reuse`, which would serve them as this run's.
+    let s = Sandbox::new("reuse_exact_cell_at_200_lsb");
+    make_shard(&s);
+    edit_results(&s, |r| r["cells"][0]["error"]["max_abs_8bit"] = 200.into());
+    let mut args = tiny_matrix("again");
+    args.extend(["--reuse", "shard"]);
+    case("reuse_exact_cell_at_200_lsb", &args, 1)
+        .expect("`error.max_abs_8bit`")
+        .check(&s);
+    // A sequence marked exact at 200 LSB.
+    let s = Sandbox::new("merge_sequence_exact_at_200_lsb");
+    let (code, text) = s.run("project", &tiny_sequence_matrix("shard"), &[]);
+    assert_eq!(code, Some(0), "{text}");
+    edit_results(&s, |r| {
+        r["cells"][0]["sequence_summary"]["max_abs_8bit"] = 200.into();
+        r["cells"][0]["sequence_summary"]["exact"] = true.into();
+    });
+    case(
+        "merge_sequence_exact_at_200_lsb",
+        &["merge", "shard", "--out", "merged"],
+        1,
+    )
+    .check(&s);
     let s = Sandbox::new("baseline_negative_time");
     make_shard(&s);
     edit_results(&s, |r| r["cells"][0]["wall_ms"] = (-1.0).into());

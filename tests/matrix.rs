@@ -877,3 +877,149 @@ fn an_efficiency_above_100_percent_is_flagged_never_clamped() {
     assert!(broken.check().is_err(), "a clamped bound passes the check");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `--reuse` takes a cell only where every input that can change its figures is as it was:
+/// each environment variable of `environment::VARIABLES` that changes figures, the frames
+/// asked for, the variant file. Changed one at a time, each reruns the cell; unchanged, it
+/// is reused (the control).
+#[test]
+fn every_input_that_changes_a_figure_reruns_the_cell() {
+    use clusterlab::environment::{Effect, VARIABLES};
+    let dir = scratch("reuse-inputs");
+    let variant = dir.join("mine.ron");
+    std::fs::copy("variants/forward_plus.ron", &variant).unwrap();
+    let run = |out: &str, extra: &[&str], env: &[(&str, &str)]| {
+        let mut args = vec![
+            "matrix",
+            "--variants",
+            variant.to_str().unwrap(),
+            "--scenes",
+            "one_light",
+            "--size",
+            "16x9",
+            "--warmup",
+            "0",
+            "--out",
+        ];
+        let out = dir.join(out);
+        args.push(out.to_str().unwrap());
+        args.extend_from_slice(extra);
+        if !extra.contains(&"--frames") {
+            args.extend(["--frames", "1"]);
+        }
+        let (ok, text) = cli(&args).envs(env).run().succeeded();
+        assert!(ok, "{text}");
+        text
+    };
+    run("first", &[], &[]);
+    let first = dir.join("first");
+    let reuse = ["--reuse", first.to_str().unwrap()];
+    // The variant and the naive forward baseline the matrix adds.
+    let reused = |text: &str| text.contains("reused 2 of 2 cells");
+    assert!(
+        reused(&run("same", &reuse, &[])),
+        "the control: nothing changed"
+    );
+    // A value for each variable other than the one the test runs with.
+    let value = |name: &str| -> &'static str {
+        let now = std::env::var(name).unwrap_or_default();
+        let candidates: &[&'static str] = match name {
+            "CLUSTERLAB_PERTURB_DEPTH_ULPS" => &["32", "64"],
+            "CLUSTERLAB_WITHOUT" => &["timestamps", "early-depth"],
+            "CLUSTERLAB_TIMING" => &["wall", "timestamps"],
+            "CLUSTERLAB_MAX_BUFFER_SIZE" => &["1073741824", "1073741825"],
+            "WGPU_BACKEND" => &["vulkan", "gl"],
+            "WGPU_ADAPTER_NAME" => &["llvmpipe", "lavapipe"],
+            "LP_NUM_THREADS" => &["3", "5"],
+            other => panic!("{other} changes figures: give the test a value for it"),
+        };
+        candidates.iter().find(|c| **c != now).unwrap()
+    };
+    for v in VARIABLES.iter().filter(|v| v.effect == Effect::Figures) {
+        let text = run(v.name, &reuse, &[(v.name, value(v.name))]);
+        assert!(
+            !reused(&text),
+            "{} changed and the cell was reused:\n{text}",
+            v.name
+        );
+    }
+    let text = run(
+        "frames",
+        &["--frames", "2", "--reuse", first.to_str().unwrap()],
+        &[],
+    );
+    assert!(!reused(&text), "--frames 2: {text}");
+    std::fs::write(
+        &variant,
+        std::fs::read_to_string(&variant)
+            .unwrap()
+            .replace("description: \"", "description: \"mine: "),
+    )
+    .unwrap();
+    assert!(
+        !reused(&run("edited", &reuse, &[])),
+        "an edited variant file"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Two copies of one variant, timed in interleaved rounds: their intervals overlap, so the
+/// report calls them a tie, not one faster than the other, in results.json (rank, Pareto),
+/// the terminal table and the page's "At a glance".
+#[test]
+fn two_equal_variants_are_a_tie() {
+    use clusterlab::matrix::Rank;
+    use clusterlab::measure::{Interval, Verdict};
+    let dir = scratch("tie");
+    for name in ["twin_a", "twin_b"] {
+        std::fs::copy("variants/forward_plus.ron", dir.join(format!("{name}.ron"))).unwrap();
+    }
+    let out = dir.join("out");
+    let (ok, text) = cli([
+        "matrix",
+        "--variants",
+        dir.join("twin_a.ron").to_str().unwrap(),
+        dir.join("twin_b.ron").to_str().unwrap(),
+        "--scenes",
+        "atrium",
+        "--size",
+        "64x36",
+        "--frames",
+        "12",
+        "--out",
+        out.to_str().unwrap(),
+    ])
+    .run()
+    .succeeded();
+    assert!(ok, "{text}");
+    let results = Results::load(&out).unwrap();
+    let twin = |name: &str| {
+        results
+            .cells
+            .iter()
+            .find(|c| c.spec.variant == name)
+            .unwrap()
+    };
+    let (a, b) = (twin("twin_a"), twin("twin_b"));
+    let (ia, ib) = (a.total_interval().unwrap(), b.total_interval().unwrap());
+    // 12 frames: k = 3 (P(B <= 2) = 79/4096), coverage 1 - 158/4096 = 0.9614.
+    assert_eq!(ia.level, 1.0 - 158.0 / 4096.0);
+    assert_eq!(
+        Interval::compare(Some(&ia), Some(&ib)),
+        Verdict::Tie,
+        "{ia:?} {ib:?}"
+    );
+    assert_eq!(
+        a.pareto, b.pareto,
+        "neither is faster, so one is dominated only with the other"
+    );
+    let mut ranks = [a.rank.unwrap(), b.rank.unwrap()];
+    ranks.sort_by_key(|r| *r != Rank::Fastest);
+    if ranks[0] == Rank::Fastest {
+        assert_eq!(ranks[1], Rank::TiedWithFastest);
+    }
+    assert!(text.contains(" tie "), "{text}");
+    let page = std::fs::read_to_string(out.join("index.html")).unwrap();
+    assert!(page.contains("tied with it ("), "At a glance names the tie");
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -10,6 +10,7 @@ mod compose;
 mod constants;
 mod debug_views;
 mod device;
+mod environment;
 mod features;
 mod folders;
 mod fuzz;

@@ -107,6 +107,16 @@ pub fn perturbed_depth_ulps() -> u32 {
         .unwrap_or(0)
 }
 
+/// What a run perturbed by [`PERTURB_DEPTH_VAR`] prints first, and None for a stock run.
+pub fn perturbation_note() -> Option<String> {
+    match perturbed_depth_ulps() {
+        0 => None,
+        n => Some(format!(
+            "note: {PERTURB_DEPTH_VAR}={n}: every depth the marking passes read is moved {n} units in the last place (a test mode of what another rasteriser may store); results record it, and their figures are not a stock run's"
+        )),
+    }
+}
+
 /// The variant's spatial reuse, if its light loop has one.
 fn spatial_reuse(v: &Variant) -> Option<crate::variant::SpatialReuse> {
     match v.shading.lights.sampling()?.method {

@@ -24,6 +24,8 @@ pub struct Measured<'a> {
     pub rank: Option<super::Rank>,
     /// The earlier run a reused cell was taken from.
     pub reused_from: Option<&'a str>,
+    /// Depths moved by this many units in the last place (a test mode; 0: stock).
+    pub perturbed_depth_ulps: u32,
     pub error: Option<&'a ErrorMetrics>,
     pub stats: Option<&'a FrameStats>,
     pub efficiency: Option<&'a crate::efficiency::Efficiency>,
@@ -80,6 +82,7 @@ impl CellRecord {
             pareto: self.pareto,
             rank: self.rank,
             reused_from: self.reused_from.as_deref(),
+            perturbed_depth_ulps: self.perturbed_depth_ulps,
             error: self.error.as_ref(),
             stats: self.stats.as_ref(),
             efficiency: self.efficiency.as_ref(),
@@ -108,6 +111,7 @@ impl RenderReport {
             pareto: false,
             rank: None,
             reused_from: None,
+            perturbed_depth_ulps: crate::compose::perturbed_depth_ulps(),
             error: self.error.as_ref(),
             stats: self.stats.as_ref(),
             efficiency: self.efficiency.as_ref(),
@@ -646,6 +650,20 @@ pub const COLUMNS: &[Column] = &[
         shown: CSV_AND_HTML,
         value: |m| m.reused_from.map(str::to_string).into(),
         text: |m| m.reused_from.unwrap_or_default().to_string(),
+    },
+    Column {
+        key: "perturbed_depth_ulps",
+        heading: "perturbed",
+        meaning: "a test mode: every depth the marking passes read was moved this many units in the last place (`CLUSTERLAB_PERTURB_DEPTH_ULPS`), as another rasteriser may store it; empty for a stock run",
+        shown: CSV_AND_HTML,
+        value: |m| match m.perturbed_depth_ulps {
+            0 => Cell::Missing,
+            n => n.into(),
+        },
+        text: |m| match m.perturbed_depth_ulps {
+            0 => String::new(),
+            n => format!("{n} ULP"),
+        },
     },
     Column {
         key: "timing_stop",

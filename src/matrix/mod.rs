@@ -98,6 +98,10 @@ pub struct CellRecord {
     /// (`run::exact_claim`): a record over it that says it passed is refused.
     #[serde(default)]
     pub exact_claim: bool,
+    /// Made with every depth marking read moved this many units in the last place
+    /// (`CLUSTERLAB_PERTURB_DEPTH_ULPS`, a test mode; 0 for a stock run).
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub perturbed_depth_ulps: u32,
     /// Taken unchanged from an earlier run (`--reuse`): that run's date and revision.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub reused_from: Option<String>,
@@ -222,6 +226,7 @@ impl CellRecord {
             run: 0,
             reused_from: None,
             exact_claim: false,
+            perturbed_depth_ulps: 0,
             vs_baseline: None,
             skipped_passes: Vec::new(),
             warmup_frames: 0,
@@ -633,6 +638,12 @@ pub fn run(
     }
     let mut provenance = provenance(gpu, composer, options);
     provenance.cost = Some(cost);
+    let mut records = records;
+    for r in &mut records {
+        if !reused_ids.contains(&r.spec.id.as_str()) {
+            r.perturbed_depth_ulps = provenance.perturbed_depth_ulps;
+        }
+    }
     let mut results = Results {
         provenance: vec![provenance],
         cells: records,
@@ -1034,6 +1045,7 @@ fn finish(pending: Pending, options: &MatrixOptions, references: &ReferenceCache
         run: 0,
         reused_from: None,
         exact_claim: r.exact_claim,
+        perturbed_depth_ulps: 0,
         vs_baseline: None,
         skipped_passes: r.skipped_passes,
         warmup_frames: r.frame_count.warmup,
@@ -1143,6 +1155,7 @@ fn run_sequence(
         run: 0,
         reused_from: None,
         exact_claim: false,
+        perturbed_depth_ulps: 0,
         vs_baseline: None,
         skipped_passes: r
             .frames
@@ -1494,6 +1507,10 @@ fn provenance(gpu: &Gpu, composer: &Composer, options: &MatrixOptions) -> Proven
             .map(|s| (s.name.to_string(), s.defaults.into()))
             .collect(),
     }
+}
+
+fn is_zero(n: &u32) -> bool {
+    *n == 0
 }
 
 fn round3(x: f64) -> f64 {
