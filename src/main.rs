@@ -112,9 +112,9 @@ enum Command {
         /// Folder for NAME.csv, NAME.json, NAME.md and the plot.
         #[arg(long, default_value = "out/study")]
         out: PathBuf,
-        /// Codecs: uniform unit vectors to sample (1 to 67108864).
-        #[arg(long, default_value_t = 1 << 20, value_parser = parse_samples)]
-        samples: usize,
+        /// Codecs: uniform unit vectors to sample (1 to 67108864; default 1048576).
+        #[arg(long, value_parser = parse_samples)]
+        samples: Option<usize>,
         /// Image size, WIDTHxHEIGHT (default 640x360; scale: 1920x1080 on a GPU, 640x360 on
         /// a software adapter).
         #[arg(long, value_parser = parse_size)]
@@ -127,10 +127,10 @@ enum Command {
         /// its help says which).
         #[arg(long, value_delimiter = ',')]
         lights: Vec<u32>,
-        /// Timed frames per run, at least 1 (the median is reported; temporal: the frames
-        /// of each sequence after the first).
-        #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..))]
-        frames: u32,
+        /// Timed frames per run, at least 1 (default 3; the median is reported; temporal:
+        /// the frames of each sequence after the first).
+        #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+        frames: Option<u32>,
         #[command(flatten)]
         gpu: GpuArgs,
     },
@@ -612,17 +612,29 @@ fn main() -> ExitCode {
             frames,
             gpu,
         } => {
+            use clusterlab::study::Reads;
+            let given: Vec<Reads> = [
+                (samples.is_some(), Reads::Samples),
+                (size.is_some(), Reads::Size),
+                (!scenes.is_empty(), Reads::Scenes),
+                (!lights.is_empty(), Reads::Lights),
+                (frames.is_some(), Reads::Frames),
+            ]
+            .into_iter()
+            .filter_map(|(given, option)| given.then_some(option))
+            .collect();
+            let defaults = clusterlab::study::StudyOptions::default();
             let mut options = clusterlab::study::StudyOptions {
-                samples,
+                samples: samples.unwrap_or(defaults.samples),
                 size,
                 lights,
-                frames,
-                ..Default::default()
+                frames: frames.unwrap_or(defaults.frames),
+                ..defaults
             };
             if !scenes.is_empty() {
                 options.scenes = scenes;
             }
-            study(&name, &options, json, &out, &gpu)
+            study(&name, &options, &given, json, &out, &gpu)
         }
     };
     match result {

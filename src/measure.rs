@@ -163,23 +163,22 @@ impl Default for Budget {
 }
 
 impl Budget {
-    /// What the matrix uses unless told otherwise: a precision of 3%, at most 10 frames
-    /// (hyperfine's default run count), and 150 ms, which a naive forward frame of the atrium
-    /// at 640x360 (1.6-1.8 s on lavapipe) spends alone: like most naive forward cells, it is
-    /// timed once.
+    /// What the matrix uses unless told otherwise: a precision of 3%, at most 9 frames (9
+    /// and 10 frames give the same trimmed interval, [x(2), x(n-1)]) and 300 ms, which
+    /// gives a cell of up to 43 ms a frame the 6 frames an interval needs ([`MIN_FRAMES`],
+    /// with the two untimed frames first). Naive forward's frames of a second or more are
+    /// timed once, with no interval: they tie with every other time.
     ///
-    /// Why 150 and not more: a cell's time moves about 5% between two runs of the matrix
-    /// (median over its 225 cells; 12-14% at the 90th percentile), whatever the budget, so
-    /// frames past that buy no figure a second run would repeat. Measured on lavapipe, two
-    /// runs each, 300 and 150 taken in turn: 300 ms against 300 ms, a cell's time differed
-    /// by 5.1% at the median and 12.4% at the 90th percentile, 150 against 150 by 5.0% and
-    /// 14.0%, 300 against 150 by 4.7-6.1% and 13.3-14.8%. Relative to the cells that took
-    /// as many frames at 150, those that took fewer came out 1.0-2.8% faster, not slower.
-    /// The run took 68 s instead of 81.
+    /// Measured on lavapipe over the default matrix (294 cells, its first group at
+    /// 320x180): at 150 ms and 10 frames, 106 cells had an interval (91 were timed once);
+    /// at 400 ms, 258, in 150 s; at 300 ms and 9 frames, by the same cells' frame times,
+    /// 220 in about 8 s less. A cell's time moved about 5% between two runs of the matrix
+    /// (median over its cells; 12-14% at the 90th percentile) with 150 or 300 ms alike, so
+    /// the budget buys intervals, not steadier medians.
     pub const DEFAULT: Budget = Budget {
         precision: 0.03,
-        budget_ms: 150.0,
-        max_frames: 10,
+        budget_ms: 300.0,
+        max_frames: 9,
     };
 
     /// Whether the frames timed so far (milliseconds each) are enough, after untimed frames

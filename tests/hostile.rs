@@ -373,6 +373,34 @@ fn no_command_replaces_moves_or_deletes_what_it_did_not_make() {
             ),
             |s| s.link("project/link.glb", "home.txt"),
         ),
+        // A study writes only into a folder studies wrote, and checks every target first.
+        (
+            case(
+                "study_out_holds_a_users_scale_csv",
+                &[
+                    "study", "scale", "--lights", "64", "--size", "32x18", "--out", "notes",
+                ],
+                1,
+            ),
+            |s| s.write("project/notes/scale.csv", b"my own table\n"),
+        ),
+        (
+            case(
+                "study_target_is_a_link",
+                &[
+                    "study", "scale", "--lights", "64", "--size", "32x18", "--out", "studies",
+                ],
+                1,
+            )
+            .expect("as a link or folder"),
+            |s| {
+                s.write(
+                    "project/studies/.clusterlab-study",
+                    b"clusterlab studies\nprocess 1\n",
+                );
+                s.link("project/studies/scale.md", "../home.txt");
+            },
+        ),
         (
             case(
                 "render_image_onto_a_folder",
@@ -1575,4 +1603,133 @@ fn a_sequence_with_no_light_of_a_kind_runs_exactly() {
             );
         }
     }
+}
+
+/// Numbers a researcher can quote: what would mislead (an option that changes nothing, a
+/// count run twice, a cache inside the project, a shader nested past what the parser
+/// survives) is refused with the reason, and `--reuse` takes what a user would give it.
+#[test]
+fn what_would_mislead_is_refused_and_reuse_takes_what_a_user_gives() {
+    let study = |name, args: &[&'static str]| {
+        let mut all = vec!["study", "scale"];
+        all.extend_from_slice(args);
+        case(name, &all, 1)
+    };
+    let deep = format!(
+        "const too_deep = {}1.0{};\n",
+        "(".repeat(20_000),
+        ")".repeat(20_000)
+    );
+    let tree = env!("CARGO_MANIFEST_DIR");
+    run_all(vec![
+        (
+            study("study_reads_no_scenes", &["--scenes", "/etc/passwd"]),
+            nothing,
+        ),
+        (
+            study(
+                "study_lights_twice",
+                &["--lights", "64,64", "--size", "32x18"],
+            ),
+            nothing,
+        ),
+        (
+            case("cache_inside_the_project", &["scenes"], 1)
+                .env("CLUSTERLAB_CACHE", format!("{tree}/target/a-cache"))
+                .expect("lies inside clusterlab's source tree"),
+            nothing,
+        ),
+        (
+            {
+                let mut args = tiny_matrix("again");
+                args.extend(["--reuse", "shard/results.json"]);
+                case("reuse_given_its_results_json", &args, 0)
+                    .allow("project/again")
+                    .allow("project/again.lock")
+                    .expect("reused 2 of 2 cells")
+            },
+            make_shard,
+        ),
+        (
+            {
+                let mut args = tiny_matrix("again");
+                args.extend(["--reuse", "merged"]);
+                case("reuse_of_a_merged_folder", &args, 1)
+                    .expect("a folder `merge` made from 2 runs")
+            },
+            |s| {
+                make_shard(s);
+                let mut other = tiny_matrix("other");
+                other[4] = "empty";
+                let (code, text) = s.run("project", &other, &[]);
+                assert_eq!(code, Some(0), "{text}");
+                let (code, text) = s.run(
+                    "project",
+                    &["merge", "shard", "other", "--out", "merged"],
+                    &[],
+                );
+                assert_eq!(code, Some(0), "{text}");
+            },
+        ),
+        (
+            {
+                let mut args = tiny_matrix("again");
+                args.extend(["--reuse", "shard"]);
+                case("reuse_recipe_nested_20000_deep", &args, 0)
+                    .allow("project/again")
+                    .allow("project/again.lock")
+                    .expect("reused 0 of 2 cells")
+            },
+            |s| {
+                make_shard(s);
+                let path = s.path("project/shard/reuse.json");
+                let mut index: Value =
+                    serde_json::from_slice(&std::fs::read(&path).unwrap()).unwrap();
+                for recipe in index["recipes"].as_object_mut().unwrap().values_mut() {
+                    let constants = recipe["constants"].as_str().unwrap().to_string();
+                    let deep = format!(
+                        "const too_deep = {}1.0{};\n",
+                        "(".repeat(20_000),
+                        ")".repeat(20_000)
+                    );
+                    recipe["constants"] = (constants + &deep).into();
+                }
+                std::fs::write(path, serde_json::to_vec(&index).unwrap()).unwrap();
+            },
+        ),
+    ]);
+    // A shader module nested 20,000 deep: a clear error, not a stack overflow.
+    let s = Sandbox::new("shader_nested_20000_deep");
+    copy_shaders(&s, "project/shaders");
+    let brdf = s.path("project/shaders/shading/brdf.wesl");
+    let mut text = std::fs::read_to_string(&brdf).unwrap();
+    text.push_str(&deep);
+    std::fs::write(&brdf, text).unwrap();
+    let shaders = s.path("project/shaders");
+    case(
+        "shader_nested_20000_deep",
+        &["validate", "variants/forward_plus.ron"],
+        1,
+    )
+    .env("CLUSTERLAB_SHADERS", shaders.to_str().unwrap())
+    .expect("brackets nest more than 256 deep here")
+    .check(&s);
+    report();
+}
+
+/// A copy of clusterlab's shader folder at `rel` in the sandbox.
+fn copy_shaders(s: &Sandbox, rel: &str) {
+    fn copy(from: &Path, to: &Path) {
+        std::fs::create_dir_all(to).unwrap();
+        for e in std::fs::read_dir(from).unwrap() {
+            let e = e.unwrap();
+            let target = to.join(e.file_name());
+            if e.file_type().unwrap().is_dir() {
+                copy(&e.path(), &target);
+            } else {
+                std::fs::copy(e.path(), target).unwrap();
+            }
+        }
+    }
+    copy(Path::new("shaders"), &s.path(rel));
 }

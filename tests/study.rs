@@ -391,6 +391,34 @@ fn a_failing_point_leaves_its_named_row_and_the_others_run() {
     assert!(done.table().terminal().contains("FAILED"));
 }
 
+/// At 0 lights a study claims no useful share (not "100% useful" of 0 of 0) and writes no
+/// negative zero (an empty sum of pass times is -0.0 in Rust).
+#[test]
+fn a_study_at_no_lights_claims_no_share_and_writes_no_negative_zero() {
+    let dir = scratch("no-lights").join("results");
+    for study in ["scale", "cones"] {
+        let out = cli([
+            "study", study, "--lights", "0", "--size", "32x18", "--frames", "1",
+        ])
+        .arg("--out")
+        .arg(&dir)
+        .run();
+        assert_eq!(out.code, Some(0), "{study}: {}", out.printed());
+        for ext in ["csv", "json", "md"] {
+            let text = std::fs::read_to_string(dir.join(format!("{study}.{ext}"))).unwrap();
+            assert!(
+                !text.contains("-0.0") && !text.contains(",-0,"),
+                "{study}.{ext}: {text}"
+            );
+            assert!(
+                !text.contains("100.0%"),
+                "{study}.{ext} claims a share of nothing: {text}"
+            );
+        }
+    }
+    let _ = std::fs::remove_dir_all(dir.parent().unwrap());
+}
+
 #[test]
 fn the_study_command_writes_every_file() {
     let dir = scratch("codecs").join("results");

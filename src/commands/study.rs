@@ -7,12 +7,16 @@ use std::path::Path;
 pub(crate) fn study(
     name: &str,
     options: &clusterlab::study::StudyOptions,
+    given: &[clusterlab::study::Reads],
     json: bool,
     out: &Path,
     gpu: &GpuArgs,
 ) -> Result<bool, String> {
-    clusterlab::files::write::check_folder(out, "--out")?;
     let study = clusterlab::study::find(name).map_err(|e| e.to_string())?;
+    study
+        .check_given(given, &options.lights)
+        .map_err(|e| e.to_string())?;
+    clusterlab::study::check_folder(out, name)?;
     let gpu = gpu.open()?;
     eprintln!(
         "study {name} on {} ({}, {})",

@@ -50,10 +50,48 @@ impl ShaderResolver {
     }
 }
 
+/// The deepest a shader module may nest brackets: wesl parses recursively, and about 20,000
+/// nested parentheses overflowed its stack and aborted the process (10,000 did not); this
+/// project's modules nest under 10.
+pub const MAX_NESTING: usize = 256;
+
+/// Where `text` first nests ( [ { deeper than [`MAX_NESTING`]: its 1-based line and column.
+pub fn too_deep(text: &str) -> Option<(usize, usize)> {
+    let (mut depth, mut line, mut column) = (0usize, 1, 0);
+    for c in text.chars() {
+        column += 1;
+        match c {
+            '\n' => (line, column) = (line + 1, 0),
+            '(' | '[' | '{' => {
+                depth += 1;
+                if depth > MAX_NESTING {
+                    return Some((line, column));
+                }
+            }
+            ')' | ']' | '}' => depth = depth.saturating_sub(1),
+            _ => {}
+        }
+    }
+    None
+}
+
+/// `text` of module `shown`, or an error where it nests too deep for the parser.
+fn checked<'a>(shown: &str, text: Cow<'a, str>) -> Result<Cow<'a, str>, ResolveError> {
+    match too_deep(&text) {
+        None => Ok(text),
+        Some((line, column)) => Err(ResolveError::Error(wesl::Diagnostic::from(
+            wesl::Error::Custom(format!(
+                "{shown}:{line}:{column}: brackets nest more than {MAX_NESTING} deep here: a shader module may nest at most {MAX_NESTING} (the WESL parser is recursive)"
+            )),
+        ))),
+    }
+}
+
 impl Resolver for ShaderResolver {
     fn resolve_source<'a>(&'a self, path: &ModulePath) -> Result<Cow<'a, str>, ResolveError> {
+        let shown = self.display_name(path).unwrap_or_else(|| path.to_string());
         if Self::is_constants(path) {
-            return Ok(Cow::Borrowed(&self.constants));
+            return checked(&shown, Cow::Borrowed(&self.constants));
         }
         // Read here rather than by wesl's resolver, which reads a file whole whatever it is
         // (a named pipe in the shader folder would block the run).
@@ -61,9 +99,9 @@ impl Resolver for ShaderResolver {
             // No such file: wesl's own error says so.
             return self.files.resolve_source(path);
         };
-        crate::files::read_text(&file, crate::files::read::SHADER)
-            .map(Cow::Owned)
-            .map_err(|e| ResolveError::ModuleNotFound(path.clone(), e.to_string()))
+        let text = crate::files::read_text(&file, crate::files::read::SHADER)
+            .map_err(|e| ResolveError::ModuleNotFound(path.clone(), e.to_string()))?;
+        checked(&shown, Cow::Owned(text))
     }
 
     fn display_name(&self, path: &ModulePath) -> Option<String> {

@@ -193,6 +193,94 @@ fn marker_text(header: &str, extra: &str) -> String {
     format!("{header}\nprocess {}\n{extra}", me())
 }
 
+/// The marker a study's output folder holds (`study --out`): several studies write their
+/// files side by side there, so the folder is not swapped whole; it is the tool's only when
+/// new, empty, or holding this marker and nothing but studies' files.
+pub const STUDY_MARKER: &str = ".clusterlab-study";
+const STUDY_HEADER: &str = "clusterlab studies";
+
+/// Make `dir` a study folder that may take `files` (names inside it), or say why not: it is
+/// new, empty, or holds [`STUDY_MARKER`] and only names `is_study_file` accepts; it is no
+/// link, not the working folder or one above it, and none of `files` exists as anything
+/// but a regular file. Every check comes before the first write; the marker is written
+/// last.
+pub fn claim_study_folder(
+    dir: &Path,
+    files: &[&str],
+    is_study_file: impl Fn(&str) -> bool,
+) -> Result<(), String> {
+    check_study_folder(dir, files, &is_study_file)?;
+    create_folder(dir)?;
+    let marker = dir.join(STUDY_MARKER);
+    if !marker.exists() {
+        super::write_file(&marker, marker_text(STUDY_HEADER, "").as_bytes())?;
+    }
+    Ok(())
+}
+
+/// [`claim_study_folder`]'s checks, writing nothing (a study checks its folder before it
+/// runs, so a refused folder costs no work).
+pub fn check_study_folder(
+    dir: &Path,
+    files: &[&str],
+    is_study_file: &dyn Fn(&str) -> bool,
+) -> Result<(), String> {
+    let refuse = |why: String| {
+        Err(format!(
+            "--out `{}` {why}: a study writes only into a new folder, an empty one or one studies wrote (it holds `{STUDY_MARKER}` and only their files)",
+            shown(dir)
+        ))
+    };
+    let meta = match std::fs::symlink_metadata(dir) {
+        Ok(meta) => meta,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(()),
+        Err(e) => return Err(format!("--out `{}`: {}", shown(dir), describe(&e))),
+    };
+    if !meta.is_dir() {
+        return refuse(format!("is {}", what_is(&meta)));
+    }
+    if let (Ok(cwd), Ok(target)) = (
+        std::env::current_dir().and_then(std::fs::canonicalize),
+        std::fs::canonicalize(dir),
+    ) && cwd.starts_with(&target)
+    {
+        return refuse("is the working folder or a folder above it".into());
+    }
+    let unreadable =
+        |e: std::io::Error| format!("{}: cannot read folder: {}", shown(dir), describe(&e));
+    let mut names = Vec::new();
+    let mut marked = false;
+    for entry in std::fs::read_dir(dir).map_err(unreadable)? {
+        let entry = entry.map_err(unreadable)?;
+        let name = entry.file_name().to_string_lossy().into_owned();
+        let kind = entry.file_type().map_err(unreadable)?;
+        if name == STUDY_MARKER {
+            if !kind.is_file() || marker_process(&entry.path(), STUDY_HEADER).is_none() {
+                return refuse(format!("holds a `{STUDY_MARKER}` clusterlab did not write"));
+            }
+            marked = true;
+        } else if files.contains(&name.as_str()) && !kind.is_file() {
+            return refuse(format!("holds `{name}` as a link or folder, not a file"));
+        }
+        names.push((name, kind.is_file()));
+    }
+    if names.is_empty() {
+        return Ok(());
+    }
+    if !marked {
+        return refuse(format!(
+            "holds no `{STUDY_MARKER}` (it is not a folder studies wrote)"
+        ));
+    }
+    match names
+        .iter()
+        .find(|(n, file)| n != STUDY_MARKER && !(*file && is_study_file(n)))
+    {
+        Some((n, _)) => refuse(format!("holds `{n}`, which no study writes")),
+        None => Ok(()),
+    }
+}
+
 /// Refuse `path` as an output folder unless it is absent, empty, or a result folder.
 fn check_target(path: &Path) -> Result<(), String> {
     let meta = match std::fs::symlink_metadata(path) {

@@ -131,8 +131,61 @@ impl Gpu {
 fn written_by(bytes: &[u8]) -> String {
     let head = String::from_utf8_lossy(&bytes[..bytes.len().min(512)]).into_owned();
     let mut lines = head.lines().skip(1);
+    // A header is the file's, not ours: its control characters are shown escaped, never
+    // sent to the terminal.
+    let shown = |line: &str| {
+        line.chars()
+            .flat_map(char::escape_debug)
+            .take(200)
+            .collect::<String>()
+    };
     match (lines.next(), lines.next()) {
-        (Some(version), Some(adapter)) => format!("{version} on {adapter}"),
+        (Some(version), Some(adapter)) => format!("{} on {}", shown(version), shown(adapter)),
         _ => "an unfinished header".into(),
+    }
+}
+
+/// Refuse a `CLUSTERLAB_CACHE` inside clusterlab's source tree: the cache is kept outside
+/// the project (a cache file there would be committed, or cleaned away with the tree).
+pub fn check_environment() -> Result<(), String> {
+    let Some(value) =
+        crate::environment::var_os(CACHE_VAR).filter(|v| !v.is_empty() && *v != "off")
+    else {
+        return Ok(());
+    };
+    let path = PathBuf::from(&value);
+    // The deepest part of the path that exists, made canonical (the folder may not yet).
+    let mut existing = path.as_path();
+    let canonical = loop {
+        if let Ok(c) = std::fs::canonicalize(existing) {
+            break c.join(path.strip_prefix(existing).unwrap_or(Path::new("")));
+        }
+        match existing.parent() {
+            Some(parent) if !parent.as_os_str().is_empty() => existing = parent,
+            _ => break std::env::current_dir().unwrap_or_default().join(&path),
+        }
+    };
+    let tree = std::fs::canonicalize(env!("CARGO_MANIFEST_DIR"));
+    match tree {
+        Ok(tree) if canonical.starts_with(&tree) => Err(format!(
+            "{CACHE_VAR}=`{}` lies inside clusterlab's source tree ({}): the pipeline cache is kept outside the project; give a folder elsewhere, `off` for none, or unset it (the user's cache folder)",
+            path.display(),
+            tree.display()
+        )),
+        _ => Ok(()),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A header written by someone else is shown with its control characters escaped.
+    #[test]
+    fn a_foreign_header_reaches_the_terminal_escaped() {
+        let bytes = b"clusterlab pipeline cache\nclusterlab 9\x1b[2J\nadapter\x07\n";
+        let shown = written_by(bytes);
+        assert!(!shown.chars().any(char::is_control), "{shown:?}");
+        assert!(shown.contains("\\u{1b}[2J"), "{shown}");
     }
 }

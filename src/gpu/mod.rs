@@ -573,6 +573,7 @@ const MAX_SOFTWARE_GPU_THREADS: u32 = 256;
 /// `LP_NUM_THREADS` without a word).
 pub fn check_environment() -> Result<(), String> {
     buffer_cap()?;
+    disk_cache::check_environment()?;
     if let Some(value) = crate::environment::var_os(SOFTWARE_GPU_THREADS) {
         let value = value.to_string_lossy();
         if !value

@@ -98,6 +98,10 @@ pub struct CellRecord {
     /// (`run::exact_claim`): a record over it that says it passed is refused.
     #[serde(default)]
     pub exact_claim: bool,
+    /// What the scene's loader left out or chose, and where the depth margin blunts
+    /// z-culling (`run::margin_note`).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub notes: Vec<String>,
     /// Made with every depth marking read moved this many units in the last place
     /// (`CLUSTERLAB_PERTURB_DEPTH_ULPS`, a test mode; 0 for a stock run).
     #[serde(default, skip_serializing_if = "is_zero")]
@@ -226,6 +230,7 @@ impl CellRecord {
             run: 0,
             reused_from: None,
             exact_claim: false,
+            notes: Vec::new(),
             perturbed_depth_ulps: 0,
             vs_baseline: None,
             skipped_passes: Vec::new(),
@@ -596,6 +601,24 @@ pub fn run(
             })
         })
         .collect();
+    // Each note once, with the cells it concerns.
+    let mut notes: Vec<(&str, Vec<&str>)> = Vec::new();
+    for r in &records {
+        for note in &r.notes {
+            match notes.iter_mut().find(|(n, _)| n == note) {
+                Some((_, ids)) => ids.push(&r.spec.id),
+                None => notes.push((note, vec![&r.spec.id])),
+            }
+        }
+    }
+    for (note, ids) in notes {
+        let shown = ids[..ids.len().min(3)].join(", ");
+        let more = match ids.len() {
+            0..=3 => String::new(),
+            n => format!(" and {} more", n - 3),
+        };
+        bar.println(format!("note ({shown}{more}): {note}"));
+    }
     for r in &records {
         if let Some(why) = &r.failure {
             bar.println(format!(
@@ -1045,6 +1068,7 @@ fn finish(pending: Pending, options: &MatrixOptions, references: &ReferenceCache
         run: 0,
         reused_from: None,
         exact_claim: r.exact_claim,
+        notes: r.scene_notes,
         perturbed_depth_ulps: 0,
         vs_baseline: None,
         skipped_passes: r.skipped_passes,
@@ -1155,6 +1179,7 @@ fn run_sequence(
         run: 0,
         reused_from: None,
         exact_claim: false,
+        notes: Vec::new(),
         perturbed_depth_ulps: 0,
         vs_baseline: None,
         skipped_passes: r

@@ -112,12 +112,9 @@ impl std::ops::Add for AssignmentWork {
 
 impl FrameStats {
     /// Useful evaluations over those performed (1 when none was performed).
-    pub fn useful_fraction(&self) -> f64 {
-        if self.light_evals > 0 {
-            self.useful_light_evals as f64 / self.light_evals as f64
-        } else {
-            1.0
-        }
+    pub fn useful_fraction(&self) -> Option<f64> {
+        // No evaluation at all has no share of useful ones (not 100%).
+        (self.light_evals > 0).then(|| self.useful_light_evals as f64 / self.light_evals as f64)
     }
 }
 

@@ -9,7 +9,7 @@ use serde::Serialize;
 use std::sync::Arc;
 
 use super::table::{Table, sig};
-use super::{StudyError, StudyOptions};
+use super::{Reads, StudyError, StudyOptions};
 use crate::compose::Composer;
 use crate::cpu::normals::*;
 use crate::cpu::normals::{decode, encode};
@@ -285,6 +285,7 @@ pub enum Point {
 
 impl super::Study for CodecStudy {
     const NAME: &'static str = "codecs";
+    const READS: &'static [Reads] = &[Reads::Samples];
     const ABOUT: &'static str = "Angular error of every normal codec at every bit count, on \
         the GPU through the G-buffer's WGSL and by the CPU twin in f64, beside Tyler 2024 and \
         Meyer 2010; GPU and CPU must print the same (--samples)";

@@ -7,7 +7,7 @@ use std::sync::Arc;
 use serde::Serialize;
 use strum::IntoEnumIterator;
 
-use super::{StudyError, StudyOptions, Table};
+use super::{Reads, StudyError, StudyOptions, Table};
 use crate::compose::Composer;
 use crate::gpu::Gpu;
 use crate::render::Renderer;
@@ -40,7 +40,8 @@ pub struct ConeRow {
     pub spot_test: String,
     pub evaluations: u64,
     pub useful_evaluations: u64,
-    pub efficiency: f64,
+    /// None: no light evaluated.
+    pub efficiency: Option<f64>,
     /// Evaluations over those of the sphere test on the same frame (1 for the sphere rows).
     pub over_sphere: Option<f64>,
     pub shading_ms: f64,
@@ -83,6 +84,7 @@ fn named(p: &Point) -> ConeRow {
 
 impl super::Study for ConeStudy {
     const NAME: &'static str = "cones";
+    const READS: &'static [Reads] = &[Reads::Scenes, Reads::Size, Reads::Lights, Reads::Frames];
     const ABOUT: &'static str = "Spot lights culled by their bounding sphere against the cone \
         test, at spot fractions 0, 0.5 and 1 on each scene: evaluations, shading time and \
         lights missed, which must be 0 (--scenes, --size, --lights, --frames)";
@@ -202,7 +204,7 @@ fn table(rows: &[ConeRow]) -> Table {
         cells.extend([
             r.evaluations.to_string(),
             r.useful_evaluations.to_string(),
-            format!("{:.1}%", 100.0 * r.efficiency),
+            super::table::percent(r.efficiency),
             r.over_sphere
                 .map_or("-".into(), |x| format!("{:.1}%", 100.0 * x)),
             format!("{:.1}", r.shading_ms),

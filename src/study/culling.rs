@@ -7,7 +7,7 @@ use std::sync::Arc;
 use serde::Serialize;
 
 use super::table::{Table, sig};
-use super::{StudyError, StudyOptions, measure};
+use super::{Reads, StudyError, StudyOptions, measure};
 use crate::compose::Composer;
 use crate::gpu::Gpu;
 use crate::plot::Plot;
@@ -188,7 +188,8 @@ pub struct CullingRow {
     pub evaluations: u64,
     pub useful_evaluations: u64,
     /// useful / performed.
-    pub efficiency: f64,
+    /// None: no light evaluated.
+    pub efficiency: Option<f64>,
     /// Longest list of a tile or cluster that holds a visible sample.
     pub worst_list: u32,
     /// Median GPU time of the passes that build the lists (depth range, marking, boxes,
@@ -241,6 +242,7 @@ impl CullingStudy {
 
 impl super::Study for CullingStudy {
     const NAME: &'static str = "culling";
+    const READS: &'static [Reads] = &[Reads::Scenes, Reads::Size, Reads::Lights, Reads::Frames];
     const ABOUT: &'static str = "Every culling method (clusters, tiled, 2.5D, Olsson, \
         z-binning, rasterised binning, two-level) on each scene at 64 to 16384 lights, spot \
         fractions 0 and 0.5: evaluations, the worst list, time, list bytes, and which did \
@@ -421,7 +423,11 @@ fn table(rows: &[CullingRow]) -> Table {
             .iter()
             .filter(|r| r.scene == *scene && r.lights == *lights && r.spot_fraction == *spots)
             .collect();
-        ranked.sort_by(|a, b| b.efficiency.total_cmp(&a.efficiency));
+        ranked.sort_by(|a, b| {
+            b.efficiency
+                .unwrap_or(0.0)
+                .total_cmp(&a.efficiency.unwrap_or(0.0))
+        });
         for r in ranked {
             if let Some(e) = &r.error {
                 t.failed_row(vec![label.clone(), r.method.clone(), r.grid.clone()], e);
@@ -433,7 +439,7 @@ fn table(rows: &[CullingRow]) -> Table {
                 r.grid.clone(),
                 r.evaluations.to_string(),
                 r.useful_evaluations.to_string(),
-                format!("{:.1}%", 100.0 * r.efficiency),
+                super::table::percent(r.efficiency),
                 r.worst_list.to_string(),
                 sig(r.assignment_ms, 3),
                 sig(r.shading_ms, 3),
@@ -450,11 +456,11 @@ fn table(rows: &[CullingRow]) -> Table {
                 .unwrap_or_default();
             t.notes.push(format!(
                 "{scene}, {lights} lights, spots {spots}: fastest frame {} ({} ms{next}); \
-                 fewest evaluations {} ({:.1}% useful); smallest lists {} ({} bytes).",
+                 fewest evaluations {} ({} useful); smallest lists {} ({} bytes).",
                 b.fastest.method,
                 sig(b.fastest.frame_ms, 3),
                 b.fewest_evaluations.method,
-                100.0 * b.fewest_evaluations.efficiency,
+                super::table::percent(b.fewest_evaluations.efficiency),
                 b.least_memory.method,
                 b.least_memory.list_bytes,
             ));

@@ -5,7 +5,7 @@ use glam::DVec3;
 use serde::Serialize;
 
 use super::table::{Table, sig};
-use super::{StudyError, StudyOptions};
+use super::{Reads, StudyError, StudyOptions};
 use crate::compose::Composer;
 use crate::cpu::depth::DepthMapping;
 use crate::gpu::Gpu;
@@ -229,6 +229,7 @@ fn named(setup: &Setup, (from, to): (f64, f64)) -> DepthRow {
 
 impl super::Study for DepthStudy {
     const NAME: &'static str = "depth";
+    const READS: &'static [Reads] = &[];
     const ABOUT: &'static str = "Relative error of view depth rebuilt from the depth buffer, \
         for each format and depth mapping, against Reed 2015's model; no plane may be missed";
     type Point = Setup;

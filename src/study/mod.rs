@@ -188,6 +188,8 @@ pub trait Study: Sized {
     const NAME: &'static str;
     /// What it measures, and the options it reads (the command's help).
     const ABOUT: &'static str;
+    /// The options it reads: any other given is refused, as it would change nothing.
+    const READS: &'static [Reads];
     /// One run: a variant on a scene at a light count, a codec on a set of normals, ...
     type Point;
     /// What a point's run gives; a failed point's row holds its error.
@@ -331,7 +333,30 @@ fn conduct<S: Study>(
 pub struct Entry {
     pub name: &'static str,
     pub about: &'static str,
+    pub reads: &'static [Reads],
     conduct: Conduct,
+}
+
+/// The options of `clusterlab study` a study may read.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Reads {
+    Samples,
+    Size,
+    Scenes,
+    Lights,
+    Frames,
+}
+
+impl Reads {
+    pub fn flag(self) -> &'static str {
+        match self {
+            Reads::Samples => "--samples",
+            Reads::Size => "--size",
+            Reads::Scenes => "--scenes",
+            Reads::Lights => "--lights",
+            Reads::Frames => "--frames",
+        }
+    }
 }
 
 type Conduct =
@@ -342,8 +367,37 @@ impl Entry {
         Entry {
             name: S::NAME,
             about: S::ABOUT,
+            reads: S::READS,
             conduct: conduct::<S>,
         }
+    }
+
+    /// Refuse the options `given` that this study does not read (they would change
+    /// nothing), and a light count given twice (it would run twice).
+    pub fn check_given(&self, given: &[Reads], lights: &[u32]) -> Result<(), StudyError> {
+        if let Some(unread) = given.iter().find(|g| !self.reads.contains(g)) {
+            let reads: Vec<&str> = self.reads.iter().map(|r| r.flag()).collect();
+            return Err(StudyError::Usage(format!(
+                "study {} does not read {}: it would change nothing; the options it reads: {}",
+                self.name,
+                unread.flag(),
+                if reads.is_empty() {
+                    "none of these".into()
+                } else {
+                    reads.join(", ")
+                }
+            )));
+        }
+        if let Some((_, n)) = lights
+            .iter()
+            .enumerate()
+            .find(|&(i, n)| lights[..i].contains(n))
+        {
+            return Err(StudyError::Usage(format!(
+                "--lights names {n} twice: each count runs once; give each count once"
+            )));
+        }
+        Ok(())
     }
 
     /// Run the study; `progress` hears of each point as it ends.
@@ -443,15 +497,42 @@ pub fn json(out: &StudyOutput, adapter: &AdapterSummary, command: &str) -> serde
     })
 }
 
-/// Write NAME.csv, NAME.json, NAME.md and the plot into `dir` (each file atomically).
+/// Whether `file` is one a study writes: NAME.csv, .json, .md or .svg of a study in
+/// [`STUDIES`].
+pub fn is_study_file(file: &str) -> bool {
+    file.rsplit_once('.').is_some_and(|(stem, ext)| {
+        ["csv", "json", "md", "svg"].contains(&ext) && STUDIES.iter().any(|e| e.name == stem)
+    })
+}
+
+/// The files study `name` writes.
+pub fn files_of(name: &str) -> [String; 4] {
+    ["csv", "json", "md", "svg"].map(|ext| format!("{name}.{ext}"))
+}
+
+/// Whether study `name` may write its files into `dir` (`files::folder::check_study_folder`):
+/// asked before it runs.
+pub fn check_folder(dir: &Path, name: &str) -> Result<(), String> {
+    let files = files_of(name);
+    let files: Vec<&str> = files.iter().map(String::as_str).collect();
+    crate::files::folder::check_study_folder(dir, &files, &is_study_file)
+}
+
+/// Write NAME.csv, NAME.json, NAME.md and the plot into `dir` (each file atomically), once
+/// the folder is checked to be a study folder that may take them.
 pub fn write(
     dir: &Path,
     out: &StudyOutput,
     adapter: &AdapterSummary,
     command: &str,
 ) -> Result<Vec<PathBuf>, StudyError> {
-    crate::files::write::create_folder(dir).map_err(StudyError::Io)?;
     let name = out.name;
+    let mut names: Vec<String> = files_of(name).into();
+    if let Some(p) = &out.plot {
+        names.push(p.file.clone());
+    }
+    let names: Vec<&str> = names.iter().map(String::as_str).collect();
+    crate::files::folder::claim_study_folder(dir, &names, is_study_file).map_err(StudyError::Io)?;
     let doc = serde_json::to_string_pretty(&json(out, adapter, command))
         .map_err(|e| StudyError::Io(e.to_string()))?;
     let markdown = format!(

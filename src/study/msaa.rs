@@ -9,7 +9,7 @@ use std::sync::Arc;
 
 use serde::Serialize;
 
-use super::{StudyError, StudyOptions, Table};
+use super::{Reads, StudyError, StudyOptions, Table};
 use crate::compose::Composer;
 use crate::gpu::Gpu;
 use crate::measure::Frames;
@@ -80,6 +80,7 @@ fn named(p: &Point) -> MsaaRow {
 
 impl super::Study for MsaaStudy {
     const NAME: &'static str = "msaa";
+    const READS: &'static [Reads] = &[Reads::Scenes, Reads::Size, Reads::Lights, Reads::Frames];
     const ABOUT: &'static str = "Naive forward, Forward+ and clustered deferred (tiled and \
         two-level both ways) at every sample count the adapter multisamples, 1024 lights: \
         time, memory, edge pixels, and where deferred and forward cross over; every run \

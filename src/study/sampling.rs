@@ -11,7 +11,7 @@ use std::sync::Arc;
 
 use serde::Serialize;
 
-use super::{StudyError, StudyOptions, Table};
+use super::{Reads, StudyError, StudyOptions, Table};
 use crate::compose::Composer;
 use crate::gpu::Gpu;
 use crate::metrics;
@@ -142,6 +142,7 @@ impl Point {
 
 impl super::Study for SamplingStudy {
     const NAME: &'static str = "sampling";
+    const READS: &'static [Reads] = &[Reads::Size, Reads::Lights, Reads::Frames];
     const ABOUT: &'static str = "Time against error: the sampled light loops (uniform, RIS, \
         stochastic light culling, ReSTIR's temporal and spatiotemporal reuse) beside the \
         fastest exact variants on the atrium at 1024, 4096 and 16384 lights, radius 2..4 and \

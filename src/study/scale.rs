@@ -10,7 +10,7 @@ use std::sync::Arc;
 use serde::Serialize;
 
 use super::table::{Table, sig};
-use super::{StudyError, StudyOptions};
+use super::{Reads, StudyError, StudyOptions};
 use crate::compose::Composer;
 use crate::gpu::Gpu;
 use crate::measure::Frames;
@@ -116,6 +116,7 @@ fn named(p: &Point) -> ScaleRow {
 
 impl super::Study for ScaleStudy {
     const NAME: &'static str = "scale";
+    const READS: &'static [Reads] = &[Reads::Size, Reads::Lights, Reads::Frames];
     const ABOUT: &'static str = "The exact culling methods from 4096 lights to a million on \
         the atrium (radius scaled with the count): frame, assignment and shading time, \
         evaluations per useful one, the assignment's work, list bytes and exactness; \
@@ -188,14 +189,17 @@ impl super::Study for ScaleStudy {
         let ms = |name: &str| r.gpu_ms.get(name).and_then(|v| v.as_f64());
         let mut row = named(p);
         row.frame_ms = ms("total").unwrap_or(0.0);
+        // `+ 0.0`: a sum of no passes is -0.0 (Rust's float sum starts there), shown "-0.0".
         row.assignment_ms = <crate::compose::ClusterPass as strum::IntoEnumIterator>::iter()
             .filter_map(|p| ms(p.into()))
-            .sum();
+            .sum::<f64>()
+            + 0.0;
         row.shading_ms = renderer
             .shading_pass_names()
             .iter()
             .filter_map(|p| ms(p))
-            .sum();
+            .sum::<f64>()
+            + 0.0;
         if let Some(s) = &r.stats {
             row.evaluations = s.light_evals;
             row.useful_evaluations = s.useful_light_evals;

@@ -6,7 +6,7 @@ use std::sync::Arc;
 use serde::Serialize;
 
 use super::table::{Table, sig};
-use super::{Measured, StudyError, StudyOptions, measure};
+use super::{Measured, Reads, StudyError, StudyOptions, measure};
 use crate::compose::Composer;
 use crate::gpu::Gpu;
 use crate::plot::Plot;
@@ -51,7 +51,8 @@ pub struct SlicingRow {
     pub evaluations: u64,
     pub useful_evaluations: u64,
     /// useful / performed.
-    pub efficiency: f64,
+    /// None: no light evaluated.
+    pub efficiency: Option<f64>,
     /// Median GPU time of the frame over the timed frames, ms.
     pub gpu_ms: f64,
     /// Median time of the shading pass (the light loop), ms.
@@ -153,6 +154,7 @@ fn named(p: &Point) -> SlicingRow {
 
 impl super::Study for SlicingStudy {
     const NAME: &'static str = "slicing";
+    const READS: &'static [Reads] = &[Reads::Scenes, Reads::Size, Reads::Lights, Reads::Frames];
     const ABOUT: &'static str = "Culling efficiency of each z-slicing scheme and grid on each \
         scene, and Olsson 2012's tiled against clustered comparison (--scenes, --size, \
         --lights, --frames)";
@@ -272,7 +274,8 @@ fn table(rows: &[SlicingRow]) -> Table {
             .collect();
         ranked.sort_by(|a, b| {
             b.efficiency
-                .total_cmp(&a.efficiency)
+                .unwrap_or(0.0)
+                .total_cmp(&a.efficiency.unwrap_or(0.0))
                 .then(a.evaluations.cmp(&b.evaluations))
         });
         for r in ranked {
@@ -290,7 +293,7 @@ fn table(rows: &[SlicingRow]) -> Table {
                 r.max_lights_per_occupied.to_string(),
                 r.evaluations.to_string(),
                 r.useful_evaluations.to_string(),
-                format!("{:.1}%", 100.0 * r.efficiency),
+                super::table::percent(r.efficiency),
                 sig(r.shading_ms, 3),
                 sig(r.gpu_ms, 3),
             ]);
@@ -371,7 +374,7 @@ fn plot(rows: &[SlicingRow]) -> Option<Plot> {
                 let points: Vec<(f64, f64)> = ok
                     .iter()
                     .filter(|r| r.scheme == *name)
-                    .map(|r| (r.shading_ms, 100.0 * r.efficiency))
+                    .filter_map(|r| Some((r.shading_ms, 100.0 * r.efficiency?)))
                     .collect();
                 chart
                     .draw_series(points.iter().map(|&p| Circle::new(p, 4, color.filled())))

@@ -122,6 +122,11 @@ impl Table {
 }
 
 /// `x` with `digits` significant digits, in plain or scientific notation by size.
+/// A share as a percentage with one decimal; "-" where there is none (0 of 0).
+pub fn percent(share: Option<f64>) -> String {
+    share.map_or("-".into(), |s| format!("{:.1}%", 100.0 * s))
+}
+
 pub fn sig(x: f64, digits: usize) -> String {
     if x == 0.0 {
         return "0".into();

@@ -10,7 +10,7 @@ use std::sync::Arc;
 
 use serde::Serialize;
 
-use super::{StudyError, StudyOptions, Table};
+use super::{Reads, StudyError, StudyOptions, Table};
 use crate::compose::Composer;
 use crate::gpu::Gpu;
 use crate::reference::ReferenceCache;
@@ -97,6 +97,7 @@ fn named(p: &Point) -> TemporalRow {
 
 impl super::Study for TemporalStudy {
     const NAME: &'static str = "temporal";
+    const READS: &'static [Reads] = &[Reads::Size, Reads::Lights, Reads::Frames];
     const ABOUT: &'static str = "Every list strategy for moving lights (rebuild, static and \
         dynamic lists, patch, BVH refit) against the fraction of lights moving (0 to 100%), \
         camera still and moving, at 1024 and 16384 lights on the atrium: a sequence of \

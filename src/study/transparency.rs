@@ -9,7 +9,7 @@ use std::sync::Arc;
 
 use serde::Serialize;
 
-use super::{StudyError, StudyOptions, Table};
+use super::{Reads, StudyError, StudyOptions, Table};
 use crate::compose::Composer;
 use crate::gpu::Gpu;
 use crate::measure::Frames;
@@ -60,6 +60,7 @@ super::outcome_in_error_field!(TransparencyRow);
 
 impl super::Study for TransparencyStudy {
     const NAME: &'static str = "transparency";
+    const READS: &'static [Reads] = &[Reads::Size, Reads::Lights, Reads::Frames];
     const ABOUT: &'static str = "Every pipeline and culling method on the glass scene with its \
         blended panes and without: the transparent pass, the blended depths pass, and what \
         the panes cost the opaque frame through shared list bounds (--size, --lights, \

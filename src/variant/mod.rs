@@ -193,18 +193,40 @@ fn field_before(text: &str, line: usize, col: usize) -> Option<String> {
     (!name.is_empty()).then_some(name)
 }
 
-/// The source line with a caret under `col` (both 1-based), as compilers print it.
+/// Characters of a source line a snippet shows on each side of the caret: a long line (a
+/// file written on one line) is cut to the part around the place, with `...` for the rest.
+pub const SNIPPET_REACH: usize = 60;
+
+/// The source line with a caret under `col` (both 1-based), as compilers print it; at most
+/// [`SNIPPET_REACH`] characters either side of the caret, control characters escaped.
 pub fn caret_snippet(text: &str, line: usize, col: usize) -> String {
     let Some(src) = text.lines().nth(line.saturating_sub(1)) else {
         return String::new();
     };
+    let chars: Vec<char> = src.chars().collect();
+    let at = col.saturating_sub(1).min(chars.len());
+    let start = at.saturating_sub(SNIPPET_REACH);
+    let end = (at + SNIPPET_REACH).min(chars.len());
+    let shown = |c: &char| {
+        if c.is_control() && *c != '\t' {
+            '?'
+        } else {
+            *c
+        }
+    };
+    let before = if start > 0 { "..." } else { "" };
+    let after = if end < chars.len() { "..." } else { "" };
+    let body: String = chars[start..end].iter().map(shown).collect();
     let gutter = format!("{line:>4} | ");
-    let pad: String = src
-        .chars()
-        .take(col.saturating_sub(1))
-        .map(|c| if c == '\t' { '\t' } else { ' ' })
+    let pad: String = chars[start..at]
+        .iter()
+        .map(|&c| if c == '\t' { '\t' } else { ' ' })
         .collect();
-    format!("{gutter}{src}\n{}{pad}^", " ".repeat(gutter.len()))
+    format!(
+        "{gutter}{before}{body}{after}\n{}{}{pad}^",
+        " ".repeat(gutter.len()),
+        " ".repeat(before.len())
+    )
 }
 
 /// Where a dotted field path is written in RON text, found by looking for each segment's

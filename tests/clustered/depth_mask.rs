@@ -113,23 +113,27 @@ fn depth_masks_keep_every_light_that_reaches_a_sample() {
             // Tiles span the scene's depth, so their masks cut lights between surfaces;
             // thin 3D clusters seldom have such gaps, and the masks may only not add. The
             // GPU marks each sample over the depths it may be shaded at (`depth_margin`,
-            // with standard depth and near 0.1: 0.7% of a depth of 60), which may keep the
-            // few lights the twin's exact depths cut; it never adds.
-            let fewer = |a: usize, b: usize| {
-                if v.clusters().grid.2 == 1 {
-                    a < b
-                } else {
-                    a <= b
-                }
-            };
+            // with standard depth and near 0.1: 0.7% of a depth of 60, under one of a
+            // tile's 32 cells), so where the twin's exact depths cut 1% or more of the
+            // box lists' entries (atrium's tiles: 3.2% and 5.6%), the GPU's masks must cut
+            // too; where the twin cuts a handful (the stage's tiles: 1 of 3013), the
+            // margin may keep them.
+            let tiled = v.clusters().grid.2 == 1;
+            let must_cull =
+                tiled && 100 * (boxes.indices.len() - twin.indices.len()) >= boxes.indices.len();
+            let fewer = |a: usize, b: usize, strict: bool| if strict { a < b } else { a <= b };
             assert!(
-                fewer(twin.indices.len(), boxes.indices.len())
-                    && gpu_lists.indices.len() <= gpu_boxes.indices.len(),
+                fewer(twin.indices.len(), boxes.indices.len(), tiled)
+                    && fewer(gpu_lists.indices.len(), gpu_boxes.indices.len(), must_cull),
                 "{what}: masks culled too little: list entries twin {} against {} with boxes alone, GPU {} against {}",
                 twin.indices.len(),
                 boxes.indices.len(),
                 gpu_lists.indices.len(),
                 gpu_boxes.indices.len()
+            );
+            assert!(
+                !tiled || label.starts_with("stage") || must_cull,
+                "{what}: the twin's masks cut under 1% on the atrium's tiles, so the GPU's are not held to cut"
             );
             // The break: each mask one cell deeper loses lights at the nearest samples.
             let shifted: Vec<Option<cpu::DepthMask>> = masks
