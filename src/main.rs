@@ -223,8 +223,8 @@ struct MatrixArgs {
     /// With --frames: untimed frames first (software rasterisers compile on first use).
     #[arg(long, default_value_t = 1, requires = "frames")]
     warmup: u32,
-    /// Frames by budget: a cell stops once 3 or more frames lie within +-PERCENT of their
-    /// median (or its budget is spent).
+    /// Frames by budget: a cell stops once the 95% interval of its median (6 frames at
+    /// least) lies within +-PERCENT of it (or its budget is spent).
     #[arg(long, default_value_t = Budget::DEFAULT.precision * 100.0, value_parser = parse_percent, conflicts_with = "frames")]
     precision: f64,
     /// Frames by budget: milliseconds of frames one cell may spend, counting the untimed

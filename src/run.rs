@@ -370,6 +370,16 @@ impl<'g> Timing<'g> {
             }
         }
         self.count.disturbed = self.disturbed.len() as u32;
+        // Only the last frame's images are used (the error, the debug view): a group's
+        // cells time side by side, so earlier frames keep their times alone.
+        for frames in [&mut self.runs, &mut self.disturbed] {
+            if let Some((_, earlier)) = frames.split_last_mut() {
+                for f in earlier {
+                    f.hdr = Vec::new();
+                    f.ldr = Vec::new();
+                }
+            }
+        }
         Ok(())
     }
 

@@ -1733,3 +1733,59 @@ fn copy_shaders(s: &Sandbox, rel: &str) {
     }
     copy(Path::new("shaders"), &s.path(rel));
 }
+
+/// `scripts/gpu-check` keeps the binary's promises: an empty or unsafe `--out` is refused
+/// before anything is written, a folder is its own only when its marker says so, relative
+/// paths are the caller's, and a failed step makes it exit non-zero.
+#[test]
+fn the_gpu_check_script_writes_only_its_own_folder_and_fails_when_a_step_fails() {
+    let script = std::fs::canonicalize("scripts/gpu-check").unwrap();
+    let s = Sandbox::new("gpu_check");
+    s.write("project/mine/.gpu-check", b"");
+    s.write("project/mine/notes.txt", b"mine\n");
+    let run = |args: &[&str]| {
+        let out = std::process::Command::new("bash")
+            .arg(&script)
+            .args(args)
+            .current_dir(s.path("project"))
+            .output()
+            .unwrap();
+        let text = String::from_utf8_lossy(&out.stderr).into_owned()
+            + &String::from_utf8_lossy(&out.stdout);
+        (out.status.code(), text)
+    };
+    let fake = ["--bin", "/bin/true", "--tests", "/bin/true"];
+    let before = s.tree();
+    for (out, why) in [
+        ("", "is empty"),
+        ("/", "filesystem root"),
+        ("mine", "not a gpu-check folder"),
+        (".", "holds"),
+        ("..", "without . or .. parts"),
+    ] {
+        let mut args = vec!["--out", out];
+        args.extend_from_slice(&fake);
+        let (code, text) = run(&args);
+        assert_eq!(code, Some(2), "--out `{out}`: {text}");
+        assert!(text.contains(why), "--out `{out}`: {text}");
+    }
+    assert!(changes(&before, &s.tree(), &[]).is_empty());
+    // Relative to the caller's folder; every step passing: exit 0, its own files only.
+    let mut args = vec!["--out", "checked"];
+    args.extend_from_slice(&fake);
+    let (code, text) = run(&args);
+    assert_eq!(code, Some(0), "{text}");
+    assert!(s.path("project/checked/.gpu-check").is_file());
+    // Again into its own folder, with a step failing: exit 1.
+    let (code, text) = run(&[
+        "--out",
+        "checked",
+        "--bin",
+        "/bin/false",
+        "--tests",
+        "/bin/true",
+    ]);
+    assert_eq!(code, Some(1), "{text}");
+    assert!(text.contains("steps failed"), "{text}");
+    assert!(changes(&before, &s.tree(), &["project/checked"]).is_empty());
+}

@@ -271,3 +271,21 @@ fn a_baseline_from_another_adapter_is_said_to_be_one() {
         "{text}"
     );
 }
+
+/// A RON error on a very long line (a file written on one line) shows the place, not the
+/// whole line: 60 characters either side.
+#[test]
+fn an_error_on_a_long_line_shows_the_place_not_the_line() {
+    let dir = scratch("long-line");
+    let text = format!(
+        "(description: \"{}\", pipeline: NaiveForwardd)",
+        "x".repeat(60_000)
+    );
+    let file = dir.join("long.ron");
+    std::fs::write(&file, text).unwrap();
+    let (ok, printed) = cli(["validate", file.to_str().unwrap()]).run().succeeded();
+    assert!(!ok);
+    assert!(printed.contains("NaiveForwardd"), "{printed}");
+    assert!(printed.len() < 2000, "{} bytes printed", printed.len());
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -418,6 +418,45 @@ fn shards_merge_into_the_whole_and_a_baseline_shows_changes() {
         shown.contains("counters: the same in 6 of 7 cells; different: light_evals in 1\n"),
         "{shown}"
     );
+    // Two cells of one group, told apart in both runs: in the same order, then in opposite
+    // orders (the verdict did not repeat), then tied in one run.
+    let (x, y) = {
+        let g = again.cells[0].spec.group();
+        let other = again
+            .cells
+            .iter()
+            .skip(1)
+            .find(|c| c.spec.group() == g)
+            .unwrap();
+        (again.cells[0].spec.id.clone(), other.spec.id.clone())
+    };
+    let timed = |r: &Results, at: [(&str, [f64; 2]); 2]| {
+        let mut r = r.clone();
+        for c in &mut r.cells {
+            c.gpu_ms_interval.clear();
+            c.interval_level = None;
+            if let Some((_, [lo, hi])) = at.iter().find(|(id, _)| *id == c.spec.id) {
+                c.gpu_ms_interval
+                    .insert("total".into(), serde_json::json!([lo, hi]));
+                c.interval_level = Some(0.98);
+            }
+        }
+        r
+    };
+    let now = timed(&again, [(&x, [1.0, 2.0]), (&y, [3.0, 4.0])]);
+    let same = compare_runs(&now, &timed(&rm, [(&x, [1.5, 2.5]), (&y, [3.0, 4.0])]));
+    assert_eq!((same.pairs_apart_in_both, same.pairs_flipped.len()), (1, 0));
+    let flipped = compare_runs(&now, &timed(&rm, [(&x, [5.0, 6.0]), (&y, [3.0, 4.0])]));
+    assert_eq!(flipped.pairs_flipped, vec![(x.clone(), y.clone())]);
+    assert!(
+        flipped.to_string().contains("1 called in opposite order"),
+        "{flipped}"
+    );
+    let tied = compare_runs(&now, &timed(&rm, [(&x, [3.5, 6.0]), (&y, [3.0, 4.0])]));
+    assert_eq!(
+        (tied.pairs_apart_in_both, tied.pairs_tied.1 >= 1),
+        (0, true)
+    );
     // A run against itself: every cell's [min, max] overlaps its own, and both walls are
     // one; a cell whose frames were far slower does not overlap.
     let itself = compare_runs(&again, &again);
@@ -907,7 +946,8 @@ fn every_input_that_changes_a_figure_reruns_the_cell() {
         if !extra.contains(&"--frames") {
             args.extend(["--frames", "1"]);
         }
-        let (ok, text) = cli(&args).envs(env).run().succeeded();
+        // From a folder outside the tree, as a user's run would be.
+        let (ok, text) = cli(&args).envs(env).dir(&dir).run().succeeded();
         assert!(ok, "{text}");
         text
     };
@@ -943,6 +983,41 @@ fn every_input_that_changes_a_figure_reruns_the_cell() {
             v.name
         );
     }
+    // A perturbed run says so, first thing, and records it in its provenance and each cell.
+    let perturbed = "CLUSTERLAB_PERTURB_DEPTH_ULPS";
+    let text = run(perturbed, &reuse, &[(perturbed, value(perturbed))]);
+    assert!(text.starts_with(&format!("note: {perturbed}=")), "{text}");
+    let r = Results::load(&dir.join(perturbed)).unwrap();
+    let n: u32 = value(perturbed).parse().unwrap();
+    assert_eq!(r.provenance[0].perturbed_depth_ulps, n);
+    assert!(r.cells.iter().all(|c| c.perturbed_depth_ulps == n));
+    // Edited shaders are told from stock ones: the folder, where it came from, the hash.
+    let stock = Results::load(&first).unwrap().provenance[0].shaders.clone();
+    assert!(!stock.from_environment && stock.files > 0 && stock.sha256.len() == 64);
+    let edited = common::EditedShaders::of(
+        "shading/brdf.wesl",
+        "reuse-inputs-edited",
+        &[(
+            "return max(dot(n, l), 0.0);",
+            "return max(dot(n, l) * 1.0, 0.0);",
+        )],
+    );
+    let folder = edited.root().to_str().unwrap().to_string();
+    run("edited-shaders", &[], &[("CLUSTERLAB_SHADERS", &folder)]);
+    let shaders = Results::load(&dir.join("edited-shaders"))
+        .unwrap()
+        .provenance[0]
+        .shaders
+        .clone();
+    assert!(
+        shaders.from_environment && shaders.sha256 != stock.sha256,
+        "{shaders:?}"
+    );
+    // The revision is the build's, wherever the run is: this one ran in a scratch folder.
+    assert_eq!(
+        r.provenance[0].git_revision,
+        env!("CLUSTERLAB_GIT_REVISION")
+    );
     let text = run(
         "frames",
         &["--frames", "2", "--reuse", first.to_str().unwrap()],

@@ -139,14 +139,56 @@ fn a_depth_stored_otherwise_keeps_every_light_in_the_lists() {
             missed.push(name);
         }
     }
-    // The three the H200 failed, each for the same reason.
-    assert_eq!(
-        missed,
-        [
-            "forward_plus_depthmask",
-            "forward_plus_active",
-            "forward_plus_sample_bounds"
-        ],
-        "with the constant margin, the methods that should miss lights"
+    // The three the H200 failed, each for the same reason. Under CI's own perturbation
+    // (`CLUSTERLAB_PERTURB_DEPTH_ULPS`, added to this test's nudge up and down in a
+    // checkerboard) which samples cross a boundary changes, so only some may miss.
+    let all = [
+        "forward_plus_depthmask",
+        "forward_plus_active",
+        "forward_plus_sample_bounds",
+    ];
+    if clusterlab::compose::perturbed_depth_ulps() == 0 {
+        assert_eq!(
+            missed, all,
+            "with the constant margin, the methods that should miss lights"
+        );
+    } else {
+        assert!(
+            !missed.is_empty(),
+            "with the constant margin, no method missed a light"
+        );
+    }
+}
+
+/// Where the depth margin switches z-culling off, the run says so and names reversed depth:
+/// the stress case with 10 decades of standard depth (far/near 1e10: the margin at the far
+/// plane is 1e-5 x 1e10, far past 1) for a variant that marks the clusters its samples land
+/// in; not for one that marks nothing, nor with reversed depth (1e-3 + 1e-5).
+#[test]
+fn a_margin_that_switches_z_culling_off_is_named() {
+    let case = stress::cases()
+        .into_iter()
+        .find(|c| c.name == "near_1e-4_far_1e6")
+        .expect("case");
+    let marking = common::load("forward_plus_olsson").variant;
+    let note = clusterlab::run::margin_note(&marking, &case.scene).expect("a note");
+    assert!(
+        note.contains("z-culling is off") && note.contains("reversed_z: true"),
+        "{note}"
     );
+    let plain = common::load("forward_plus").variant;
+    assert_eq!(clusterlab::run::margin_note(&plain, &case.scene), None);
+    let mut reversed = marking.clone();
+    reversed.depth.reversed_z = true;
+    assert_eq!(clusterlab::run::margin_note(&reversed, &case.scene), None);
+    // The built-in scenes at their planes keep the margin under the note's threshold.
+    for name in ["atrium", "stage", "spheres", "glass"] {
+        let scene =
+            clusterlab::scene::generate(name, common::small(name, 32, 18, Some(1))).unwrap();
+        assert_eq!(
+            clusterlab::run::margin_note(&marking, &scene),
+            None,
+            "{name}"
+        );
+    }
 }

@@ -31,6 +31,14 @@ pub struct RunComparison {
     pub time_ratios: Vec<f64>,
     /// Of those, the cells whose [min, max] frame times overlap.
     pub spreads_overlap: usize,
+    /// Pairs of cells of one group that both runs timed, as each run calls them: told
+    /// apart in both, of those the pairs called in opposite order (a faster one in one run
+    /// that is the slower in the other: the verdict did not repeat), and the pairs a run
+    /// called a tie (in this run, in the baseline).
+    pub pairs_apart_in_both: usize,
+    pub pairs_flipped: Vec<(String, String)>,
+    pub pairs_tied: (usize, usize),
+    pub pairs: usize,
     /// Wall seconds of this run and of the baseline, where one run recorded it.
     pub wall_s: Option<f64>,
     pub baseline_wall_s: Option<f64>,
@@ -79,10 +87,45 @@ pub fn compare_runs(new: &Results, baseline: &Results) -> RunComparison {
             }
         }
     }
+    compare_verdicts(new, &old, &mut out);
     let here: BTreeSet<Key> = new.cells.iter().map(key).collect();
     out.only_there = old.keys().filter(|k| !here.contains(*k)).count();
     out.time_ratios.sort_by(f64::total_cmp);
     out
+}
+
+/// How each pair of one group's cells compares in the two runs (`measure::Interval::compare`).
+fn compare_verdicts(new: &Results, old: &BTreeMap<Key, &CellRecord>, out: &mut RunComparison) {
+    use crate::measure::{Interval, Verdict};
+    let both: Vec<(&CellRecord, &CellRecord)> = new
+        .cells
+        .iter()
+        .filter(|c| c.ok() && c.total_ms().is_some())
+        .filter_map(|c| Some((c, *old.get(&key(c))?)))
+        .filter(|(_, b)| b.ok() && b.total_ms().is_some())
+        .collect();
+    for (i, (a, a_old)) in both.iter().enumerate() {
+        for (b, b_old) in &both[i + 1..] {
+            if a.spec.group() != b.spec.group() {
+                continue;
+            }
+            out.pairs += 1;
+            let now = Interval::compare(a.total_interval().as_ref(), b.total_interval().as_ref());
+            let then = Interval::compare(
+                a_old.total_interval().as_ref(),
+                b_old.total_interval().as_ref(),
+            );
+            out.pairs_tied.0 += usize::from(now == Verdict::Tie);
+            out.pairs_tied.1 += usize::from(then == Verdict::Tie);
+            if now != Verdict::Tie && then != Verdict::Tie {
+                out.pairs_apart_in_both += 1;
+                if now != then {
+                    out.pairs_flipped
+                        .push((a.spec.id.clone(), b.spec.id.clone()));
+                }
+            }
+        }
+    }
 }
 
 /// What makes two cells the same cell: its id and, for a file scene, the file's hash (an
@@ -191,6 +234,27 @@ impl fmt::Display for RunComparison {
                 self.spreads_overlap,
                 r.len()
             )?;
+        }
+        if self.pairs > 0 {
+            write!(
+                f,
+                "  verdicts: of {} pairs of a group's cells, {} told apart (95% intervals apart) in both runs, {} called in opposite order; {} tied in this run, {} in the baseline",
+                self.pairs,
+                self.pairs_apart_in_both,
+                self.pairs_flipped.len(),
+                self.pairs_tied.0,
+                self.pairs_tied.1
+            )?;
+            let named: Vec<String> = self
+                .pairs_flipped
+                .iter()
+                .take(NAMED)
+                .map(|(a, b)| format!("{a} / {b}"))
+                .collect();
+            if !named.is_empty() {
+                write!(f, ": {}", named.join(", "))?;
+            }
+            writeln!(f)?;
         }
         match (self.wall_s, self.baseline_wall_s) {
             (Some(now), Some(then)) if then > 0.0 => writeln!(

@@ -58,14 +58,13 @@ impl Measured<'_> {
             .as_f64()
     }
 
-    /// The speed-up over naive forward, "tie" where its range holds 1.
+    /// The speed-up over naive forward: "tie" where its range holds 1, "?" where a time has
+    /// no interval (too few frames) to give it a range.
     pub(crate) fn speedup_text(&self) -> String {
-        let tie = self
-            .speedup_interval
-            .is_none_or(|[lo, hi]| lo <= 1.0 && 1.0 <= hi);
-        or_dash(self.speedup_vs_naive, |x| match tie {
-            true => format!("{x:.1}x tie"),
-            false => format!("{x:.1}x"),
+        or_dash(self.speedup_vs_naive, |x| match self.speedup_interval {
+            None => format!("{x:.1}x ?"),
+            Some([lo, hi]) if lo <= 1.0 && 1.0 <= hi => format!("{x:.1}x tie"),
+            Some(_) => format!("{x:.1}x"),
         })
     }
 }
@@ -285,7 +284,7 @@ pub const COLUMNS: &[Column] = &[
     Column {
         key: "rank",
         heading: "vs fastest",
-        meaning: "where the cell's time stands in its group: `fastest` (the lowest median), `tie` (its interval overlaps the fastest's, or either has none: they cannot be told apart) or `slower` (its interval lies wholly above)",
+        meaning: "where the cell's time stands in its group: `fastest` (the lowest median with an interval), `tie` (its interval overlaps the fastest's: they cannot be told apart), `slower` (its interval lies wholly above) or `few frames` (timed under 6 times, so no interval: compared with none)",
         shown: EVERYWHERE,
         value: |m| m.rank.map(|r| r.label().to_string()).into(),
         text: |m| or_dash(m.rank, |r| r.label().to_string()),
@@ -340,7 +339,7 @@ pub const COLUMNS: &[Column] = &[
     Column {
         key: "speedup_vs_naive",
         heading: "x naive",
-        meaning: "naive forward's median over the cell's, same scene and parameters, same adapter and timing source; `tie` where the range from the two intervals holds 1",
+        meaning: "naive forward's median over the cell's, same scene and parameters, same adapter and timing source; `tie` where the range from the two intervals holds 1, `?` where either time has no interval (naive forward's frames of a second or more are timed once)",
         shown: EVERYWHERE,
         value: |m| m.speedup_vs_naive.into(),
         text: |m| m.speedup_text(),

@@ -183,12 +183,15 @@ fn at_a_glance(h: &mut String, results: &Results) {
             c.error.as_ref().is_some_and(|e| e.max_abs_8bit <= 1)
                 && c.stats.as_ref().is_none_or(|s| s.dropped_lights == 0)
         };
-        // Groups are fastest first; the cells whose intervals overlap the fastest's tie.
-        let exact_cells: Vec<&&CellRecord> =
-            cells.iter().filter(|c| shown(c) && exact(c)).collect();
-        let fastest = exact_cells.first().map_or("-".into(), |c| {
+        // Groups are fastest first. The fastest exact cell with an interval, the cells whose
+        // intervals overlap its (a tie), and those without one (compared with none).
+        let (compared, few): (Vec<&&CellRecord>, Vec<&&CellRecord>) = cells
+            .iter()
+            .filter(|c| shown(c) && exact(c))
+            .partition(|c| c.total_interval().is_some());
+        let fastest = compared.first().map_or("-".into(), |c| {
             let interval = c.total_interval();
-            let tied: Vec<String> = exact_cells[1..]
+            let tied: Vec<String> = compared[1..]
                 .iter()
                 .filter(|o| {
                     Interval::compare(o.total_interval().as_ref(), interval.as_ref())
@@ -197,14 +200,13 @@ fn at_a_glance(h: &mut String, results: &Results) {
                 .map(|o| label(o))
                 .collect();
             let m = c.measured();
+            let i = interval.expect("an interval");
             format!(
-                "{} ({:.2} ms, 95% CI {}{}){}",
+                "{} ({:.2} ms, 95% CI {:.2}-{:.2}{}){}",
                 label(c),
                 c.total_ms().unwrap_or(f64::NAN),
-                interval.map_or("none: too few frames".into(), |i| format!(
-                    "{:.2}-{:.2}",
-                    i.lo, i.hi
-                )),
+                i.lo,
+                i.hi,
                 c.speedup_vs_naive
                     .map_or(String::new(), |_| format!(", {} naive", m.speedup_text())),
                 match tied.len() {
@@ -213,6 +215,14 @@ fn at_a_glance(h: &mut String, results: &Results) {
                 }
             )
         });
+        let few: Vec<String> = few.iter().map(|c| label(c)).collect();
+        let fastest = match few.len() {
+            0 => fastest,
+            n => format!(
+                "{fastest}; too few frames for an interval, compared with none ({n}): {}",
+                few.join(", ")
+            ),
+        };
         let efficient = cells
             .iter()
             .filter(|c| shown(c) && exact(c))

@@ -138,12 +138,15 @@ pub struct CellRecord {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Rank {
-    /// The lowest median of the group.
+    /// The lowest median of the group's cells with an interval.
     Fastest,
-    /// Its interval overlaps the fastest's (or either has none): they cannot be told apart.
+    /// Its interval overlaps the fastest's: they cannot be told apart.
     TiedWithFastest,
     /// Its interval lies wholly above the fastest's.
     Slower,
+    /// Timed too few times for an interval (a frame of a second or more is timed once):
+    /// it is compared with no other.
+    TooFewFrames,
 }
 
 impl Rank {
@@ -152,6 +155,7 @@ impl Rank {
             Rank::Fastest => "fastest",
             Rank::TiedWithFastest => "tie",
             Rank::Slower => "slower",
+            Rank::TooFewFrames => "few frames",
         }
     }
 }
@@ -469,7 +473,7 @@ pub fn run(
         .ok();
     let mut index = ReuseIndex::default();
     let mut recomposed = std::collections::HashMap::new();
-    let mut reused: Vec<(String, CellRecord, usize)> = Vec::new();
+    let mut reused: Vec<String> = Vec::new();
     let mut records: Vec<Option<CellRecord>> = vec![None; cells.len()];
     std::thread::scope(|scope| {
         // With overlap, the cells' CPU halves run on one thread of their own, in order, while
@@ -494,13 +498,13 @@ pub fn run(
                     reuse::cell_inputs(run, &cell.spec, variant.map(|f| f.sha256.as_str()))
                 });
                 if let (Some(previous), Some(inputs)) = (&options.reuse, &inputs)
-                    && let Some((record, used, run)) =
+                    && let Some((record, used)) =
                         previous.unchanged(cell, inputs, composer, gpu, &mut recomposed)
                 {
                     match copy_images(&previous.dir, record, &options.out) {
                         Ok(()) => {
                             index.add(&cell.spec.id, inputs.clone(), &used);
-                            reused.push((cell.spec.id.clone(), record.clone(), run));
+                            reused.push(cell.spec.id.clone());
                             records[i] = Some(record.clone());
                             bar.inc(1);
                             continue;
@@ -630,7 +634,7 @@ pub fn run(
     }
     bar.finish_and_clear();
     let (reference_frames, reference_shadings) = references.counts();
-    let reused_ids: Vec<&str> = reused.iter().map(|(id, _, _)| id.as_str()).collect();
+    let reused_ids: Vec<&str> = reused.iter().map(String::as_str).collect();
     let mut cost = RunCost {
         wall_s: start.elapsed().as_secs_f64(),
         pipelines: add_pipelines(replaced, gpu.pipeline_stats()),
@@ -1137,12 +1141,12 @@ fn run_sequence(
     gpu_ms.insert("total".into(), m.frame_ms.into());
     let mut gpu_ms_spread = Map::new();
     gpu_ms_spread.insert("total".into(), m.frame_ms_spread.to_vec().into());
-    // The frames after the first, as the median and spread are.
-    let interval = crate::measure::median_interval(m.totals_ms.get(1..).unwrap_or_default());
-    let mut gpu_ms_interval = Map::new();
-    if let Some(i) = interval {
-        gpu_ms_interval.insert("total".into(), vec![i.lo, i.hi].into());
-    }
+    // No interval: a sequence's frames differ by design (lights move, lists are patched),
+    // and sequences run one after another, not in interleaved rounds, so drift between
+    // them is not shared. Two back-to-back default matrices called two pairs of sequence
+    // cells in opposite orders (Forward+ against Patch: 45-48 against 64-68 ms, then 51-61
+    // against 43-45), so a sequence's time ties with every other.
+    let gpu_ms_interval = Map::new();
     // The worst checked frame's error stands for the sequence.
     let error = r
         .frames
@@ -1162,7 +1166,7 @@ fn run_sequence(
         gpu_ms,
         gpu_ms_spread,
         gpu_ms_interval,
-        interval_level: interval.map(|i| i.level),
+        interval_level: None,
         timing_stop: Some(Stop::Count),
         timing_source: Some(r.timing_source.to_string()),
         frames,
@@ -1252,14 +1256,18 @@ pub fn derive(cells: &mut [CellRecord], provenance: &[Provenance], baseline: Opt
                     })
             })
         });
+        let with_interval = |j: usize| cells[j].total_interval().is_some();
         let fastest = (0..cells.len())
-            .filter(|&j| peer(j) && timed(&cells[j]))
+            .filter(|&j| peer(j) && timed(&cells[j]) && with_interval(j))
             .min_by(|&a, &b| {
                 let t = |j: usize| cells[j].total_ms().unwrap_or(f64::INFINITY);
                 t(a).total_cmp(&t(b)).then(a.cmp(&b))
             });
-        let rank = fastest.filter(|_| timed(&cells[i])).map(|f| {
+        let rank = timed(&cells[i]).then(|| {
             let this = cells[i].total_interval();
+            let Some(f) = fastest.filter(|_| this.is_some()) else {
+                return Rank::TooFewFrames;
+            };
             match Interval::compare(this.as_ref(), cells[f].total_interval().as_ref()) {
                 _ if f == i => Rank::Fastest,
                 Verdict::Slower => Rank::Slower,
@@ -1517,7 +1525,7 @@ fn provenance(gpu: &Gpu, composer: &Composer, options: &MatrixOptions) -> Proven
                 format!("exact: {warmup} untimed then {timed} timed per cell")
             }
             Frames::Budget(b) => format!(
-                "by budget: a frame without lights (untimed), then until 3+ frames lie within +-{}% of their median, {} ms of frames are spent (the untimed one included), or {} frames",
+                "by budget, a group's cells in interleaved rounds: a frame without lights (untimed), then until the median's 95% interval lies within +-{}% of it, {} ms of frames are spent (the untimed ones included), or {} frames",
                 b.precision * 100.0,
                 b.budget_ms,
                 b.max_frames

@@ -98,8 +98,8 @@ impl Previous {
     /// The earlier record of `cell` when it ran with the same `inputs`, its spec is the
     /// plan's, its figures hold as a fresh cell's would (`stale`), and every shader it
     /// composed still composes to the same WGSL (`wgsl` remembers recipes composed
-    /// before); with the compositions and the index of its run in the earlier results'
-    /// provenance. None when anything differs, or the cell failed there.
+    /// before); with the compositions it used. None when anything differs, or the cell
+    /// failed there.
     pub fn unchanged(
         &self,
         cell: &PlannedCell,
@@ -107,7 +107,7 @@ impl Previous {
         composer: &Composer,
         gpu: &Gpu,
         wgsl: &mut HashMap<String, Option<String>>,
-    ) -> Option<(&CellRecord, Vec<Arc<Composition>>, usize)> {
+    ) -> Option<(&CellRecord, Vec<Arc<Composition>>)> {
         let id = &cell.spec.id;
         let shaders = self.index.cells.get(id)?;
         if shaders.inputs != inputs {
@@ -137,7 +137,7 @@ impl Previous {
                 wgsl_sha256: now.clone(),
             }));
         }
-        Some((record, used, record.run))
+        Some((record, used))
     }
 
     /// Give the cells of `results` taken from this run (`results.reused`) their own runs'

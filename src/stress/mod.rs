@@ -40,6 +40,10 @@ pub struct CaseRun {
     pub what: String,
     pub ok: bool,
     pub checks: Vec<Check>,
+    /// Where the depth margin blunts z-culling for the variant on the case
+    /// (`run::margin_note`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub note: Option<String>,
 }
 
 /// Largest 8-bit error a variant may have against the reference on an adapter whose HDR
@@ -147,6 +151,7 @@ pub fn run_case(
             what: case.what.to_string(),
             ok: checks.iter().all(|c| c.ok),
             checks,
+            note: crate::run::margin_note(v, &case.scene),
         };
     }
     let mut checks = Vec::new();
@@ -296,6 +301,7 @@ pub fn run_case(
         what: case.what.to_string(),
         ok: checks.iter().all(|c| c.ok),
         checks,
+        note: crate::run::margin_note(v, &case.scene),
     }
 }
 
@@ -677,6 +683,7 @@ pub fn run(
                 what: case.what.to_string(),
                 ok: false,
                 checks: vec![check("renders", false, why)],
+                note: None,
             };
             if let Some(why) = &no_device {
                 out.push(failed(why.clone()));
@@ -721,6 +728,9 @@ pub fn report(runs: &[CaseRun]) -> String {
         );
         for c in r.checks.iter().filter(|c| !c.ok) {
             let _ = writeln!(s, "         {}: {}", c.check, c.detail);
+        }
+        if let Some(note) = &r.note {
+            let _ = writeln!(s, "         note: {note}");
         }
     }
     let failed = runs.iter().filter(|r| !r.ok).count();
