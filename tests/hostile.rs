@@ -1760,7 +1760,7 @@ fn the_gpu_check_script_writes_only_its_own_folder_and_fails_when_a_step_fails()
         ("", "is empty"),
         ("/", "filesystem root"),
         ("mine", "not a gpu-check folder"),
-        (".", "holds"),
+        (".", "without . or .. parts"),
         ("..", "without . or .. parts"),
     ] {
         let mut args = vec!["--out", out];
