@@ -810,31 +810,45 @@ fn run_batch(
             live.iter().filter(|l| !l.timing.done()).count(),
             cells[batch[0]].spec.group()
         ));
-        let mut k = 0;
-        while k < live.len() {
-            if live[k].timing.done() {
-                k += 1;
-                continue;
-            }
+        // Every other round runs the cells in reverse, so that no cell always follows the
+        // same one (what a frame leaves warm or busy, the next one meets).
+        let mut order: Vec<usize> = (0..live.len())
+            .filter(|&k| !live[k].timing.done())
+            .collect();
+        if round % 2 == 0 {
+            order.reverse();
+        }
+        let mut failed_now: Vec<(usize, CellRecord)> = Vec::new();
+        for k in order {
             gpu.begin_cell();
             let timing = &mut live[k].timing;
             let why = match catch_unwind(AssertUnwindSafe(|| timing.next_frame())) {
-                Ok(Ok(())) => None,
-                Ok(Err(e)) => Some(CellRecord::not_run(
-                    cells[live[k].i].spec.clone(),
-                    &RunError::from(e),
-                )),
-                Err(panic) => Some(failed(live[k].i, panicked(panic))),
+                Ok(Ok(())) => continue,
+                Ok(Err(e)) => {
+                    CellRecord::not_run(cells[live[k].i].spec.clone(), &RunError::from(e))
+                }
+                Err(panic) => failed(live[k].i, panicked(panic)),
             };
-            let Some(record) = why else {
-                k += 1;
-                continue;
-            };
-            let l = live.remove(k);
-            ran.push((l.i, Ran::done(record), l.compositions));
+            failed_now.push((k, why));
             if gpu.check_health().is_err() {
-                return stop_here(ran, &live, &[]);
+                break;
             }
+        }
+        if failed_now.is_empty() {
+            continue;
+        }
+        // Out of the rounds, in the order they failed (the last is the one a broken device
+        // is charged to).
+        let mut gone: Vec<usize> = failed_now.iter().map(|(k, _)| *k).collect();
+        gone.sort_unstable_by(|a, b| b.cmp(a));
+        let mut removed: std::collections::HashMap<usize, Live> =
+            gone.into_iter().map(|k| (k, live.remove(k))).collect();
+        for (k, record) in failed_now {
+            let l = removed.remove(&k).expect("removed above");
+            ran.push((l.i, Ran::done(record), l.compositions));
+        }
+        if gpu.check_health().is_err() {
+            return stop_here(ran, &live, &[]);
         }
     }
     let mut unfinished = live.into_iter();
