@@ -1719,19 +1719,7 @@ fn what_would_mislead_is_refused_and_reuse_takes_what_a_user_gives() {
 
 /// A copy of clusterlab's shader folder at `rel` in the sandbox.
 fn copy_shaders(s: &Sandbox, rel: &str) {
-    fn copy(from: &Path, to: &Path) {
-        std::fs::create_dir_all(to).unwrap();
-        for e in std::fs::read_dir(from).unwrap() {
-            let e = e.unwrap();
-            let target = to.join(e.file_name());
-            if e.file_type().unwrap().is_dir() {
-                copy(&e.path(), &target);
-            } else {
-                std::fs::copy(e.path(), target).unwrap();
-            }
-        }
-    }
-    copy(Path::new("shaders"), &s.path(rel));
+    common::copy_tree(Path::new("shaders"), &s.path(rel));
 }
 
 /// `scripts/gpu-check` keeps the binary's promises: an empty or unsafe `--out` is refused
