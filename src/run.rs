@@ -584,9 +584,13 @@ pub fn margin_note(variant: &Variant, scene: &Scene) -> Option<String> {
             (false, true) => "reversed 32-bit float depth (`depth: (format: Float32, reversed_z: true)`)",
             (true, _) => "32-bit float depth (`depth: (format: Float32)`)",
         };
+        let size = if m < 1.0 {
+            format!("{:.0}% of the depth", m * 100.0)
+        } else {
+            format!("{m:.1e} times the depth")
+        };
         format!(
-            "the depth margin at the far plane is {:.0}% of the depth ({} depth, {}, far/near = {:.0}): a sample there marks {reach}; {remedy} keeps the margin under 0.2% whatever the planes",
-            m * 100.0,
+            "the depth margin at the far plane is {size} ({} depth, {}, far/near = {:.1e}): a sample there marks {reach}; {remedy} keeps the margin under 0.2% whatever the planes",
             if reversed { "reversed" } else { "standard" },
             if unorm24 { "24-bit" } else { "32-bit float" },
             far / near,

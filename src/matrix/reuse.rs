@@ -57,9 +57,10 @@ impl Previous {
     /// `results.json`.
     pub fn load(dir: &Path) -> Result<Self, String> {
         let dir = match dir.file_name() {
-            Some(name) if name == "results.json" && !dir.is_dir() => {
-                dir.parent().unwrap_or(Path::new("."))
-            }
+            Some(name) if name == "results.json" && !dir.is_dir() => dir
+                .parent()
+                .filter(|p| !p.as_os_str().is_empty())
+                .unwrap_or(Path::new(".")),
             _ => dir,
         };
         let results = Results::load(dir)?;
