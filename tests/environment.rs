@@ -28,21 +28,10 @@ fn stray_reads(file: &str, source: &str) -> Vec<String> {
     found
 }
 
-fn sources(dir: &std::path::Path, out: &mut Vec<std::path::PathBuf>) {
-    for entry in std::fs::read_dir(dir).unwrap() {
-        let path = entry.unwrap().path();
-        if path.is_dir() {
-            sources(&path, out);
-        } else if path.extension().is_some_and(|x| x == "rs") {
-            out.push(path);
-        }
-    }
-}
-
 #[test]
 fn every_environment_read_goes_through_the_one_list() {
     let mut files = Vec::new();
-    sources(std::path::Path::new("src"), &mut files);
+    crate::common::rust_sources(std::path::Path::new("src"), &mut files);
     let mut stray = Vec::new();
     for path in files.iter().filter(|p| !p.ends_with("environment.rs")) {
         let text = std::fs::read_to_string(path).unwrap();

@@ -64,17 +64,6 @@ fn climbs(module: &str, source: &str) -> Vec<String> {
     found
 }
 
-fn sources(dir: &std::path::Path, out: &mut Vec<std::path::PathBuf>) {
-    for entry in std::fs::read_dir(dir).unwrap() {
-        let path = entry.unwrap().path();
-        if path.is_dir() {
-            sources(&path, out);
-        } else if path.extension().is_some_and(|e| e == "rs") {
-            out.push(path);
-        }
-    }
-}
-
 #[test]
 fn no_import_climbs_a_layer() {
     // The deliberate break: a file module importing the matrix, and the matrix the study.
@@ -91,7 +80,7 @@ fn no_import_climbs_a_layer() {
     );
     assert!(climbs("run", "use crate::{measure::median, render::Renderer};").is_empty());
     let mut files = Vec::new();
-    sources(std::path::Path::new("src"), &mut files);
+    crate::common::rust_sources(std::path::Path::new("src"), &mut files);
     let mut wrong = Vec::new();
     for file in &files {
         let relative = file.strip_prefix("src").unwrap();

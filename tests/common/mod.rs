@@ -57,6 +57,18 @@ pub fn split_glb(glb: &[u8]) -> (serde_json::Value, Vec<u8>) {
 }
 
 /// Copy folder `from` into `to`, recursively.
+/// Every `.rs` file under `dir`, into `out` (the source scans of `layers` and `environment`).
+pub fn rust_sources(dir: &Path, out: &mut Vec<PathBuf>) {
+    for entry in std::fs::read_dir(dir).unwrap() {
+        let path = entry.unwrap().path();
+        if path.is_dir() {
+            rust_sources(&path, out);
+        } else if path.extension().is_some_and(|x| x == "rs") {
+            out.push(path);
+        }
+    }
+}
+
 pub fn copy_tree(from: &Path, to: &Path) {
     std::fs::create_dir_all(to).unwrap();
     for entry in std::fs::read_dir(from).unwrap() {
