@@ -92,8 +92,19 @@ enum Command {
     /// Run the stress suite: adversarial cameras, sizes, lights, geometry and grids on every
     /// pipeline they apply to; exit code 1 if any check fails.
     Stress {
-        /// Only the cases whose name contains this.
+        /// Only the cases whose name contains this (as --cases).
         filter: Option<String>,
+        /// Only the cases whose name contains this.
+        #[arg(long, conflicts_with = "filter")]
+        cases: Option<String>,
+        /// Variant files, folders of them, or names in variants/: every case that applies
+        /// runs on these (with what the case sets: a grid, a slicing, a depth mapping, a
+        /// sample count) instead of its own variants; one that cannot apply says why.
+        #[arg(long, num_args = 1..)]
+        variants: Vec<String>,
+        /// List the cases, and with --variants the runs each makes, then stop.
+        #[arg(long)]
+        list: bool,
         /// Print the runs as JSON.
         #[arg(long)]
         json: bool,
@@ -339,7 +350,7 @@ impl SceneOptions {
 impl CellArgs {
     /// The variant, loaded.
     fn variant(&self) -> Result<variant::LoadedVariant, String> {
-        variant::load(&variant::resolve(&self.variant)).map_err(|e| e.to_string())
+        variant::load(&variant::locate(&self.variant)?).map_err(|e| e.to_string())
     }
 
     /// The scene's defaults with what was given.
@@ -600,7 +611,22 @@ fn main() -> ExitCode {
             allow_mixed,
             prefer,
         } => merge(&dirs, &out, json, allow_mixed, prefer),
-        Command::Stress { filter, json, gpu } => stress(filter.as_deref(), json, &gpu),
+        Command::Stress {
+            filter,
+            cases,
+            variants,
+            list,
+            json,
+            gpu,
+        } => stress(
+            StressArgs {
+                cases: cases.as_deref().or(filter.as_deref()),
+                variants: &variants,
+                list,
+                json,
+            },
+            &gpu,
+        ),
         Command::Study {
             name,
             json,

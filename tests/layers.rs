@@ -5,7 +5,7 @@
 /// `commands/` is the binary's (the bodies `main.rs` dispatches to); `main.rs` stands above
 /// them all.
 const LAYERS: &[&[&str]] = &[
-    &["common", "files", "environment", "measure"],
+    &["common", "files", "environment", "measure", "names", "progress"],
     &["cpu", "variant", "scene", "flip"],
     &["compose", "gpu", "explain"],
     &["render", "efficiency"],

@@ -6,6 +6,7 @@ use std::path::{Path, PathBuf};
 
 use crate::common::{self, cli, scratch};
 
+use clusterlab::compose::ShaderSource;
 use clusterlab::matrix::{Results, compare_runs};
 
 /// A folder with a good variant and a broken one.
@@ -1010,7 +1011,7 @@ fn every_input_that_changes_a_figure_reruns_the_cell() {
     assert!(r.cells.iter().all(|c| c.perturbed_depth_ulps == n));
     // Edited shaders are told from stock ones: the folder, where it came from, the hash.
     let stock = Results::load(&first).unwrap().provenance[0].shaders.clone();
-    assert!(!stock.from_environment && stock.files > 0 && stock.sha256.len() == 64);
+    assert!(stock.source == ShaderSource::Built && stock.files > 0 && stock.sha256.len() == 64);
     let edited = common::EditedShaders::of(
         "shading/brdf.wesl",
         "reuse-inputs-edited",
@@ -1027,7 +1028,7 @@ fn every_input_that_changes_a_figure_reruns_the_cell() {
         .shaders
         .clone();
     assert!(
-        shaders.from_environment && shaders.sha256 != stock.sha256,
+        shaders.source == ShaderSource::Environment && shaders.sha256 != stock.sha256,
         "{shaders:?}"
     );
     // The revision is the build's, wherever the run is: this one ran in a scratch folder.

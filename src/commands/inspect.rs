@@ -102,7 +102,7 @@ fn validated_json(
 }
 
 pub(crate) fn wgsl(arg: &str, only: Option<&str>) -> Result<bool, String> {
-    let loaded = variant::load(&variant::resolve(arg)).map_err(|e| e.to_string())?;
+    let loaded = variant::load(&variant::locate(arg)?).map_err(|e| e.to_string())?;
     let all = passes(&loaded.variant);
     let selected: Vec<_> = all
         .iter()

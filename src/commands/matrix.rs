@@ -76,12 +76,13 @@ pub(crate) fn matrix(args: &MatrixArgs) -> Result<bool, String> {
     let folder = clusterlab::files::ResultFolder::acquire(&args.out)?;
     let mut gpu = args.gpu.open()?;
     eprintln!(
-        "{} cells on {} ({}, {}); writing to {}",
+        "{} cells on {} ({}, {}); writing to {}; {}",
         cells.len(),
         gpu.adapter.name,
         gpu.adapter.backend,
         gpu.adapter.driver,
-        args.out.display()
+        args.out.display(),
+        clusterlab::compose::shaders_line()
     );
     if let Some(folder) = clusterlab::gpu::disk_cache::folder() {
         eprintln!("{}", gpu.attach_disk_cache(&folder));

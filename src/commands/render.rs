@@ -12,8 +12,12 @@ pub(crate) fn view(args: &ViewArgs) -> Result<bool, String> {
     if let Some(why) = clusterlab::view::missing_display() {
         return Err(why);
     }
-    let given: Vec<PathBuf> = args.variant.iter().map(|v| variant::resolve(v)).collect();
-    let mut variants = variant::find_files(Path::new("variants")).unwrap_or_default();
+    let given: Vec<PathBuf> = args
+        .variant
+        .iter()
+        .map(|v| variant::locate(v))
+        .collect::<Result<_, _>>()?;
+    let mut variants = variant::find_files(Path::new(variant::FOLDER)).unwrap_or_default();
     for v in &given {
         if !variants.contains(v) {
             variants.push(v.clone());
@@ -22,7 +26,7 @@ pub(crate) fn view(args: &ViewArgs) -> Result<bool, String> {
     let first = given
         .first()
         .cloned()
-        .unwrap_or_else(|| variant::resolve("forward_plus"));
+        .map_or_else(|| variant::locate("forward_plus"), Ok)?;
     let params = args.options.params(&args.scene)?;
     let gpu = args.gpu.open()?;
     clusterlab::view::run(

@@ -1,33 +1,120 @@
-//! `stress`: the adversarial cases.
+//! `stress`: the adversarial cases, on their own variants or the user's.
+
+use std::time::Instant;
 
 use crate::GpuArgs;
 use clusterlab::compose::Composer;
+use clusterlab::stress::{self, Progress, Subjects};
 
-pub(crate) fn stress(filter: Option<&str>, json: bool, gpu: &GpuArgs) -> Result<bool, String> {
-    let mut gpu = gpu.open()?;
-    eprintln!(
-        "stress suite on {} ({}, {})",
-        gpu.adapter.name, gpu.adapter.backend, gpu.adapter.driver
-    );
-    let bar = indicatif::ProgressBar::new_spinner();
-    let runs = clusterlab::stress::run(&mut gpu, &Composer::default(), filter, &|what| {
-        bar.set_message(what.to_string());
-        bar.tick();
-    });
-    bar.finish_and_clear();
-    if runs.is_empty() {
+/// What `stress` was asked for.
+pub(crate) struct StressArgs<'a> {
+    /// Only the cases whose name contains this.
+    pub cases: Option<&'a str>,
+    /// Variant files, folders or names to run instead of each case's own.
+    pub variants: &'a [String],
+    pub list: bool,
+    pub json: bool,
+}
+
+pub(crate) fn stress(args: StressArgs, gpu: &GpuArgs) -> Result<bool, String> {
+    let cases = stress::selected(args.cases);
+    if cases.is_empty() {
         return Err(format!(
-            "no stress case matches `{}`",
-            filter.unwrap_or_default()
+            "no stress case matches `{}`; `clusterlab stress --list` lists them",
+            args.cases.unwrap_or_default()
         ));
     }
-    if json {
+    let given = if args.variants.is_empty() {
+        Vec::new()
+    } else {
+        clusterlab::variant::load_args(args.variants)?
+    };
+    if args.list {
+        print!("{}", list(&cases, &given));
+        return Ok(true);
+    }
+    let mut gpu = gpu.open()?;
+    eprintln!(
+        "stress suite on {} ({}, {}); {}",
+        gpu.adapter.name,
+        gpu.adapter.backend,
+        gpu.adapter.driver,
+        clusterlab::compose::shaders_line()
+    );
+    let subjects = if given.is_empty() {
+        Subjects::BuiltIn
+    } else {
+        Subjects::Given(&given)
+    };
+    let started = Instant::now();
+    let mut case_count = 0;
+    let runs = stress::run(
+        &mut gpu,
+        &Composer::default(),
+        &cases,
+        subjects,
+        &mut |p| match p {
+            Progress::Starting(_) => {}
+            Progress::CaseDone {
+                case,
+                runs,
+                done,
+                total,
+            } => {
+                case_count += 1;
+                eprintln!(
+                    "[{case_count}/{}] {case}: {}; {done}/{total} runs, {}",
+                    cases.len(),
+                    summary(runs),
+                    clusterlab::progress::eta(started.elapsed(), done, total)
+                );
+            }
+        },
+    );
+    if args.json {
         println!(
             "{}",
             serde_json::to_string_pretty(&runs).map_err(|e| e.to_string())?
         );
     } else {
-        print!("{}", clusterlab::stress::report(&runs));
+        print!("{}", stress::report(&runs));
     }
     Ok(runs.iter().all(|r| r.ok))
+}
+
+/// The cases, what each is, and with `given` variants the run each makes of each or why it
+/// does not apply.
+fn list(cases: &[stress::Case], given: &[clusterlab::variant::LoadedVariant]) -> String {
+    use std::fmt::Write as _;
+    let mut s = String::new();
+    for case in cases {
+        let _ = writeln!(s, "{}: {}", case.name, case.what);
+        for v in given {
+            for (name, run) in case.runs_of(&v.name, &v.variant) {
+                let _ = match run {
+                    Ok(_) => writeln!(s, "  runs   {name}"),
+                    Err(why) => writeln!(s, "  n/a    {name}: {why}"),
+                };
+            }
+        }
+    }
+    let _ = writeln!(s, "{} cases", cases.len());
+    s
+}
+
+/// "ok", "2 failed: a, b" or "not applicable" for a case's runs.
+fn summary(runs: &[stress::CaseRun]) -> String {
+    let ran: Vec<&stress::CaseRun> = runs.iter().filter(|r| r.not_applicable.is_none()).collect();
+    let failed: Vec<&str> = ran
+        .iter()
+        .filter(|r| !r.ok)
+        .map(|r| r.variant.as_str())
+        .collect();
+    if ran.is_empty() {
+        "not applicable".into()
+    } else if failed.is_empty() {
+        format!("ok ({} runs)", ran.len())
+    } else {
+        format!("{} of {} FAILED: {}", failed.len(), ran.len(), failed.join(", "))
+    }
 }

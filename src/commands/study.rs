@@ -19,8 +19,11 @@ pub(crate) fn study(
     clusterlab::study::check_folder(out, name)?;
     let gpu = gpu.open()?;
     eprintln!(
-        "study {name} on {} ({}, {})",
-        gpu.adapter.name, gpu.adapter.backend, gpu.adapter.driver
+        "study {name} on {} ({}, {}); {}",
+        gpu.adapter.name,
+        gpu.adapter.backend,
+        gpu.adapter.driver,
+        clusterlab::compose::shaders_line()
     );
     let started = std::time::Instant::now();
     let result = study

@@ -127,8 +127,9 @@ pub const MAX_SHADER_FILES: usize = 4096;
 #[derive(Clone, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub struct ShaderTree {
     pub folder: PathBuf,
-    /// Named by `CLUSTERLAB_SHADERS` rather than built in.
-    pub from_environment: bool,
+    /// Why this folder: which of the places `shader_folder` looks in.
+    #[serde(default)]
+    pub source: ShaderSource,
     pub files: usize,
     /// SHA-256 over every shader file's relative path and content.
     pub sha256: String,
@@ -137,13 +138,9 @@ pub struct ShaderTree {
 impl ShaderTree {
     pub fn describe(&self) -> String {
         format!(
-            "{} ({}{} files, SHA-256 {})",
+            "{} ({}, {} files, SHA-256 {})",
             self.folder.display(),
-            if self.from_environment {
-                "from CLUSTERLAB_SHADERS, "
-            } else {
-                ""
-            },
+            self.source.describe(),
             self.files,
             &self.sha256[..16.min(self.sha256.len())]
         )
@@ -163,13 +160,79 @@ pub fn sha256_hex(text: &str) -> String {
     format!("{:x}", sha2::Sha256::digest(text.as_bytes()))
 }
 
-impl Default for Composer {
-    /// The shader folder named by `CLUSTERLAB_SHADERS`, or this crate's `shaders/`.
-    fn default() -> Self {
-        match crate::environment::var_os("CLUSTERLAB_SHADERS") {
-            Some(dir) => Self::new(Path::new(&dir)),
-            None => Self::new(&Path::new(env!("CARGO_MANIFEST_DIR")).join("shaders")),
+/// Where a run's shaders were found.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ShaderSource {
+    /// The folder `CLUSTERLAB_SHADERS` names.
+    Environment,
+    /// `shaders/` in the working folder (beside its `variants/`): a copy of the tree, or a
+    /// user's own shaders.
+    WorkingFolder,
+    /// The `shaders/` of the tree the program was built from.
+    #[default]
+    Built,
+    /// A folder a library caller gave `Composer::new`.
+    Given,
+}
+
+impl ShaderSource {
+    pub fn describe(self) -> &'static str {
+        match self {
+            ShaderSource::Environment => "named by CLUSTERLAB_SHADERS",
+            ShaderSource::WorkingFolder => "the working folder's shaders/",
+            ShaderSource::Built => "the shaders/ the program was built from",
+            ShaderSource::Given => "given to the composer",
         }
+    }
+}
+
+/// A file every shader folder of clusterlab's has: a `shaders/` without it is someone
+/// else's folder, not looked in.
+const SHADER_FOLDER_MARK: &str = "passes/forward.wesl";
+
+/// The shader folder a run composes from, looked for in this order: the one
+/// `CLUSTERLAB_SHADERS` names, `shaders/` in the working folder (one with
+/// `passes/forward.wesl`), then the one the program was built from.
+pub fn shader_folder() -> (PathBuf, ShaderSource) {
+    if let Some(dir) = crate::environment::var_os("CLUSTERLAB_SHADERS") {
+        return (PathBuf::from(dir), ShaderSource::Environment);
+    }
+    let built = Path::new(env!("CARGO_MANIFEST_DIR")).join("shaders");
+    let here = Path::new("shaders");
+    let same = |a: &Path, b: &Path| a.canonicalize().ok() == b.canonicalize().ok();
+    if here.join(SHADER_FOLDER_MARK).is_file() && !same(here, &built) {
+        return (here.to_path_buf(), ShaderSource::WorkingFolder);
+    }
+    (built, ShaderSource::Built)
+}
+
+/// Which place `shader_folder` would have found `root` in; `Given` when none (a composer
+/// made with a folder of its caller's).
+fn shader_source(root: &Path) -> ShaderSource {
+    let (folder, source) = shader_folder();
+    let cwd = std::env::current_dir().unwrap_or_default();
+    if cwd.join(folder) == root {
+        source
+    } else {
+        ShaderSource::Given
+    }
+}
+
+/// "shaders: FOLDER (why)", what a command says at its start.
+pub fn shaders_line() -> String {
+    let (folder, source) = shader_folder();
+    let folder = std::env::current_dir()
+        .ok()
+        .and_then(|cwd| folder.strip_prefix(&cwd).ok().map(Path::to_path_buf))
+        .unwrap_or(folder);
+    format!("shaders: {} ({})", folder.display(), source.describe())
+}
+
+impl Default for Composer {
+    /// The shader folder `shader_folder` finds.
+    fn default() -> Self {
+        Self::new(&shader_folder().0)
     }
 }
 
@@ -260,7 +323,7 @@ impl Composer {
         }
         Ok(ShaderTree {
             folder: self.shader_root.clone(),
-            from_environment: crate::environment::var_os("CLUSTERLAB_SHADERS").is_some(),
+            source: shader_source(&self.shader_root),
             files: files.len(),
             sha256: format!("{:x}", hash.finalize()),
         })

@@ -459,7 +459,7 @@ pub fn run(
             eprintln!("warning: {e}");
         }
     }
-    let bar = progress_bar(options.progress, cells.len());
+    let mut bar = crate::progress::Bar::new(options.progress, cells.len());
     let start = std::time::Instant::now();
     // Pipeline counts of devices replaced during the run.
     let mut replaced = PipelineStats::default();
@@ -506,11 +506,12 @@ pub fn run(
                             index.add(&cell.spec.id, inputs.clone(), &used);
                             reused.push(cell.spec.id.clone());
                             records[i] = Some(record.clone());
-                            bar.inc(1);
+                            bar.done(&format!("{}: reused", cell.spec.id));
                             continue;
                         }
-                        Err(e) => bar
-                            .suspend(|| eprintln!("{}: not reused, run again: {e}", cell.spec.id)),
+                        Err(e) => {
+                            bar.println(format!("{}: not reused, run again: {e}", cell.spec.id))
+                        }
                     }
                 }
                 todo.push((i, inputs));
@@ -572,7 +573,7 @@ pub fn run(
                     Ran::Pending(pending) if worker.is_some() => {
                         // The worker only ends when the queue closes.
                         let _ = to_worker.send((i, pending));
-                        bar.inc(1);
+                        bar.done(&format!("{}: rendered", cells[i].spec.id));
                         continue;
                     }
                     Ran::Pending(pending) => finish_guarded(*pending, options, references),
@@ -584,8 +585,11 @@ pub fn run(
                     bar.println(format!("{}: {note}", cells[i].spec.id));
                     why.push_str(&format!(" [{note}]"));
                 }
+                bar.done(&match &record.failure {
+                    None => format!("{}: ok", cells[i].spec.id),
+                    Some(why) => format!("{}: FAILED: {why}", cells[i].spec.id),
+                });
                 records[i] = Some(record);
-                bar.inc(1);
             }
         }
         drop(to_worker);
@@ -632,7 +636,7 @@ pub fn run(
             ));
         }
     }
-    bar.finish_and_clear();
+    bar.finish();
     let (reference_frames, reference_shadings) = references.counts();
     let reused_ids: Vec<&str> = reused.iter().map(String::as_str).collect();
     let mut cost = RunCost {
@@ -681,22 +685,6 @@ pub fn run(
     }
     derive(&mut results.cells, &results.provenance, None);
     results
-}
-
-fn progress_bar(shown: bool, cells: usize) -> indicatif::ProgressBar {
-    let bar = if shown {
-        indicatif::ProgressBar::new(cells as u64)
-    } else {
-        indicatif::ProgressBar::hidden()
-    };
-    bar.set_style(
-        indicatif::ProgressStyle::with_template(
-            "{elapsed_precise} [{bar:30}] {pos}/{len} {wide_msg}",
-        )
-        .expect("valid template")
-        .progress_chars("=> "),
-    );
-    bar
 }
 
 /// The order cells run in: the cells of one group (scene and parameters) together, in
@@ -754,7 +742,7 @@ fn run_batch(
     batch: &[usize],
     options: &MatrixOptions,
     references: &ReferenceCache,
-    bar: &indicatif::ProgressBar,
+    bar: &crate::progress::Bar,
 ) -> BatchEnd {
     let mut ran: Vec<(usize, Ran, Vec<Arc<Composition>>)> = Vec::new();
     let mut live: Vec<Live> = Vec::new();
@@ -772,7 +760,7 @@ fn run_batch(
     };
     for (k, &i) in batch.iter().enumerate() {
         let cell = &cells[i];
-        bar.set_message(format!("setting up {}", cell.spec.id));
+        bar.status(format!("setting up {}", cell.spec.id));
         gpu.begin_cell();
         if let Some(hook) = options.before_cell {
             hook(gpu, &cell.spec);
@@ -805,7 +793,7 @@ fn run_batch(
     let mut round = 0;
     while live.iter().any(|l| !l.timing.done()) {
         round += 1;
-        bar.set_message(format!(
+        bar.status(format!(
             "timing {} cells of {}, round {round}",
             live.iter().filter(|l| !l.timing.done()).count(),
             cells[batch[0]].spec.group()
@@ -860,7 +848,7 @@ fn run_batch(
     }) = unfinished.next()
     {
         let cell = &cells[i];
-        bar.set_message(format!("counting {}", cell.spec.id));
+        bar.status(format!("counting {}", cell.spec.id));
         gpu.begin_cell();
         let mark = composer.log_mark();
         let done = catch_unwind(AssertUnwindSafe(|| {

@@ -166,7 +166,7 @@ impl VariantEntry {
 pub fn find_variants(args: &[String]) -> Result<Vec<VariantEntry>, String> {
     let mut out = Vec::new();
     for arg in args {
-        let path = variant::resolve(arg);
+        let path = variant::locate(arg)?;
         let files = variant::find_files(&path)?;
         if files.is_empty() {
             return Err(format!("{}: no .ron variant files there", path.display()));

@@ -351,7 +351,8 @@ impl Scene {
 #[derive(Debug, PartialEq, thiserror::Error)]
 pub enum SceneError {
     #[error(
-        "unknown scene `{0}`; the built-in scenes are: {names} (see `clusterlab scenes`), or give a glTF file (a path ending in .gltf or .glb)",
+        "unknown scene `{0}`{near}; the built-in scenes are: {names} (see `clusterlab scenes`), or give a glTF file (a path ending in .gltf or .glb)",
+        near = crate::names::did_you_mean(.0, SCENES.iter().map(|s| s.name)),
         names = scene_names()
     )]
     Unknown(String),

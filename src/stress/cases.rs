@@ -5,6 +5,8 @@ use glam::DVec3;
 
 use crate::cpu::zslice::Slices;
 use crate::scene::{Camera, Light, MeshBuilder, Motion, Scene, SceneParams, Vertex};
+use std::sync::Arc;
+
 use strum::IntoEnumIterator;
 
 use crate::variant::*;
@@ -18,7 +20,126 @@ pub struct Case {
     /// sequence, every frame checked (`sequence::run`).
     pub later: Vec<Scene>,
     pub variants: Vec<(String, Variant)>,
+    /// How a user's variant (`stress --variants`) joins the case: one run per edit.
+    pub edits: Vec<Edit>,
 }
+
+/// What a case sets in a user's variant before running it (a grid, a slicing, a depth
+/// mapping, a sample count; nothing for most), and the suffix that names the result. An edit
+/// that cannot apply says why.
+#[derive(Clone)]
+pub struct Edit {
+    pub suffix: String,
+    pub apply: Arc<dyn Fn(&mut Variant) -> Result<(), String> + Send + Sync>,
+}
+
+impl Edit {
+    fn new(
+        suffix: impl Into<String>,
+        apply: impl Fn(&mut Variant) -> Result<(), String> + Send + Sync + 'static,
+    ) -> Edit {
+        Edit {
+            suffix: suffix.into(),
+            apply: Arc::new(apply),
+        }
+    }
+
+    /// The variant as it is; a clustered one where the case checks cluster lists only.
+    fn as_is(clustered_only: bool) -> Edit {
+        Edit::new("", move |v| {
+            if clustered_only && !v.pipeline.is_clustered() {
+                Err(NEEDS_CLUSTERS.into())
+            } else {
+                Ok(())
+            }
+        })
+    }
+
+    /// `v` with this edit, checked as a variant file is, named `name` and the suffix.
+    fn applied(&self, name: &str, v: &Variant) -> (String, Result<Variant, String>) {
+        let mut v = v.clone();
+        let result = (self.apply)(&mut v).and_then(|()| match check(&v).first() {
+            None => Ok(v),
+            Some(p) => Err(format!(
+                "the case's edit makes it invalid: {}: {}",
+                p.field, p.message
+            )),
+        });
+        (format!("{name}{}", self.suffix), result)
+    }
+}
+
+const NEEDS_CLUSTERS: &str = "the case checks cluster lists: it needs a clustered pipeline";
+
+impl Case {
+    /// The runs of a user's variant `v` named `name` in this case: the variant each edit
+    /// makes, or why it does not apply.
+    pub fn runs_of(&self, name: &str, v: &Variant) -> Vec<(String, Result<Variant, String>)> {
+        self.edits.iter().map(|e| e.applied(name, v)).collect()
+    }
+
+    fn with_edits(mut self, edits: Vec<Edit>) -> Case {
+        self.edits = edits;
+        self
+    }
+}
+
+/// The built-in variants `set` with `edit` applied (those it applies to).
+fn edited(set: Vec<(String, Variant)>, edit: &Edit) -> Vec<(String, Variant)> {
+    set.into_iter()
+        .filter_map(|(n, v)| match edit.applied(&n, &v) {
+            (name, Ok(v)) => Some((name, v)),
+            (_, Err(_)) => None,
+        })
+        .collect()
+}
+
+fn set_grid(grid: (u32, u32, u32)) -> Edit {
+    Edit::new(format!("_{}x{}x{}", grid.0, grid.1, grid.2), move |v| {
+        v.clusters.as_mut().ok_or(NEEDS_CLUSTERS)?.grid = grid;
+        Ok(())
+    })
+}
+
+fn set_slicing(slicing: ZSlicing, tag: &str) -> Edit {
+    Edit::new(format!("_{tag}"), move |v| {
+        v.clusters.as_mut().ok_or(NEEDS_CLUSTERS)?.slicing = slicing;
+        Ok(())
+    })
+}
+
+/// The depth mappings other than the standard finite one, each with 32-bit float depth.
+fn set_depths() -> Vec<Edit> {
+    [
+        ("reversed_z", true, None),
+        ("reversed_z_finite_far", true, Some(false)),
+        ("infinite_far", false, Some(true)),
+    ]
+    .into_iter()
+    .map(|(tag, reversed_z, infinite_far)| {
+        Edit::new(format!("_{tag}"), move |v| {
+            v.depth = Depth {
+                format: DepthFormat::Float32,
+                reversed_z,
+                infinite_far,
+            };
+            Ok(())
+        })
+    })
+    .collect()
+}
+
+/// Four samples a pixel.
+fn set_msaa4() -> Edit {
+    Edit::new("_msaa4", |v| {
+        v.msaa.samples = 4;
+        Ok(())
+    })
+}
+
+const PREVIOUS_FRAME_RANGE: ZSlicing = ZSlicing::DynamicRange {
+    source: DepthRangeSource::PreviousFrame,
+};
 
 /// Image size of the cases that do not test sizes (small: CI runs them all).
 pub const SIZE: (u32, u32) = (48, 27);
@@ -114,28 +235,8 @@ pub fn codec_case_name(codec: NormalCodec) -> String {
     }
 }
 
-fn with_grid(grid: (u32, u32, u32)) -> Vec<(String, Variant)> {
-    clustered()
-        .into_iter()
-        .map(|(n, mut v)| {
-            if let Some(c) = &mut v.clusters {
-                c.grid = grid;
-            }
-            (format!("{n}_{}x{}x{}", grid.0, grid.1, grid.2), v)
-        })
-        .collect()
-}
-
 fn with_slicing(slicing: ZSlicing, tag: &str) -> Vec<(String, Variant)> {
-    clustered()
-        .into_iter()
-        .map(|(n, mut v)| {
-            if let Some(c) = &mut v.clusters {
-                c.slicing = slicing;
-            }
-            (format!("{n}_{tag}"), v)
-        })
-        .collect()
+    edited(clustered(), &set_slicing(slicing, tag))
 }
 
 /// The name of the stress case of a z-slicing scheme: its feature flag, and the range source
@@ -149,24 +250,9 @@ pub fn slicing_case_name(slicing: ZSlicing) -> String {
 
 /// Every pipeline with each depth mapping other than the standard finite one.
 fn depth_mappings() -> Vec<(String, Variant)> {
-    let mappings = [
-        ("reversed_z", true, None),
-        ("reversed_z_finite_far", true, Some(false)),
-        ("infinite_far", false, Some(true)),
-    ];
-    pipelines()
-        .into_iter()
-        .flat_map(|(n, v)| {
-            mappings.map(|(tag, reversed_z, infinite_far)| {
-                let mut v = v.clone();
-                v.depth = Depth {
-                    format: DepthFormat::Float32,
-                    reversed_z,
-                    infinite_far,
-                };
-                (format!("{n}_{tag}"), v)
-            })
-        })
+    set_depths()
+        .iter()
+        .flat_map(|edit| edited(pipelines(), edit))
         .collect()
 }
 
@@ -268,6 +354,7 @@ fn case(
     scene: Scene,
     variants: Vec<(String, Variant)>,
 ) -> Case {
+    let clustered_only = variants.iter().all(|(_, v)| v.pipeline.is_clustered());
     Case {
         name: name.into(),
         what: what.into(),
@@ -279,6 +366,7 @@ fn case(
             .into_iter()
             .filter(|(_, v)| check(v).is_empty())
             .collect(),
+        edits: vec![Edit::as_is(clustered_only)],
     }
 }
 
@@ -311,7 +399,8 @@ pub fn all() -> Vec<Case> {
         "reversed-Z (infinite and finite far plane) and an infinite far plane, 32-bit float depth",
         lit_room("reversed_z_infinite_far", SIZE, base_lights()),
         depth_mappings(),
-    ));
+    )
+    .with_edits(set_depths()));
     for (name, fov, what) in [
         (
             "fov_1_degree",
@@ -736,18 +825,22 @@ pub fn all() -> Vec<Case> {
     }
 
     // Grids.
-    cases.push(case(
-        "grid_1x1x1",
-        "one cluster holding every light",
-        lit_room("grid_1x1x1", SIZE, lattice(64, 2.0)),
-        with_grid((1, 1, 1)),
-    ));
-    cases.push(case(
-        "grid_64x64x64",
-        "262144 clusters, most smaller than a pixel",
-        lit_room("grid_64x64x64", SIZE, lattice(64, 2.0)),
-        with_grid((64, 64, 64)),
-    ));
+    for (grid, what) in [
+        ((1, 1, 1), "one cluster holding every light"),
+        ((64, 64, 64), "262144 clusters, most smaller than a pixel"),
+    ] {
+        let edit = set_grid(grid);
+        let name = format!("grid{}", edit.suffix);
+        cases.push(
+            case(
+                name.clone(),
+                what,
+                lit_room(&name, SIZE, lattice(64, 2.0)),
+                edited(clustered(), &edit),
+            )
+            .with_edits(vec![edit]),
+        );
+    }
     // Every z-slicing scheme (the schema's list), with lights across many slices.
     {
         let cam = default_camera(&room());
@@ -758,20 +851,17 @@ pub fn all() -> Vec<Case> {
                 format!("{} slicing, 64 lights through the room", slicing.label()),
                 lit_room(&tag, SIZE, lattice(64, 2.0)),
                 with_slicing(slicing, &tag),
-            ));
+            )
+            .with_edits(vec![set_slicing(slicing, &tag)]));
         }
     }
     cases.push(case(
         "dynamic_range_previous_frame",
         "slices fitted to the previous frame's depth range: the deepest pixel sits on the far end",
         lit_room("dynamic_range_previous_frame", SIZE, base_lights()),
-        with_slicing(
-            ZSlicing::DynamicRange {
-                source: DepthRangeSource::PreviousFrame,
-            },
-            "dynamic_previous",
-        ),
-    ));
+        with_slicing(PREVIOUS_FRAME_RANGE, "dynamic_previous"),
+    )
+    .with_edits(vec![set_slicing(PREVIOUS_FRAME_RANGE, "dynamic_previous")]));
     cases.push(case(
         "olsson_slices_run_out",
         "Olsson's cubic slices at a 30 degree field of view: 12 slices end long before the far plane, the last holds the rest",
@@ -788,7 +878,8 @@ pub fn all() -> Vec<Case> {
             scene("olsson_slices_run_out", SIZE, m, base_lights(), cam)
         },
         with_slicing(ZSlicing::OlssonCubic, "olsson"),
-    ));
+    )
+    .with_edits(vec![set_slicing(ZSlicing::OlssonCubic, "olsson")]));
     spot_cases(&mut cases);
     transparency_cases(&mut cases);
     motion_cases(&mut cases);
@@ -852,6 +943,7 @@ fn motion_case(name: &str, what: &str, frames: Vec<Vec<Light>>) -> Case {
         scene: first,
         later: scenes,
         variants: strategies(),
+        edits: vec![Edit::as_is(true)],
     }
 }
 
@@ -1380,7 +1472,8 @@ fn spot_cases(cases: &mut Vec<Case>) {
             what,
             lit_room(name, size, lights),
             multisampled(),
-        ));
+        )
+        .with_edits(vec![set_msaa4()]));
     }
     {
         // The near plane through the sphere and the walls: edges on the near plane.
@@ -1392,14 +1485,16 @@ fn spot_cases(cases: &mut Vec<Case>) {
             "4 samples, the near plane cutting the sphere: edges on the near plane",
             scene("msaa_near_plane", SIZE, m, lattice(27, 3.0), cam),
             multisampled(),
-        ));
+        )
+        .with_edits(vec![set_msaa4()]));
     }
     cases.push(case(
         TIES_CASE,
         "4 samples, two floors in one plane cut along other diagonals: samples where they tie",
         coplanar_ties(),
         multisampled(),
-    ));
+    )
+    .with_edits(vec![set_msaa4()]));
 }
 
 /// The name of the case whose samples tie between two surfaces (`coplanar_ties`).
@@ -1428,11 +1523,5 @@ pub fn coplanar_ties() -> Scene {
 
 /// Every pipeline at 4 samples.
 fn multisampled() -> Vec<(String, Variant)> {
-    pipelines()
-        .into_iter()
-        .map(|(name, mut v)| {
-            v.msaa.samples = 4;
-            (format!("{name}_msaa4"), v)
-        })
-        .collect()
+    edited(pipelines(), &set_msaa4())
 }

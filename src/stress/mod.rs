@@ -6,7 +6,7 @@
 mod cases;
 
 pub use cases::{
-    Case, SIZE, TIES_CASE, all as cases, codec_case_name, coplanar_ties, slicing_case_name,
+    Case, Edit, SIZE, TIES_CASE, all as cases, codec_case_name, coplanar_ties, slicing_case_name,
 };
 
 use std::collections::HashMap;
@@ -44,6 +44,9 @@ pub struct CaseRun {
     /// (`run::margin_note`).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub note: Option<String>,
+    /// Why the case does not apply to the variant (then it did not run, and `ok` is true).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub not_applicable: Option<String>,
 }
 
 /// Largest 8-bit error a variant may have against the reference on an adapter whose HDR
@@ -152,6 +155,7 @@ pub fn run_case(
             ok: checks.iter().all(|c| c.ok),
             checks,
             note: crate::run::margin_note(v, &case.scene),
+            not_applicable: None,
         };
     }
     let mut checks = Vec::new();
@@ -302,6 +306,7 @@ pub fn run_case(
         ok: checks.iter().all(|c| c.ok),
         checks,
         note: crate::run::margin_note(v, &case.scene),
+        not_applicable: None,
     }
 }
 
@@ -651,60 +656,149 @@ fn in_proxy(grid: &Grid, light: &cpu::ViewLight, (x, y, k): (u32, u32, u32)) -> 
         .is_some_and(|((x0, y0), (x1, y1))| (x0..=x1).contains(&x) && (y0..=y1).contains(&y))
 }
 
-/// Run every case whose name contains `filter` (all without one) on each of its variants.
+/// Which variants a stress run uses: each case's own, or the user's (`--variants`), each
+/// with the case's edits.
+pub enum Subjects<'a> {
+    BuiltIn,
+    Given(&'a [LoadedVariant]),
+}
+
+/// One run a stress run plans: a case, a variant's name there, and the variant or why it
+/// does not apply.
+struct Planned<'c> {
+    case: &'c Case,
+    name: String,
+    variant: Result<Variant, String>,
+}
+
+/// What a stress run says as it goes: a run about to start, and each case once its runs are
+/// done, with how many of the applicable runs are done of how many.
+pub enum Progress<'a> {
+    Starting(&'a str),
+    CaseDone {
+        case: &'a str,
+        runs: &'a [CaseRun],
+        done: usize,
+        total: usize,
+    },
+}
+
+/// The cases whose name contains `filter` (all without one).
+pub fn selected(filter: Option<&str>) -> Vec<Case> {
+    cases()
+        .into_iter()
+        .filter(|c| filter.is_none_or(|f| c.name.contains(f)))
+        .collect()
+}
+
+/// Run `cases` on `subjects`, every run checked; a run that does not apply (the case needs
+/// what the variant lacks, or the adapter lacks its sample count) is recorded with why.
 /// After a failed run the device is checked, and replaced when it is unusable, so one run's
 /// broken device does not fail the runs after it.
 pub fn run(
     gpu: &mut Gpu,
     composer: &Composer,
-    filter: Option<&str>,
-    progress: &dyn Fn(&str),
+    cases: &[Case],
+    subjects: Subjects,
+    progress: &mut dyn FnMut(Progress),
 ) -> Vec<CaseRun> {
-    let mut out = Vec::new();
+    let samples = &gpu.multisample_counts();
+    let planned: Vec<Planned> = cases
+        .iter()
+        .flat_map(|case| {
+            let runs: Vec<(String, Result<Variant, String>)> = match &subjects {
+                Subjects::BuiltIn => case
+                    .variants
+                    .iter()
+                    .map(|(n, v)| (n.clone(), Ok(v.clone())))
+                    .collect(),
+                Subjects::Given(given) => given
+                    .iter()
+                    .flat_map(|l| case.runs_of(&l.name, &l.variant))
+                    .collect(),
+            };
+            runs.into_iter().map(move |(name, variant)| {
+                let variant = variant.and_then(|v| {
+                    if samples.contains(&v.msaa.samples) {
+                        Ok(v)
+                    } else {
+                        Err(format!(
+                            "the adapter does not multisample {} samples",
+                            v.msaa.samples
+                        ))
+                    }
+                });
+                Planned {
+                    case,
+                    name,
+                    variant,
+                }
+            })
+        })
+        .collect();
+    let total = planned.iter().filter(|p| p.variant.is_ok()).count();
+    let mut out: Vec<CaseRun> = Vec::new();
     // Why there is no usable device: the runs after that fail with it.
     let mut no_device: Option<String> = None;
-    for case in cases() {
-        if filter.is_some_and(|f| !case.name.contains(f)) {
-            continue;
+    let mut done = 0;
+    // Shared by the variants of a case that would compute the same reference frame.
+    let mut references = ReferenceCache::default();
+    for (i, p) in planned.iter().enumerate() {
+        let case = p.case;
+        if i > 0 && planned[i - 1].case.name != case.name {
+            references = ReferenceCache::default();
         }
-        let references = ReferenceCache::default();
-        for (name, v) in &case.variants {
-            if !gpu.multisample_counts().contains(&v.msaa.samples) {
-                progress(&format!(
-                    "{} / {name}: not run, the adapter does not multisample {} samples",
-                    case.name, v.msaa.samples
-                ));
-                continue;
-            }
-            progress(&format!("{} / {name}", case.name));
-            let failed = |why: String| CaseRun {
-                case: case.name.to_string(),
-                variant: name.clone(),
-                what: case.what.to_string(),
-                ok: false,
-                checks: vec![check("renders", false, why)],
-                note: None,
-            };
-            if let Some(why) = &no_device {
-                out.push(failed(why.clone()));
-                continue;
-            }
-            gpu.begin_cell();
-            let run = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-                run_case(gpu, composer, &references, &case, name, v)
-            }))
-            .unwrap_or_else(|_| failed("panicked".into()));
-            if !run.ok {
-                match gpu.renew_if_unusable() {
-                    Ok(None) => {}
-                    Ok(Some(broken)) => progress(&format!(
-                        "device unusable after {} / {name} ({broken}); opened a new one",
-                        case.name
-                    )),
-                    Err(e) => no_device = Some(format!("no usable GPU device: {e}")),
+        let failed = |why: String| CaseRun {
+            case: case.name.to_string(),
+            variant: p.name.clone(),
+            what: case.what.to_string(),
+            ok: false,
+            checks: vec![check("renders", false, why)],
+            note: None,
+            not_applicable: None,
+        };
+        let run = match (&p.variant, &no_device) {
+            (Err(why), _) => CaseRun {
+                ok: true,
+                checks: Vec::new(),
+                not_applicable: Some(why.clone()),
+                ..failed(String::new())
+            },
+            (Ok(_), Some(why)) => failed(why.clone()),
+            (Ok(v), None) => {
+                progress(Progress::Starting(&format!("{} / {}", case.name, p.name)));
+                gpu.begin_cell();
+                let run = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+                    run_case(gpu, composer, &references, case, &p.name, v)
+                }))
+                .unwrap_or_else(|_| failed("panicked".into()));
+                if !run.ok {
+                    match gpu.renew_if_unusable() {
+                        Ok(None) => {}
+                        Ok(Some(broken)) => progress(Progress::Starting(&format!(
+                            "device unusable after {} / {} ({broken}); opened a new one",
+                            case.name, p.name
+                        ))),
+                        Err(e) => no_device = Some(format!("no usable GPU device: {e}")),
+                    }
                 }
+                run
             }
-            out.push(run);
+        };
+        done += usize::from(p.variant.is_ok());
+        out.push(run);
+        let last_of_case = planned.get(i + 1).is_none_or(|n| n.case.name != case.name);
+        if last_of_case {
+            let first = out
+                .iter()
+                .rposition(|r| r.case != case.name)
+                .map_or(0, |k| k + 1);
+            progress(Progress::CaseDone {
+                case: &case.name,
+                runs: &out[first..],
+                done,
+                total,
+            });
         }
     }
     out
@@ -720,6 +814,10 @@ pub fn report(runs: &[CaseRun]) -> String {
             case = &r.case;
             let _ = writeln!(s, "{}: {}", r.case, r.what);
         }
+        if let Some(why) = &r.not_applicable {
+            let _ = writeln!(s, "  n/a    {}: {why}", r.variant);
+            continue;
+        }
         let _ = writeln!(
             s,
             "  {} {}",
@@ -734,13 +832,19 @@ pub fn report(runs: &[CaseRun]) -> String {
         }
     }
     let failed = runs.iter().filter(|r| !r.ok).count();
+    let not_applicable = runs.iter().filter(|r| r.not_applicable.is_some()).count();
     let cases: std::collections::BTreeSet<&str> = runs.iter().map(|r| r.case.as_str()).collect();
     let _ = writeln!(
         s,
-        "{} cases, {} runs, {} failed",
+        "{} cases, {} runs, {} failed{}",
         cases.len(),
-        runs.len(),
-        failed
+        runs.len() - not_applicable,
+        failed,
+        if not_applicable > 0 {
+            format!(", {not_applicable} not applicable")
+        } else {
+            String::new()
+        }
     );
     s
 }

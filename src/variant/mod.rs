@@ -128,16 +128,49 @@ pub fn parse(path: &Path, text: &str) -> Result<Variant, VariantError> {
     }
 }
 
+/// The folder a variant name is looked for in.
+pub const FOLDER: &str = "variants";
+
 /// A variant argument: a path, or the name of a file in `variants/` (`forward_plus` is
-/// `variants/forward_plus.ron`). An unknown name comes back as the path it was, so that
-/// reading it names what was asked for.
-pub fn resolve(arg: &str) -> PathBuf {
+/// `variants/forward_plus.ron`). An unknown one is an error that says where it was looked
+/// for and names the nearest variants there.
+pub fn locate(arg: &str) -> Result<PathBuf, String> {
     let path = PathBuf::from(arg);
     if path.exists() {
-        return path;
+        return Ok(path);
     }
-    let in_folder = Path::new("variants").join(format!("{arg}.ron"));
-    if in_folder.exists() { in_folder } else { path }
+    let in_folder = Path::new(FOLDER).join(format!("{arg}.ron"));
+    if in_folder.exists() {
+        return Ok(in_folder);
+    }
+    let known: Vec<String> = find_files(Path::new(FOLDER))
+        .unwrap_or_default()
+        .iter()
+        .filter_map(|p| Some(p.file_stem()?.to_string_lossy().into_owned()))
+        .collect();
+    Err(format!(
+        "no variant `{arg}`: no file or folder {}, and no {}{}",
+        path.display(),
+        in_folder.display(),
+        crate::names::did_you_mean(arg, known.iter().map(String::as_str))
+    ))
+}
+
+/// Every variant of `args` (files, folders of them, or names in `variants/`), loaded; the
+/// first that cannot be found or read is the error, with its file, line and column.
+pub fn load_args(args: &[String]) -> Result<Vec<LoadedVariant>, String> {
+    let mut out = Vec::new();
+    for arg in args {
+        let path = locate(arg)?;
+        let files = find_files(&path)?;
+        if files.is_empty() {
+            return Err(format!("{}: no .ron variant files there", path.display()));
+        }
+        for file in files {
+            out.push(load(&file).map_err(|e| e.to_string())?);
+        }
+    }
+    Ok(out)
 }
 
 /// The variant files under `path` (a file, or a folder searched for `*.ron`), sorted.

@@ -673,11 +673,6 @@ impl App<'_, '_> {
         ));
         ui.separator();
 
-        let variant_name = |p: &Path| {
-            p.file_stem()
-                .map(|s| s.to_string_lossy().into_owned())
-                .unwrap_or_default()
-        };
         let mut chosen = None;
         egui::ComboBox::from_label("variant")
             .selected_text(variant_name(&setup.variant))
@@ -1151,11 +1146,29 @@ fn output_path(out: &Path, file: &Path, step: &str) -> Result<PathBuf, String> {
     Ok(path)
 }
 
+/// A variant file's name: its stem.
+fn variant_name(p: &Path) -> String {
+    p.file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default()
+}
+
+/// The variant a script names: one the viewer offers by its name (a file given by path
+/// too), else a path or a name in `variants/`.
+fn offered(variants: &[PathBuf], name: &str) -> Result<PathBuf, String> {
+    match variants.iter().find(|v| variant_name(v) == name) {
+        Some(v) => Ok(v.clone()),
+        None => crate::variant::locate(name),
+    }
+}
+
 /// A panel change from a script.
 fn set(app: &mut App, change: Change) -> Result<(), String> {
     let mut setup = app.session.setup.clone();
     match change {
-        Change::Variant(v) => setup = app.session.setup_for_variant(crate::variant::resolve(&v))?,
+        Change::Variant(v) => {
+            setup = app.session.setup_for_variant(offered(&app.options.variants, &v)?)?
+        }
         Change::Scene(s) => {
             setup.params = crate::scene::defaults(&s).map_err(|e| e.to_string())?;
             setup.scene = s;
