@@ -27,6 +27,7 @@ pub mod render;
 pub mod run;
 pub mod scene;
 pub mod sequence;
+pub mod snapshot;
 pub mod stress;
 pub mod study;
 pub mod variant;

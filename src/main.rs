@@ -35,6 +35,22 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+    /// Write the pending snapshots of variants for review: the WGSL of every pass and a
+    /// frame on a small scene, beside the reviewed ones in the working folder's snapshots/
+    /// (images of an adapter other than llvmpipe in a folder of its own); and the lists
+    /// generated from the variant files (snapshots/wgsl/users.txt, and in a clusterlab
+    /// tree docs/variants.md). Review with `cargo insta review`, or take every pending one
+    /// with --accept.
+    Snapshot {
+        /// Variant files, folders of them, or names in variants/ (default: variants/).
+        #[arg(long, num_args = 1..)]
+        variants: Vec<String>,
+        /// Take every pending snapshot in: each replaces its reviewed one.
+        #[arg(long, conflicts_with = "variants")]
+        accept: bool,
+        #[command(flatten)]
+        gpu: GpuArgs,
+    },
     /// Print the composed WGSL of a variant's passes.
     Wgsl {
         /// A variant file, or the name of one in variants/.
@@ -585,6 +601,11 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Validate { paths, json } => validate(&paths, json),
         Command::Wgsl { variant, pass } => wgsl(&variant, pass.as_deref()),
+        Command::Snapshot {
+            variants,
+            accept,
+            gpu,
+        } => snapshot(&variants, accept, &gpu),
         Command::Explain => {
             print!("{}", clusterlab::explain::explain());
             Ok(true)

@@ -36,7 +36,12 @@ mod tests {
 
     #[test]
     fn a_typo_finds_the_name_and_a_stranger_finds_none() {
-        let known = ["forward_plus", "forward_plus_bvh", "naive_forward", "atrium"];
+        let known = [
+            "forward_plus",
+            "forward_plus_bvh",
+            "naive_forward",
+            "atrium",
+        ];
         assert_eq!(nearest("forward_plu", known)[0], "forward_plus");
         assert_eq!(nearest("atrum", known), ["atrium"]);
         assert!(nearest("zzzzzzzz", known).is_empty());

@@ -1,13 +1,12 @@
 //! Composition: every pass of every variant in variants/ (and of the default matrix's MSAA
-//! group at 4 samples) composes and validates, and its WGSL matches the reviewed snapshot;
-//! bad input gives the reviewed error text.
+//! group at 4 samples) composes and validates, and its WGSL matches the reviewed snapshot
+//! (`clusterlab snapshot` writes them for review); bad input gives the reviewed error text.
 
 use std::path::Path;
 
-use clusterlab::compose::{Composer, SceneFeatures, feature_flags, frame_features, passes};
-use clusterlab::variant::{self, Msaa, MsaaResolve};
-
-use crate::common;
+use clusterlab::compose::{Composer, feature_flags, passes};
+use clusterlab::snapshot::shaders;
+use clusterlab::variant;
 
 fn snapshot_settings(folder: &str) -> insta::Settings {
     let mut settings = insta::Settings::clone_current();
@@ -16,98 +15,39 @@ fn snapshot_settings(folder: &str) -> insta::Settings {
     settings
 }
 
-/// One snapshot per distinct composed shader: every pass of every variant in variants/ is
-/// composed (a shading pass also instrumented, as `<pass>.counting`), and equal WGSL is one
-/// snapshot, named after its pass and a hash of its text (`shader_name`); `USERS` lists the
-/// variants that share each. A new variant file then joins existing snapshots (changing
-/// only that index) or adds its own with no code change, and renames none; a change to a
-/// module shows as each shader it reaches, under its new name, with the old ones listed
-/// here to delete.
+/// One snapshot per distinct composed shader (`snapshot::shaders`), for every pass of every
+/// variant in variants/ and the default matrix's MSAA group at 4 samples; the index of which
+/// variants compose each is what `clusterlab snapshot` generates, and no snapshot is left
+/// that no shader produces.
 #[test]
 fn composed_wgsl_of_every_distinct_pass() {
-    let composer = Composer::default();
-    let mut files = variant::find_files(Path::new("variants")).expect("variants/");
-    files.sort();
-    // (pass, WGSL) -> the variants that compose it, in name order.
-    let mut shaders: Vec<((String, String), Vec<String>)> = Vec::new();
-    let mut variants: Vec<variant::LoadedVariant> = files
+    let files = variant::find_files(Path::new("variants")).expect("variants/");
+    let variants: Vec<variant::LoadedVariant> = files
         .iter()
         .map(|path| variant::load(path).unwrap_or_else(|e| panic!("{e}")))
         .collect();
-    // The default matrix's MSAA group at 4 samples (its multisampled shaders), the
-    // tonemapped resolve on one forward and one deferred pipeline.
-    for (i, name) in clusterlab::matrix::MSAA_GROUP.iter().enumerate() {
-        let resolves: &[MsaaResolve] = match i {
-            1 | 2 => &[MsaaResolve::Box, MsaaResolve::Tonemapped],
-            _ => &[MsaaResolve::Box],
-        };
-        for &resolve in resolves {
-            let mut v = common::load(name);
-            v.variant.msaa = Msaa {
-                samples: 4,
-                resolve,
-            };
-            v.name = format!("{name}[msaa=4,{resolve:?}]");
-            variants.push(v);
-        }
-    }
-    for loaded in &variants {
-        let path = &loaded.path;
-        for pass in passes(&loaded.variant) {
-            // A shading pass also as an instrumented frame composes it: the counting code
-            // behind every evaluation count a table prints.
-            let instrumented = frame_features(
-                SceneFeatures {
-                    spots: true,
-                    ..Default::default()
-                },
-                Some(false),
-            );
-            let versions = [(pass.name().to_string(), &[][..])].into_iter().chain(
-                pass.id
-                    .is_shading()
-                    .then(|| (format!("{}.counting", pass.name()), &instrumented[..])),
-            );
-            for (name, overrides) in versions {
-                let composed = composer
-                    .compose_with(&loaded.variant, &pass, overrides)
-                    .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-                let key = (name, composed.wgsl);
-                match shaders.iter_mut().find(|(k, _)| *k == key) {
-                    Some((_, users)) => users.push(loaded.name.clone()),
-                    None => shaders.push((key, vec![loaded.name.clone()])),
-                }
-            }
-        }
-    }
+    let composed = shaders::distinct(&Composer::default(), &shaders::with_multisampled(&variants))
+        .unwrap_or_else(|e| panic!("{e}"));
     let mut names: Vec<String> = Vec::new();
-    // Which variants compose each shader: one index, so that a new variant sharing a shader
-    // changes this file and not the snapshot's header.
-    let mut index = Vec::new();
-    for ((pass, wgsl), users) in &shaders {
-        let name = shader_name(pass, wgsl);
+    for shader in &composed {
+        let name = shader.name();
         let mut settings = snapshot_settings("wgsl");
-        settings.set_description(format!("pass `{pass}`"));
-        settings.bind(|| insta::assert_snapshot!(name.clone(), wgsl));
+        settings.set_description(format!("pass `{}`", shader.pass));
+        settings.bind(|| insta::assert_snapshot!(name.clone(), &shader.wgsl));
         let file_name = format!("{name}.snap");
         assert!(
             !names.contains(&file_name),
-            "two shaders of pass `{pass}` hash alike: lengthen `shader_name`'s hash"
+            "two shaders of pass `{}` hash alike: lengthen `Shader::name`'s hash",
+            shader.pass
         );
-        index.push(format!("{file_name}: {}\n", users.join(", ")));
         names.push(file_name);
     }
-    index.sort();
-    let index = index.concat();
-    let updating = std::env::var("INSTA_UPDATE").is_ok_and(|v| v == "always")
-        || std::env::var_os("INSTA_FORCE_UPDATE").is_some();
-    if updating {
-        std::fs::write(USERS, &index).expect("the snapshots' index");
-    }
+    let index = shaders::index(&composed);
+    let path = Path::new("snapshots/wgsl").join(shaders::INDEX);
     assert!(
-        std::fs::read_to_string(USERS).is_ok_and(|t| t.replace("\r\n", "\n") == index),
-        "{USERS} does not list the variants composing each shader (rewrite it with \
-         `INSTA_UPDATE=always cargo test compose::`)"
+        std::fs::read_to_string(&path).is_ok_and(|t| t.replace("\r\n", "\n") == index),
+        "{} does not list the variants composing each shader: run `clusterlab snapshot`",
+        path.display()
     );
     // No snapshot is left that no shader produces.
     let stale: Vec<String> = std::fs::read_dir("snapshots/wgsl")
@@ -119,18 +59,6 @@ fn composed_wgsl_of_every_distinct_pass() {
         stale.is_empty(),
         "snapshots of no composed shader (delete them): {stale:?}"
     );
-}
-
-/// The variants composing each WGSL snapshot, one line a snapshot.
-const USERS: &str = "snapshots/wgsl/users.txt";
-
-/// A shader's snapshot name: its pass and the first 32 bits of the SHA-256 of its text (line
-/// ends made `\n`, so a checkout's line ends do not rename it).
-fn shader_name(pass: &str, wgsl: &str) -> String {
-    use sha2::{Digest, Sha256};
-    let hash = Sha256::digest(wgsl.replace("\r\n", "\n"));
-    let hex: String = hash[..4].iter().map(|b| format!("{b:02x}")).collect();
-    format!("{pass}@{hex}")
 }
 
 #[test]

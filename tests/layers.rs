@@ -5,7 +5,14 @@
 /// `commands/` is the binary's (the bodies `main.rs` dispatches to); `main.rs` stands above
 /// them all.
 const LAYERS: &[&[&str]] = &[
-    &["common", "files", "environment", "measure", "names", "progress"],
+    &[
+        "common",
+        "files",
+        "environment",
+        "measure",
+        "names",
+        "progress",
+    ],
     &["cpu", "variant", "scene", "flip"],
     &["compose", "gpu", "explain"],
     &["render", "efficiency"],
@@ -13,7 +20,7 @@ const LAYERS: &[&[&str]] = &[
     &["run", "bias", "plot"],
     &["sequence"],
     &["kernels", "stress", "matrix"],
-    &["study", "view"],
+    &["study", "view", "snapshot"],
     &["commands"],
 ];
 

@@ -1,157 +1,30 @@
-//! README's table of the shipped variants is the variant files' own: a file added, removed
-//! or changed without its row fails here, with the table to paste.
+//! The pages that front the project say what is true: the variant page is the variant
+//! files' own, ARCHITECTURE is a map, README a front page.
 
 use std::path::Path;
 
-use clusterlab::common::{NormalCodec, SpotTest, ZSlicing};
-use clusterlab::variant::{
-    self, Assignment, BloomKernel, Culling, DebugView, GBufferLayout, LightLists, ListUpdate,
-    ShadingModel, ToonMode, Variant,
-};
+use clusterlab::snapshot::table;
+use clusterlab::variant;
 
-fn slicing(s: ZSlicing) -> &'static str {
-    match s {
-        ZSlicing::Linear => "linear",
-        ZSlicing::Exponential => "exponential",
-        ZSlicing::NearSliceThenExponential { .. } => "near slice + exponential",
-        ZSlicing::OlssonCubic => "Olsson cubic",
-        ZSlicing::DynamicRange { .. } => "exponential over the frame's depth",
-        ZSlicing::NdcUniform => "NDC uniform",
-    }
-}
-
-/// How the lists are built, the test that keeps a light, and the options that change which
-/// clusters get lists.
-fn culling(v: &Variant) -> String {
-    if !v.pipeline.is_clustered() {
-        return "-".into();
-    }
-    let c = v.clusters();
-    let mut label = match c.assignment {
-        Assignment::Cpu => "CPU".to_string(),
-        Assignment::Gpu => c.method().label().to_string(),
-    };
-    if c.culling == Culling::DepthMask {
-        label += " 2.5D";
-    }
-    for (on, flag) in [
-        (c.active_clusters, " +active"),
-        (c.sample_bounds, " +sample"),
-        (c.spot_test == SpotTest::Sphere, " +spot sphere"),
-    ] {
-        if on {
-            label += flag;
-        }
-    }
-    if let LightLists::Capped { max_per_cluster } = c.lists {
-        label += &format!(" +cap {max_per_cluster}");
-    }
-    if c.update != ListUpdate::Rebuild {
-        label += &format!(" +{}", c.update.label());
-    }
-    label
-}
-
-fn clusters(v: &Variant) -> String {
-    if !v.pipeline.is_clustered() {
-        return "-".into();
-    }
-    let c = v.clusters();
-    let (x, y, z) = c.grid;
-    format!("{x}x{y}x{z} {}", slicing(c.slicing))
-}
-
-fn gbuffer(v: &Variant) -> String {
-    if !v.pipeline.is_deferred() {
-        return "-".into();
-    }
-    let layout = match v.gbuffer().layout {
-        GBufferLayout::Wide => "wide",
-        GBufferLayout::Packed => "packed",
-        GBufferLayout::Compact => "compact",
-    };
-    let normals = match v.normal_codec() {
-        NormalCodec::Xyz => "xyz".to_string(),
-        NormalCodec::Octahedral { bits, precise } => {
-            format!("octahedral {bits}{}", if precise { " precise" } else { "" })
-        }
-        NormalCodec::Polar { bits } => format!("polar {bits}"),
-        NormalCodec::Spheremap { bits } => format!("spheremap {bits}"),
-    };
-    format!("{layout}, {normals}")
-}
-
-fn shading(v: &Variant) -> String {
-    let model = match v.shading.model {
-        ShadingModel::Lambert => "Lambert",
-        ShadingModel::BlinnPhong { .. } => "Blinn-Phong",
-        ShadingModel::Ggx => "GGX",
-    };
-    match v.shading.lights.sampling() {
-        None => model.into(),
-        Some(s) => format!("{model}, {}", s.label()),
-    }
-}
-
-fn post(v: &Variant) -> String {
-    let mut steps = Vec::new();
-    if let Some(t) = &v.post.toon {
-        steps.push(match t.mode {
-            ToonMode::PerLight => "toon per light",
-            ToonMode::PostProcess => "toon",
-        });
-        if t.outlines.is_some() {
-            steps.push("outlines");
-        }
-    }
-    if let Some(b) = &v.post.bloom {
-        steps.push(match b.kernel {
-            BloomKernel::Naive => "bloom naive",
-            BloomKernel::Separable => "bloom separable",
-        });
-    }
-    if v.post.motion_blur.is_some() {
-        steps.push("motion blur");
-    }
-    if v.debug_view != DebugView::Off {
-        steps.push("debug view");
-    }
-    if steps.is_empty() {
-        "-".into()
-    } else {
-        steps.join(", ")
-    }
-}
-
-/// The table README should hold, one row per file in `variants/`.
-fn table() -> String {
-    let mut rows =
-        vec!["| variant | pipeline | culling | clusters | G-buffer | shading | post |".to_string()];
-    rows.push("| --- | --- | --- | --- | --- | --- | --- |".into());
-    for file in variant::find_files(Path::new("variants")).expect("variants/") {
-        let loaded = variant::load(&file).unwrap_or_else(|e| panic!("{e}"));
-        let v = &loaded.variant;
-        rows.push(format!(
-            "| `{}` | {} | {} | {} | {} | {} | {} |",
-            loaded.name,
-            v.pipeline.short_name(),
-            culling(v),
-            clusters(v),
-            gbuffer(v),
-            shading(v),
-            post(v)
-        ));
-    }
-    rows.join("\n") + "\n"
-}
-
+/// `docs/variants.md` is what `clusterlab snapshot` generates from `variants/`: a row per
+/// file as the file says, and the default matrix's size with them. A file added, removed or
+/// changed without running it fails here, with the page to write.
 #[test]
-fn readme_lists_every_shipped_variant_as_its_file_says() {
-    let readme = std::fs::read_to_string("README.md").expect("README.md");
-    let want = table();
+fn the_variant_page_is_the_variant_files_own() {
+    let variants: Vec<variant::LoadedVariant> = variant::find_files(Path::new("variants"))
+        .expect("variants/")
+        .iter()
+        .map(|f| variant::load(f).unwrap_or_else(|e| panic!("{e}")))
+        .collect();
+    let cells = clusterlab::matrix::expand(&clusterlab::matrix::default_groups().unwrap())
+        .unwrap()
+        .len();
+    let want = table::page(&variants, cells);
+    let page = std::fs::read_to_string(table::PAGE).expect("docs/variants.md");
     assert!(
-        readme.contains(&want),
-        "README's variant table differs from variants/; it should read:\n{want}"
+        page.replace("\r\n", "\n") == want,
+        "{} differs from variants/: run `clusterlab snapshot`; it should read:\n{want}",
+        table::PAGE
     );
 }
 
@@ -201,19 +74,4 @@ fn readme_is_a_front_page() {
     // The viewer's picture is there to see.
     assert!(readme[..first_section].contains("](docs/viewer.png)"));
     assert!(std::path::Path::new("docs/viewer.png").is_file());
-}
-
-/// The default matrix's size as README and the measurement notes state it is the size of
-/// the plan `clusterlab matrix` runs with no arguments.
-#[test]
-fn the_default_matrix_has_the_cells_readme_says() {
-    let cells = clusterlab::matrix::expand(&clusterlab::matrix::default_groups().unwrap())
-        .unwrap()
-        .len();
-    let claim = format!("the default matrix ({cells} cells)");
-    for file in ["README.md", "docs/measurement.md"] {
-        let text = std::fs::read_to_string(file).unwrap();
-        let text = text.split_whitespace().collect::<Vec<_>>().join(" ");
-        assert!(text.contains(&claim), "{file} does not say `{claim}`");
-    }
 }

@@ -115,6 +115,11 @@ fn summary(runs: &[stress::CaseRun]) -> String {
     } else if failed.is_empty() {
         format!("ok ({} runs)", ran.len())
     } else {
-        format!("{} of {} FAILED: {}", failed.len(), ran.len(), failed.join(", "))
+        format!(
+            "{} of {} FAILED: {}",
+            failed.len(),
+            ran.len(),
+            failed.join(", ")
+        )
     }
 }

@@ -75,6 +75,12 @@ pub const EXECUTABLE: Kind = Kind {
     why: "a debug build is under 200 MiB",
 };
 /// A marker or lock file the tool writes.
+pub const SNAPSHOT: Kind = Kind {
+    what: "a snapshot file",
+    limit: 16 * MIB,
+    why: "the largest shipped one is under 100 KiB",
+};
+
 pub const MARKER: Kind = Kind {
     what: "a clusterlab marker",
     limit: 64 * KIB,

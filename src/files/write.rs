@@ -37,6 +37,35 @@ pub fn write_file(path: &Path, bytes: &[u8]) -> Result<(), String> {
     })
 }
 
+/// Move `from`, a file this tool wrote, over `to` (a pending snapshot over the reviewed
+/// one), replacing `to` only when it is a regular file.
+pub fn promote(from: &Path, to: &Path) -> Result<(), String> {
+    check_target(to)?;
+    std::fs::rename(from, to).map_err(|e| {
+        format!(
+            "{}: cannot move over {}: {}",
+            shown(from),
+            shown(to),
+            describe(&e)
+        )
+    })
+}
+
+/// Remove `path`, a regular file this tool wrote; a missing one is already gone.
+pub fn remove_own_file(path: &Path) -> Result<(), String> {
+    match std::fs::symlink_metadata(path) {
+        Ok(meta) if meta.file_type().is_file() => std::fs::remove_file(path)
+            .map_err(|e| format!("{}: cannot remove: {}", shown(path), describe(&e))),
+        Ok(meta) => Err(format!(
+            "{}: is {}, not a file clusterlab wrote: left as it is",
+            shown(path),
+            what_is(&meta)
+        )),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(()),
+        Err(e) => Err(format!("{}: {}", shown(path), describe(&e))),
+    }
+}
+
 /// Create folder `dir` and the folders above it that are missing; an existing folder (or a
 /// link to one) is kept as it is.
 pub fn create_folder(dir: &Path) -> Result<(), String> {

@@ -846,13 +846,15 @@ pub fn all() -> Vec<Case> {
         let cam = default_camera(&room());
         for slicing in ZSlicing::every(cam.near, cam.far) {
             let tag = slicing_case_name(slicing);
-            cases.push(case(
-                tag.clone(),
-                format!("{} slicing, 64 lights through the room", slicing.label()),
-                lit_room(&tag, SIZE, lattice(64, 2.0)),
-                with_slicing(slicing, &tag),
-            )
-            .with_edits(vec![set_slicing(slicing, &tag)]));
+            cases.push(
+                case(
+                    tag.clone(),
+                    format!("{} slicing, 64 lights through the room", slicing.label()),
+                    lit_room(&tag, SIZE, lattice(64, 2.0)),
+                    with_slicing(slicing, &tag),
+                )
+                .with_edits(vec![set_slicing(slicing, &tag)]),
+            );
         }
     }
     cases.push(case(
@@ -1467,34 +1469,35 @@ fn spot_cases(cases: &mut Vec<Case>) {
             "4 samples, 512 lights of radius 0.3 (a few pixels): lights that reach some samples of an edge pixel and not others",
         ),
     ] {
-        cases.push(case(
-            name,
-            what,
-            lit_room(name, size, lights),
-            multisampled(),
-        )
-        .with_edits(vec![set_msaa4()]));
+        cases.push(
+            case(name, what, lit_room(name, size, lights), multisampled())
+                .with_edits(vec![set_msaa4()]),
+        );
     }
     {
         // The near plane through the sphere and the walls: edges on the near plane.
         let m = room();
         let eye = DVec3::new(0.0, 1.0, 3.0);
         let cam = camera(eye, DVec3::new(0.0, 1.0, 0.0), 60.0, 2.6, 40.0);
-        cases.push(case(
-            "msaa_near_plane",
-            "4 samples, the near plane cutting the sphere: edges on the near plane",
-            scene("msaa_near_plane", SIZE, m, lattice(27, 3.0), cam),
+        cases.push(
+            case(
+                "msaa_near_plane",
+                "4 samples, the near plane cutting the sphere: edges on the near plane",
+                scene("msaa_near_plane", SIZE, m, lattice(27, 3.0), cam),
+                multisampled(),
+            )
+            .with_edits(vec![set_msaa4()]),
+        );
+    }
+    cases.push(
+        case(
+            TIES_CASE,
+            "4 samples, two floors in one plane cut along other diagonals: samples where they tie",
+            coplanar_ties(),
             multisampled(),
         )
-        .with_edits(vec![set_msaa4()]));
-    }
-    cases.push(case(
-        TIES_CASE,
-        "4 samples, two floors in one plane cut along other diagonals: samples where they tie",
-        coplanar_ties(),
-        multisampled(),
-    )
-    .with_edits(vec![set_msaa4()]));
+        .with_edits(vec![set_msaa4()]),
+    );
 }
 
 /// The name of the case whose samples tie between two surfaces (`coplanar_ties`).

@@ -131,27 +131,33 @@ pub fn parse(path: &Path, text: &str) -> Result<Variant, VariantError> {
 /// The folder a variant name is looked for in.
 pub const FOLDER: &str = "variants";
 
-/// A variant argument: a path, or the name of a file in `variants/` (`forward_plus` is
-/// `variants/forward_plus.ron`). An unknown one is an error that says where it was looked
-/// for and names the nearest variants there.
+/// A variant argument: a path, or the name of a file in the working folder's `variants/`
+/// (`forward_plus` is `variants/forward_plus.ron`) or else in the shipped `variants/` of the
+/// tree the program was built from. An unknown one is an error that says where it was
+/// looked for and names the nearest variants there.
 pub fn locate(arg: &str) -> Result<PathBuf, String> {
     let path = PathBuf::from(arg);
     if path.exists() {
         return Ok(path);
     }
-    let in_folder = Path::new(FOLDER).join(format!("{arg}.ron"));
-    if in_folder.exists() {
-        return Ok(in_folder);
+    let folders = [
+        PathBuf::from(FOLDER),
+        Path::new(env!("CARGO_MANIFEST_DIR")).join(FOLDER),
+    ];
+    let file = format!("{arg}.ron");
+    if let Some(found) = folders.iter().map(|f| f.join(&file)).find(|p| p.is_file()) {
+        return Ok(found);
     }
-    let known: Vec<String> = find_files(Path::new(FOLDER))
-        .unwrap_or_default()
+    let known: Vec<String> = folders
         .iter()
+        .flat_map(|f| find_files(f).unwrap_or_default())
         .filter_map(|p| Some(p.file_stem()?.to_string_lossy().into_owned()))
         .collect();
     Err(format!(
-        "no variant `{arg}`: no file or folder {}, and no {}{}",
+        "no variant `{arg}`: no file or folder {}, and no {file} in {} or {}{}",
         path.display(),
-        in_folder.display(),
+        folders[0].display(),
+        folders[1].display(),
         crate::names::did_you_mean(arg, known.iter().map(String::as_str))
     ))
 }

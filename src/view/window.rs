@@ -1167,7 +1167,9 @@ fn set(app: &mut App, change: Change) -> Result<(), String> {
     let mut setup = app.session.setup.clone();
     match change {
         Change::Variant(v) => {
-            setup = app.session.setup_for_variant(offered(&app.options.variants, &v)?)?
+            setup = app
+                .session
+                .setup_for_variant(offered(&app.options.variants, &v)?)?
         }
         Change::Scene(s) => {
             setup.params = crate::scene::defaults(&s).map_err(|e| e.to_string())?;

@@ -1,0 +1,72 @@
+//! `snapshot`: write the pending WGSL and image snapshots of variants, or take them in.
+
+use std::path::Path;
+
+use crate::GpuArgs;
+use clusterlab::compose::Composer;
+use clusterlab::snapshot;
+use clusterlab::variant::{self, LoadedVariant};
+
+pub(crate) fn snapshot(variants: &[String], accept: bool, gpu: &GpuArgs) -> Result<bool, String> {
+    let root = Path::new("");
+    if accept {
+        let taken = snapshot::accept(root)?;
+        for path in &taken {
+            println!("accepted {}", path.display());
+        }
+        println!("{} snapshots accepted", taken.len());
+        return Ok(true);
+    }
+    // The index covers the working folder's variants/ and those given.
+    let folder = Path::new(variant::FOLDER);
+    let in_folder = if folder.is_dir() {
+        variant::load_args(&[variant::FOLDER.to_string()])?
+    } else {
+        Vec::new()
+    };
+    let given: Vec<LoadedVariant> = if variants.is_empty() {
+        if in_folder.is_empty() {
+            return Err(format!(
+                "no variants: give --variants FILES|FOLDERS, or run where a {}/ folder of .ron files is",
+                variant::FOLDER
+            ));
+        }
+        in_folder.clone()
+    } else {
+        variant::load_args(variants)?
+    };
+    let mut all = in_folder;
+    for v in &given {
+        match all.iter_mut().find(|a| a.name == v.name) {
+            Some(a) => *a = v.clone(),
+            None => all.push(v.clone()),
+        }
+    }
+    all.sort_by(|a, b| a.name.cmp(&b.name));
+    // The default matrix's size, for the page that states it (a tree's docs/variants.md).
+    let cells = clusterlab::matrix::default_groups()
+        .and_then(|g| clusterlab::matrix::expand(&g))
+        .map(|cells| cells.len())
+        .ok();
+    let gpu = gpu.open()?;
+    eprintln!(
+        "snapshots of {} variants on {} ({}, {}) into {}/; {}",
+        given.len(),
+        gpu.adapter.name,
+        gpu.adapter.backend,
+        gpu.adapter.driver,
+        snapshot::FOLDER,
+        clusterlab::compose::shaders_line()
+    );
+    let outcome = snapshot::write(
+        &gpu,
+        &Composer::default(),
+        root,
+        &given,
+        &all,
+        cells,
+        &mut |line| eprintln!("{line}"),
+    )?;
+    print!("{}", outcome.report());
+    Ok(outcome.failed.is_empty())
+}
