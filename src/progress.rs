@@ -22,19 +22,6 @@ pub fn clock(seconds: f64) -> String {
     format!("{}:{:02}", s / 60, s % 60)
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn the_estimate_is_the_time_per_unit_times_the_units_left() {
-        assert_eq!(eta(Duration::from_secs(10), 2, 5), "0:15 left");
-        assert_eq!(eta(Duration::from_secs(10), 0, 5), "? left");
-        assert_eq!(eta(Duration::from_secs(10), 5, 5), "done");
-        assert_eq!(clock(125.4), "2:05");
-    }
-}
-
 /// A count of units done out of a total, shown on stderr: on a terminal a bar with the
 /// time left and the unit at work on a line of its own; off a terminal (a log, CI, a pipe)
 /// one line per unit done, with the count and the time left. Hidden, it shows nothing.
@@ -101,5 +88,18 @@ impl Bar {
 
     pub fn finish(&self) {
         self.bar.finish_and_clear();
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_estimate_is_the_time_per_unit_times_the_units_left() {
+        assert_eq!(eta(Duration::from_secs(10), 2, 5), "0:15 left");
+        assert_eq!(eta(Duration::from_secs(10), 0, 5), "? left");
+        assert_eq!(eta(Duration::from_secs(10), 5, 5), "done");
+        assert_eq!(clock(125.4), "2:05");
     }
 }

@@ -220,7 +220,7 @@ pub fn accept(root: &Path) -> Result<Vec<PathBuf>, String> {
             let Some(reviewed) = name.strip_suffix(PENDING) else {
                 continue;
             };
-            if !kind.is_file() || !read_text(&path)?.is_some_and(|t| contents(&t).is_some()) {
+            if !kind.is_file() || read_text(&path)?.is_none_or(|t| contents(&t).is_none()) {
                 continue;
             }
             let png = PathBuf::from(format!("{name}.png"));

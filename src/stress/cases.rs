@@ -30,8 +30,11 @@ pub struct Case {
 #[derive(Clone)]
 pub struct Edit {
     pub suffix: String,
-    pub apply: Arc<dyn Fn(&mut Variant) -> Result<(), String> + Send + Sync>,
+    pub apply: Arc<EditFn>,
 }
+
+/// What an edit does to a variant, or why it cannot.
+pub type EditFn = dyn Fn(&mut Variant) -> Result<(), String> + Send + Sync;
 
 impl Edit {
     fn new(
