@@ -24,6 +24,7 @@ mod layers;
 mod matrix;
 mod measure;
 mod naive;
+mod own_variant;
 mod post;
 mod properties;
 mod readme;
