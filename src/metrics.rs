@@ -101,8 +101,14 @@ fn flip_mean(frame: &FrameOutput, reference: &ReferenceFrame) -> f64 {
     )
 }
 
-/// Per-pixel error as an RGB8 heat map (magma): the largest 8-bit channel difference d
-/// maps to log2(1 + d) / 8, so 1 LSB is faint and 255 LSB is white.
+/// Where an error of `d` 8-bit LSB falls on the heat map's scale: log2(1 + d) / 8, so 1 LSB
+/// is faint and 255 LSB is white.
+pub fn heat_value(d: u32) -> f32 {
+    ((1.0 + d as f32).log2() / 8.0).min(1.0)
+}
+
+/// Per-pixel error as an RGB8 heat map (magma) of [`heat_value`]: the largest 8-bit channel
+/// difference.
 pub fn heat_map(frame: &FrameOutput, reference: &ReferenceFrame) -> Vec<u8> {
     let values: Vec<f32> = frame
         .ldr
@@ -113,7 +119,7 @@ pub fn heat_map(frame: &FrameOutput, reference: &ReferenceFrame) -> Vec<u8> {
                 .map(|c| (a[c] as i32 - b[c] as i32).unsigned_abs())
                 .max()
                 .unwrap_or(0);
-            ((1.0 + d as f32).log2() / 8.0).min(1.0)
+            heat_value(d)
         })
         .collect();
     let map = nv_flip::FlipImageFloat::with_data(frame.width, frame.height, &values);

@@ -2,8 +2,9 @@
 //! into a string, one palette, one legend style, and a numbered key for scatter plots whose
 //! points are too many to label in place.
 
+use plotters::coord::Shift;
+use plotters::coord::combinators::{BindKeyPoints, LogCoord, WithKeyPoints};
 use plotters::coord::ranged1d::Ranged;
-use plotters::coord::{CoordTranslate, Shift};
 use plotters::prelude::*;
 
 /// One plot: its file name, title and SVG text.
@@ -67,43 +68,231 @@ pub fn series_color(i: usize) -> RGBColor {
     COLORS[i % COLORS.len()]
 }
 
-/// The legend box of every plot.
-pub fn legend<'a, CT: CoordTranslate>(
-    chart: &mut ChartContext<'a, SVGBackend<'a>, CT>,
-    position: SeriesLabelPosition,
-) -> Option<()> {
-    chart
-        .configure_series_labels()
-        .position(position)
-        .background_style(WHITE.mix(0.85))
-        .border_style(BLACK)
-        .label_font((FONT, 12))
-        .draw()
-        .ok()
+/// A log axis over `lo..hi` (positive) labelled at round numbers (`log_ticks`), with no
+/// light grid lines between them: dense lines made a grey band.
+pub type LogAxis = WithKeyPoints<LogCoord<f64>>;
+
+pub fn log_axis(lo: f64, hi: f64) -> LogAxis {
+    (lo..hi).log_scale().with_key_points(log_ticks(lo, hi))
 }
 
-/// Series `label` in `color`: a line through `points`, a dot at each, and its legend entry.
+/// Round numbers within `lo..=hi` to label a log axis with, far enough apart on it never to
+/// overprint: powers of ten over 2.5 decades or more (every second or third one past 7
+/// decades), 1, 2 and 5 times them over one to 2.5 decades, 1, 2, 3, 5 and 7 times them
+/// under a decade, and where that leaves fewer than two, about four even steps.
+pub fn log_ticks(lo: f64, hi: f64) -> Vec<f64> {
+    if !(lo > 0.0 && hi > lo && hi.is_finite()) {
+        return Vec::new();
+    }
+    let decades = (hi / lo).log10();
+    let mantissas: &[f64] = if decades >= 2.5 {
+        &[1.0]
+    } else if decades >= 1.0 {
+        &[1.0, 2.0, 5.0]
+    } else {
+        &[1.0, 2.0, 3.0, 5.0, 7.0]
+    };
+    let every = (decades / 7.0).ceil().max(1.0) as i32;
+    let mut ticks = Vec::new();
+    for k in (lo.log10().floor() as i32)..=(hi.log10().ceil() as i32) {
+        if k.rem_euclid(every) != 0 {
+            continue;
+        }
+        for m in mantissas {
+            let v = round_significant(m * 10f64.powi(k));
+            if (lo..=hi).contains(&v) {
+                ticks.push(v);
+            }
+        }
+    }
+    if ticks.len() < 2 {
+        let step = nice_step((hi - lo) / 4.0);
+        let first = (lo / step).ceil() as i64;
+        ticks = (first..)
+            .map(|i| round_significant(i as f64 * step))
+            .take_while(|&v| v <= hi)
+            .collect();
+    }
+    ticks
+}
+
+/// 1, 2 or 5 times a power of ten, the nearest at or above `x`.
+fn nice_step(x: f64) -> f64 {
+    let power = 10f64.powf(x.log10().floor());
+    [1.0, 2.0, 5.0, 10.0]
+        .into_iter()
+        .map(|m| m * power)
+        .find(|&s| s >= x)
+        .unwrap_or(10.0 * power)
+}
+
+/// `v` to 12 significant digits: `0.1 * 3` is `0.3`, as a label should say.
+fn round_significant(v: f64) -> f64 {
+    if v == 0.0 {
+        return 0.0;
+    }
+    let scale = 10f64.powi(11 - v.abs().log10().floor() as i32);
+    (v * scale).round() / scale
+}
+
+/// A tick label: a whole number without a decimal point (`10000`, not `10000.0`), others to
+/// three significant digits, very small or large ones in exponent form.
+pub fn tick_label(v: &f64) -> String {
+    let v = *v;
+    let a = v.abs();
+    if a != 0.0 && !(1e-3..1e6).contains(&a) {
+        return format!("{v:.0e}");
+    }
+    if (v - v.round()).abs() < 1e-9 * a.max(1.0) {
+        return format!("{}", v.round() as i64);
+    }
+    let decimals = (2 - a.log10().floor() as i32).max(0) as usize;
+    let s = format!("{v:.decimals$}");
+    s.trim_end_matches('0').trim_end_matches('.').to_string()
+}
+
+/// Width of the legend column beside a plot's data.
+pub const LEGEND_WIDTH: u32 = 300;
+
+/// `area` split into the data's part and a legend column of [`LEGEND_WIDTH`] at its right:
+/// a legend never covers a line or a point.
+pub fn legend_column<'a>(area: &Area<'a>) -> (Area<'a>, Area<'a>) {
+    let width = area.dim_in_pixel().0 as i32;
+    area.split_horizontally(width - LEGEND_WIDTH as i32)
+}
+
+/// A series' entry in a legend: its name, colour and marker (`marker`'s index).
+pub type Entry = (String, RGBColor, usize);
+
+/// Series i's legend entry: its colour and marker.
+pub fn series_entry(name: &str, i: usize) -> Entry {
+    (name.to_string(), series_color(i), i)
+}
+
+/// The legend in its own column (`legend_column`): per series its marker on a short line in
+/// its colour, and its name.
+pub fn side_legend(area: &Area, title: &str, entries: &[Entry]) -> Option<()> {
+    let line = 17;
+    area.draw(&Text::new(
+        title.to_string(),
+        (6, 16),
+        (FONT, 13).into_font().style(FontStyle::Bold),
+    ))
+    .ok()?;
+    for (k, (name, color, i)) in entries.iter().enumerate() {
+        let y = 36 + line * k as i32;
+        let color = *color;
+        area.draw(&PathElement::new(
+            vec![(6, y), (30, y)],
+            color.stroke_width(2),
+        ))
+        .ok()?;
+        draw_marker(area, *i, (18, y), color)?;
+        area.draw(&Text::new(
+            name.clone(),
+            (36, y - 7),
+            (FONT, 12).into_font().color(&RGBColor(30, 30, 30)),
+        ))
+        .ok()?;
+    }
+    Some(())
+}
+
+/// Marker size, pixels from the centre.
+const MARKER_SIZE: i32 = 4;
+
+/// The shape of series i's markers: circles for the first ten colours, then squares,
+/// triangles and crosses, so two series of like colours still differ.
+#[derive(Clone, Copy)]
+enum Shape {
+    Circle,
+    Square,
+    Triangle,
+    Cross,
+}
+
+fn shape(i: usize) -> Shape {
+    match (i / 10) % 4 {
+        0 => Shape::Circle,
+        1 => Shape::Square,
+        2 => Shape::Triangle,
+        _ => Shape::Cross,
+    }
+}
+
+/// Draw series i's marker at pixel `at` of `area` (a legend's).
+fn draw_marker(area: &Area, i: usize, at: (i32, i32), color: RGBColor) -> Option<()> {
+    let (fill, r) = (color.filled(), MARKER_SIZE);
+    let (x, y) = at;
+    match shape(i) {
+        Shape::Circle => area.draw(&Circle::new(at, r, fill)),
+        Shape::Square => area.draw(&Rectangle::new([(x - r, y - r), (x + r, y + r)], fill)),
+        Shape::Triangle => area.draw(&TriangleMarker::new(at, r + 1, fill)),
+        Shape::Cross => area.draw(&Cross::new(at, r, color.stroke_width(2))),
+    }
+    .ok()
+}
+
+/// Series `i` in its colour and marker: a line through `points`, a marker at each, and its
+/// legend entry `label`.
 pub fn line_with_points<'a, X, Y>(
     chart: &mut ChartContext<'a, SVGBackend<'a>, Cartesian2d<X, Y>>,
     points: Vec<(f64, f64)>,
-    color: RGBColor,
+    i: usize,
     label: &str,
 ) -> Option<()>
 where
     X: Ranged<ValueType = f64>,
     Y: Ranged<ValueType = f64>,
 {
-    let dots: Vec<Circle<(f64, f64), i32>> = points
-        .iter()
-        .map(|&p| Circle::new(p, 3, color.filled()))
-        .collect();
-    chart
-        .draw_series(LineSeries::new(points, color.stroke_width(2)))
+    let color = series_color(i);
+    let (line, fill, r) = (color.stroke_width(2), color.filled(), MARKER_SIZE);
+    let path =
+        move |(x, y)| EmptyElement::at((x, y)) + PathElement::new(vec![(0, 0), (16, 0)], line);
+    let series = chart
+        .draw_series(LineSeries::new(points.clone(), line))
         .ok()?
-        .label(label)
-        .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 16, y)], color.stroke_width(2)));
-    chart.draw_series(dots).ok()?;
+        .label(label);
+    match shape(i) {
+        Shape::Circle => {
+            series.legend(move |c| path(c) + Circle::new((8, 0), r, fill));
+            chart.draw_series(points.iter().map(|&p| Circle::new(p, r, fill)))
+        }
+        Shape::Square => {
+            series.legend(move |c| path(c) + Rectangle::new([(8 - r, -r), (8 + r, r)], fill));
+            chart.draw_series(
+                points
+                    .iter()
+                    .map(|&p| EmptyElement::at(p) + Rectangle::new([(-r, -r), (r, r)], fill)),
+            )
+        }
+        Shape::Triangle => {
+            series.legend(move |c| path(c) + TriangleMarker::new((8, 0), r + 1, fill));
+            chart.draw_series(points.iter().map(|&p| TriangleMarker::new(p, r + 1, fill)))
+        }
+        Shape::Cross => {
+            series.legend(move |c| path(c) + Cross::new((8, 0), r, line));
+            chart.draw_series(points.iter().map(|&p| Cross::new(p, r, line)))
+        }
+    }
+    .ok()?;
     Some(())
+}
+
+/// The legend of a chart built with `.margin_right(LEGEND_WIDTH)`: in that margin, beside
+/// the data, never over a line or a point.
+pub fn legend<'a, X: Ranged, Y: Ranged>(
+    chart: &mut ChartContext<'a, SVGBackend<'a>, Cartesian2d<X, Y>>,
+) -> Option<()> {
+    let width = chart.plotting_area().dim_in_pixel().0 as i32;
+    chart
+        .configure_series_labels()
+        .position(SeriesLabelPosition::Coordinate(width + 10, 0))
+        .background_style(WHITE)
+        .border_style(WHITE)
+        .label_font((FONT, 12))
+        .draw()
+        .ok()
 }
 
 /// A key beside a scatter plot whose points carry numbers instead of names: one line per
@@ -130,13 +319,22 @@ pub fn numbered_key(area: &Area, title: &str, entries: &[(String, RGBColor)]) ->
     Some(())
 }
 
-/// The number of the i-th key entry, drawn beside its point.
-pub fn number_label<C>(i: usize, at: C) -> Text<'static, C, String> {
-    Text::new(
-        format!("{}", i + 1),
-        at,
-        (FONT, 10).into_font().color(&RGBColor(40, 40, 40)),
-    )
+/// Each point's number in a numbered key, drawn above and right of the point, not under it.
+pub fn number_points<'a, X, Y>(
+    chart: &mut ChartContext<'a, SVGBackend<'a>, Cartesian2d<X, Y>>,
+    points: &[(f64, f64)],
+) -> Option<()>
+where
+    X: Ranged<ValueType = f64>,
+    Y: Ranged<ValueType = f64>,
+{
+    let style = (FONT, 13).into_font().color(&RGBColor(20, 20, 20));
+    chart
+        .draw_series(points.iter().enumerate().map(|(i, &p)| {
+            EmptyElement::at(p) + Text::new(format!("{}", i + 1), (5, -17), style.clone())
+        }))
+        .ok()?;
+    Some(())
 }
 
 /// One panel of [`against_lights`]: its label, the values that set its range, and one line
@@ -148,16 +346,18 @@ pub struct Panel<'a> {
 }
 
 /// Panels side by side, each log-log against the light count from `lights` (its first and
-/// last, widened), one coloured line per series with its legend.
+/// last, widened), one line per series in its colour and marker; the legend in a column of
+/// its own.
 pub fn against_lights(
     file: &str,
     title: &str,
     lights: (u32, u32),
     panels: &[Panel<'_>],
 ) -> Option<Plot> {
-    let x = (lights.0 as f64 * 0.8)..(lights.1 as f64 * 1.25);
-    svg(file, title, (1100, 480), |area| {
-        let parts = area.split_evenly((1, panels.len()));
+    let (x0, x1) = (lights.0 as f64 * 0.8, lights.1 as f64 * 1.25);
+    svg(file, title, (1100 + LEGEND_WIDTH, 480), |area| {
+        let (data, key) = legend_column(area);
+        let parts = data.split_evenly((1, panels.len()));
         for (panel, part) in panels.iter().zip(parts.iter()) {
             let positive = panel.values.iter().copied().filter(|&v| v > 0.0);
             let lo = positive.clone().fold(f64::MAX, f64::min) * 0.8;
@@ -167,19 +367,47 @@ pub fn against_lights(
                 .margin(12)
                 .x_label_area_size(40)
                 .y_label_area_size(70)
-                .build_cartesian_2d(x.clone().log_scale(), (lo..hi).log_scale())
+                .build_cartesian_2d(log_axis(x0, x1), log_axis(lo, hi))
                 .ok()?;
             chart
                 .configure_mesh()
+                .light_line_style(TRANSPARENT)
                 .x_desc("lights")
                 .y_desc(panel.label)
+                .x_label_formatter(&tick_label)
+                .y_label_formatter(&tick_label)
                 .draw()
                 .ok()?;
             for (i, (name, points)) in panel.series.iter().enumerate() {
-                line_with_points(&mut chart, points.clone(), series_color(i), name)?;
+                line_with_points(&mut chart, points.clone(), i, name)?;
             }
-            legend(&mut chart, SeriesLabelPosition::UpperLeft)?;
         }
-        Some(())
+        let entries: Vec<Entry> = panels
+            .first()?
+            .series
+            .iter()
+            .enumerate()
+            .map(|(i, (name, _))| series_entry(name, i))
+            .collect();
+        side_legend(&key, "series", &entries)
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn log_ticks_are_round_and_few_whatever_the_range() {
+        assert_eq!(log_ticks(0.8, 12500.0), [1.0, 10.0, 100.0, 1000.0, 10000.0]);
+        assert_eq!(
+            log_ticks(50.0, 6000.0),
+            [50.0, 100.0, 200.0, 500.0, 1000.0, 2000.0, 5000.0]
+        );
+        assert_eq!(log_ticks(80.0, 125.0), [80.0, 100.0, 120.0]);
+        assert_eq!(log_ticks(1e-4, 1e10).len(), 8);
+        assert_eq!(tick_label(&10000.0), "10000");
+        assert_eq!(tick_label(&0.25), "0.25");
+        assert_eq!(tick_label(&1e-5), "1e-5");
+    }
 }

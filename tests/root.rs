@@ -25,6 +25,7 @@ mod matrix;
 mod measure;
 mod naive;
 mod own_variant;
+mod page;
 mod post;
 mod properties;
 mod readme;

@@ -18,10 +18,14 @@ fn esc(s: &str) -> String {
 
 const STYLE: &str = "
 body { font-family: system-ui, sans-serif; margin: 24px; color: #222; max-width: 1500px; }
+.wide { max-width: 100%; overflow-x: auto; }
+th a { color: inherit; text-decoration: none; border-bottom: 1px dotted #888; }
 h1 { margin-bottom: 4px; } h2 { margin-top: 36px; border-bottom: 1px solid #ccc; }
 h3 { margin-top: 24px; }
 table { border-collapse: collapse; font-size: 13px; margin: 8px 0; }
 th, td { padding: 3px 8px; border-bottom: 1px solid #e4e4e4; text-align: right; }
+td { white-space: nowrap; }
+.meta td { white-space: normal; }
 th { background: #f3f3f3; position: sticky; top: 0; }
 td.name, th.name { text-align: left; }
 tr.pareto td { background: #eef8ee; font-weight: 600; }
@@ -29,8 +33,12 @@ tr.failed td { background: #fdecec; color: #900; }
 .meta td { text-align: left; }
 .plots { display: flex; flex-wrap: wrap; gap: 16px; }
 figure { margin: 0; }
-figure img.plot { width: 880px; border: 1px solid #ddd; }
+figure img.plot { width: 880px; max-width: 100%; border: 1px solid #ddd; }
 figcaption { font-size: 13px; color: #555; max-width: 880px; }
+.scale { font-size: 10px; color: #444; margin: 2px 0 4px; }
+.scale .bar { height: 8px; border: 1px solid #aaa; }
+.scale .ticks { position: relative; height: 12px; }
+.scale .ticks span { position: absolute; transform: translateX(-50%); }
 .cards { display: flex; flex-wrap: wrap; gap: 14px; }
 .card { border: 1px solid #ddd; padding: 6px; font-size: 12px; width: 330px; }
 .card img { width: 320px; display: block; margin-bottom: 4px; image-rendering: pixelated; }
@@ -67,9 +75,8 @@ pub fn page(results: &Results, plots: &[Plot]) -> String {
         for p in plots {
             let _ = write!(
                 h,
-                "<figure><img class=\"plot\" src=\"plots/{}\" alt=\"{}\"><figcaption>{}</figcaption></figure>",
+                "<figure><a href=\"plots/{0}\"><img class=\"plot\" src=\"plots/{0}\" alt=\"{1}\"></a><figcaption>{1}</figcaption></figure>",
                 esc(&p.file),
-                esc(&p.title),
                 esc(&p.title)
             );
         }
@@ -81,26 +88,36 @@ pub fn page(results: &Results, plots: &[Plot]) -> String {
     images(&mut h, results);
     provenance(&mut h, results);
     let _ = writeln!(h, "</body></html>");
-    h
+    // Every table in a box of its own that scrolls when the table is wider than the window:
+    // the page itself never is.
+    h.replace("<table", "<div class=\"wide\"><table")
+        .replace("</table>", "</table></div>")
 }
 
 /// Every column of the tables and the CSV, with what it holds.
 fn glossary(h: &mut String) {
     let _ = write!(
         h,
-        "<h2 id=\"glossary\">Glossary</h2><table class=\"meta\"><tr><th class=\"name\">column</th>\
+        "<h2 id=\"glossary\">Glossary</h2><p>Each column's heading links here.</p>\
+         <table class=\"meta\"><tr><th class=\"name\">column</th>\
          <th class=\"name\">CSV</th><th class=\"name\">what it holds</th></tr>"
     );
     for c in columns::COLUMNS {
         let _ = write!(
             h,
-            "<tr><td>{}</td><td><code>{}</code></td><td>{}</td></tr>",
+            "<tr id=\"{}\"><td>{}</td><td><code>{}</code></td><td>{}</td></tr>",
+            glossary_id(c),
             esc(c.heading),
             if c.shown.csv { c.key } else { "-" },
             esc(c.meaning)
         );
     }
     let _ = write!(h, "</table>");
+}
+
+/// The glossary row of column `c`: what its heading links to.
+fn glossary_id(c: &columns::Column) -> String {
+    format!("column-{}", c.key)
 }
 
 fn provenance(h: &mut String, results: &Results) {
@@ -280,7 +297,13 @@ fn summary(h: &mut String, results: &Results) {
             esc(&group)
         );
         for c in &cols {
-            let _ = write!(h, "<th>{}</th>", esc(c.heading));
+            let _ = write!(
+                h,
+                "<th><a href=\"#{}\" title=\"{}\">{}</a></th>",
+                glossary_id(c),
+                esc(c.meaning),
+                esc(c.heading)
+            );
         }
         let _ = write!(h, "</tr>");
         for c in cells {
@@ -328,7 +351,8 @@ fn images(h: &mut String, results: &Results) {
     let _ = write!(
         h,
         "<h2>Images</h2><p>Each card: the image, its error heat map against the reference \
-         (magma, brighter is worse) and, for clustered variants, the lights per cluster.</p>"
+         and, for clustered variants, the lights per cluster, each with its colour scale; \
+         every image links to its full size.</p>"
     );
     for (group, cells) in grouped(results) {
         let with_images: Vec<&CellRecord> = cells
@@ -340,18 +364,25 @@ fn images(h: &mut String, results: &Results) {
         }
         let _ = write!(h, "<h3>{}</h3><div class=\"cards\">", esc(&group));
         for c in with_images {
-            let img = |p: &Option<String>, alt: &str| {
+            let img = |p: &Option<String>, alt: &str, scale: Option<&str>| {
                 p.as_ref().map_or(String::new(), |p| {
-                    format!("<img src=\"{}\" alt=\"{alt}\" title=\"{alt}\">", esc(p))
+                    let linked = format!(
+                        "<a href=\"{0}\"><img src=\"{0}\" alt=\"{alt}\" title=\"{alt}\"></a>",
+                        esc(p)
+                    );
+                    match scale {
+                        Some(scale) => format!("<div>{linked}{scale}</div>"),
+                        None => linked,
+                    }
                 })
             };
             let e = c.error.as_ref();
             let _ = write!(
                 h,
                 "<div class=\"card\">{}<div class=\"row\">{}{}</div><b>{}</b><br>{:.2} ms{}, max {} LSB, PSNR {}</div>",
-                img(&c.images.image, "image"),
-                img(&c.images.heat, "error heat map"),
-                img(&c.images.debug, "lights per cluster"),
+                img(&c.images.image, "image", None),
+                img(&c.images.heat, "error heat map", Some(&heat_scale())),
+                img(&c.images.debug, "lights per cluster", Some(&lights_scale())),
                 esc(&label(c)),
                 c.total_ms().unwrap_or(f64::NAN),
                 c.speedup_vs_naive
@@ -364,6 +395,64 @@ fn images(h: &mut String, results: &Results) {
         }
         let _ = write!(h, "</div>");
     }
+}
+
+/// A colour scale under an image: a bar through `stops` (colour, position 0..1) and the
+/// values at `ticks` (label, position), with what the values are.
+fn scale(kind: &str, unit: &str, stops: &[([u8; 3], f64)], ticks: &[(String, f64)]) -> String {
+    let gradient: Vec<String> = stops
+        .iter()
+        .map(|([r, g, b], t)| format!("rgb({r},{g},{b}) {:.1}%", t * 100.0))
+        .collect();
+    let labels: String = ticks
+        .iter()
+        .map(|(label, t)| format!("<span style=\"left:{:.1}%\">{label}</span>", t * 100.0))
+        .collect();
+    format!(
+        "<div class=\"scale\" data-scale=\"{kind}\"><div class=\"bar\" style=\"background:linear-gradient(to right,{})\"></div><div class=\"ticks\">{labels}</div>{unit}</div>",
+        gradient.join(",")
+    )
+}
+
+/// The error heat map's scale (`metrics::heat_map`): the magma map of log2(1 + d) / 8 for
+/// an error of d 8-bit LSB, 0 black to 255 white.
+fn heat_scale() -> String {
+    let lut = nv_flip::magma_lut().to_vec();
+    let colour = |t: f64| {
+        let i = ((t * 255.0).round() as usize).min(255) * 3;
+        [lut[i], lut[i + 1], lut[i + 2]]
+    };
+    let stops: Vec<([u8; 3], f64)> = (0..=8)
+        .map(|k| (colour(k as f64 / 8.0), k as f64 / 8.0))
+        .collect();
+    let ticks: Vec<(String, f64)> = [0u32, 1, 7, 31, 255]
+        .iter()
+        .map(|&d| (d.to_string(), crate::metrics::heat_value(d) as f64))
+        .collect();
+    scale("error", "error, 8-bit LSB", &stops, &ticks)
+}
+
+/// The lights-per-cluster view's scale (`heat` in `shaders/passes/debug_view.wesl`): black
+/// for none, then blue, green, yellow, red and white at 1, 4, 16, 64 and 256 lights and
+/// more, on log2(n) / 8.
+fn lights_scale() -> String {
+    let stops = [
+        ([0, 0, 255], 0.0),
+        ([0, 255, 0], 0.25),
+        ([255, 255, 0], 0.5),
+        ([255, 0, 0], 0.75),
+        ([255, 255, 255], 1.0),
+    ];
+    let ticks: Vec<(String, f64)> = [1u32, 4, 16, 64, 256]
+        .iter()
+        .map(|&n| (n.to_string(), (n as f64).log2() / 8.0))
+        .collect();
+    scale(
+        "lights",
+        "lights in the cluster's list (black: none)",
+        &stops,
+        &ticks,
+    )
 }
 
 /// The sequence cells: per group, how each variant's frames went (the first, the later

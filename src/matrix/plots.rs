@@ -5,11 +5,14 @@ use plotters::prelude::*;
 
 use super::report::{grouped, label};
 use super::{CellRecord, Results};
-use crate::plot::{self, Area, FONT, Plot, number_label, numbered_key, series_color};
+use crate::plot::{self, Area, FONT, Plot, log_axis, numbered_key, series_color, tick_label};
 
-const SIZE: (u32, u32) = (880, 520);
+const SIZE: (u32, u32) = (880 + plot::LEGEND_WIDTH, 520);
+
+/// The marker index of a square (`plot::marker`): a bar's legend entry.
+const SQUARE: usize = 10;
 /// Width of the plot beside a numbered key.
-const KEY_SPLIT: u32 = 560;
+const KEY_SPLIT: u32 = 560 + plot::LEGEND_WIDTH / 2;
 
 fn pipeline_color(c: &CellRecord) -> RGBColor {
     match c.spec.pipeline.as_deref() {
@@ -105,11 +108,14 @@ fn time_error(area: &Area, cells: &[&CellRecord]) -> Drawn {
         .margin(16)
         .x_label_area_size(44)
         .y_label_area_size(64)
-        .build_cartesian_2d((t0..t1).log_scale(), (ERROR_FLOOR / 2.0..e1).log_scale())?;
+        .build_cartesian_2d(log_axis(t0, t1), log_axis(ERROR_FLOOR / 2.0, e1))?;
     chart
         .configure_mesh()
+        .light_line_style(TRANSPARENT)
         .x_desc("GPU time per frame, ms (log)")
         .y_desc("RMSE against the reference, 8-bit LSB (log; 0.001 = exact)")
+        .x_label_formatter(&tick_label)
+        .y_label_formatter(&tick_label)
         .label_style((FONT, 13))
         .draw()?;
     let mut front: Vec<(f64, f64)> = points
@@ -118,10 +124,8 @@ fn time_error(area: &Area, cells: &[&CellRecord]) -> Drawn {
         .map(|p| (p.0, p.1))
         .collect();
     front.sort_by(|a, b| a.0.total_cmp(&b.0));
-    chart
-        .draw_series(LineSeries::new(front, BLACK.stroke_width(2)))?
-        .label("Pareto front")
-        .legend(|(x, y)| PathElement::new([(x, y), (x + 16, y)], BLACK.stroke_width(2)));
+    chart.draw_series(LineSeries::new(front, BLACK.stroke_width(2)))?;
+    let mut legend = vec![("Pareto front".to_string(), BLACK, 0)];
     for (name, pipeline) in [
         ("naive forward", "NaiveForward"),
         ("clustered forward", "ClusteredForward"),
@@ -136,21 +140,14 @@ fn time_error(area: &Area, cells: &[&CellRecord]) -> Drawn {
             continue;
         }
         let color = pipeline_color(mine[0].2);
-        chart
-            .draw_series(
-                mine.iter()
-                    .map(|p| Circle::new((p.0, p.1), 5, color.filled())),
-            )?
-            .label(name)
-            .legend(move |(x, y)| Circle::new((x + 8, y), 5, color.filled()));
+        chart.draw_series(
+            mine.iter()
+                .map(|p| Circle::new((p.0, p.1), 5, color.filled())),
+        )?;
+        legend.push((name.to_string(), color, 0));
     }
-    chart.draw_series(
-        points
-            .iter()
-            .enumerate()
-            .map(|(i, p)| number_label(i, (p.0, p.1))),
-    )?;
-    plot::legend(&mut chart, SeriesLabelPosition::UpperRight);
+    let at: Vec<(f64, f64)> = points.iter().map(|p| (p.0, p.1)).collect();
+    plot::number_points(&mut chart, &at).ok_or("the point numbers did not draw")?;
     let key: Vec<(String, RGBColor)> = points
         .iter()
         .map(|p| {
@@ -158,6 +155,8 @@ fn time_error(area: &Area, cells: &[&CellRecord]) -> Drawn {
             (format!("{mark}{}", label(p.2)), pipeline_color(p.2))
         })
         .collect();
+    let (legend_area, key_area) = key_area.split_vertically(40 + 17 * legend.len() as u32);
+    plot::side_legend(&legend_area, "pipeline", &legend);
     numbered_key(&key_area, "* = Pareto front", &key);
     Ok(true)
 }
@@ -184,8 +183,11 @@ fn time_clusters(area: &Area, cells: &[&CellRecord]) -> Drawn {
         .build_cartesian_2d(0.0..c1, 0.0..t1)?;
     chart
         .configure_mesh()
+        .light_line_style(TRANSPARENT)
         .x_desc("clusters in the grid")
         .y_desc("GPU time per frame, ms")
+        .x_label_formatter(&tick_label)
+        .y_label_formatter(&tick_label)
         .label_style((FONT, 13))
         .draw()?;
     chart.draw_series(
@@ -193,12 +195,8 @@ fn time_clusters(area: &Area, cells: &[&CellRecord]) -> Drawn {
             .iter()
             .map(|p| Circle::new((p.0, p.1), 5, pipeline_color(p.2).filled())),
     )?;
-    chart.draw_series(
-        points
-            .iter()
-            .enumerate()
-            .map(|(i, p)| number_label(i, (p.0, p.1))),
-    )?;
+    let at: Vec<(f64, f64)> = points.iter().map(|p| (p.0, p.1)).collect();
+    plot::number_points(&mut chart, &at).ok_or("the point numbers did not draw")?;
     let key: Vec<(String, RGBColor)> = points
         .iter()
         .map(|p| {
@@ -232,13 +230,15 @@ fn passes(area: &Area, cells: &[&CellRecord]) -> Drawn {
         .fold(0.0, f64::max)
         .max(1e-3);
     let n = rows.len() as i32;
-    let mut chart = ChartBuilder::on(area)
+    let (area, legend_area) = plot::legend_column(area);
+    let mut chart = ChartBuilder::on(&area)
         .margin(16)
         .x_label_area_size(44)
         .y_label_area_size(250)
         .build_cartesian_2d(0.0..longest * 1.05, (0..n - 1).into_segmented())?;
     chart
         .configure_mesh()
+        .light_line_style(TRANSPARENT)
         .disable_y_mesh()
         .y_labels(rows.len())
         .y_label_formatter(&|v| match v {
@@ -246,8 +246,10 @@ fn passes(area: &Area, cells: &[&CellRecord]) -> Drawn {
             _ => String::new(),
         })
         .x_desc("GPU time per frame, ms (median)")
+        .x_label_formatter(&tick_label)
         .label_style((FONT, 12))
         .draw()?;
+    let mut legend = Vec::new();
     for (k, name) in names.iter().enumerate() {
         let color = series_color(k);
         let bars = rows.iter().enumerate().filter_map(|(i, c)| {
@@ -269,12 +271,10 @@ fn passes(area: &Area, cells: &[&CellRecord]) -> Drawn {
                 color.filled(),
             ))
         });
-        chart
-            .draw_series(bars)?
-            .label(name.clone())
-            .legend(move |(x, y)| Rectangle::new([(x, y - 5), (x + 12, y + 5)], color.filled()));
+        chart.draw_series(bars)?;
+        legend.push((name.clone(), color, SQUARE));
     }
-    plot::legend(&mut chart, SeriesLabelPosition::UpperRight);
+    plot::side_legend(&legend_area, "pass", &legend);
     Ok(true)
 }
 
@@ -300,26 +300,27 @@ fn time_lights(area: &Area, results: &Results) -> Drawn {
     }
     let (l0, l1) = log_range(series.iter().flat_map(|s| s.1.iter().map(|p| p.0)));
     let (t0, t1) = log_range(series.iter().flat_map(|s| s.1.iter().map(|p| p.1)));
-    let mut chart = ChartBuilder::on(area)
+    let (area, legend_area) = plot::legend_column(area);
+    let mut chart = ChartBuilder::on(&area)
         .margin(16)
         .x_label_area_size(44)
         .y_label_area_size(64)
-        .build_cartesian_2d((l0..l1).log_scale(), (t0..t1).log_scale())?;
+        .build_cartesian_2d(log_axis(l0, l1), log_axis(t0, t1))?;
     chart
         .configure_mesh()
+        .light_line_style(TRANSPARENT)
         .x_desc("lights (log)")
         .y_desc("GPU time per frame, ms (log)")
+        .x_label_formatter(&tick_label)
+        .y_label_formatter(&tick_label)
         .label_style((FONT, 14))
         .draw()?;
+    let mut legend = Vec::new();
     for (i, (name, mut pts)) in series.into_iter().enumerate() {
         pts.sort_by(|a, b| a.0.total_cmp(&b.0));
-        let color = series_color(i);
-        chart
-            .draw_series(LineSeries::new(pts.clone(), color.stroke_width(2)))?
-            .label(name)
-            .legend(move |(x, y)| PathElement::new([(x, y), (x + 16, y)], color.stroke_width(2)));
-        chart.draw_series(pts.iter().map(|p| Circle::new(*p, 4, color.filled())))?;
+        plot::line_with_points(&mut chart, pts, i, &name).ok_or("a series did not draw")?;
+        legend.push(plot::series_entry(&name, i));
     }
-    plot::legend(&mut chart, SeriesLabelPosition::UpperLeft);
+    plot::side_legend(&legend_area, "variant", &legend);
     Ok(true)
 }

@@ -109,19 +109,22 @@ pub fn frame_plot(report: &SequenceReport, file: &str) -> Option<Plot> {
         frames.len(),
         report.timing_source
     );
-    plot::svg(file, &title, (880, 440), |area| {
+    plot::svg(file, &title, (880 + plot::LEGEND_WIDTH, 440), |area| {
         let mut chart = ChartBuilder::on(area)
             .caption(&title, (plot::FONT, 16))
             .margin(12)
+            .margin_right(plot::LEGEND_WIDTH)
             .x_label_area_size(36)
             .y_label_area_size(60)
             .build_cartesian_2d(0.0..last, 0.0..top)
             .ok()?;
         chart
             .configure_mesh()
+            .light_line_style(TRANSPARENT)
             .x_desc("frame")
             .y_desc("ms")
-            .x_label_formatter(&|x| format!("{x:.0}"))
+            .x_label_formatter(&plot::tick_label)
+            .y_label_formatter(&plot::tick_label)
             .draw()
             .ok()?;
         let line = |values: Vec<(f64, f64)>, style: ShapeStyle| LineSeries::new(values, style);
@@ -146,7 +149,7 @@ pub fn frame_plot(report: &SequenceReport, file: &str) -> Option<Plot> {
                 .label(name.as_str())
                 .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 16, y)], color));
         }
-        plot::legend(&mut chart, SeriesLabelPosition::UpperRight)
+        plot::legend(&mut chart)
     })
 }
 

@@ -538,19 +538,22 @@ fn plot(rows: &[CodecRow]) -> Option<Plot> {
     crate::plot::svg(
         "codecs.svg",
         "Normal codecs: max error against bits",
-        (880, 520),
+        (880 + crate::plot::LEGEND_WIDTH, 520),
         |area| {
             let mut chart = ChartBuilder::on(area)
                 .caption("Normal codecs: max angular error (GPU)", ("sans-serif", 20))
                 .margin(12)
+                .margin_right(crate::plot::LEGEND_WIDTH)
                 .x_label_area_size(40)
                 .y_label_area_size(70)
-                .build_cartesian_2d(15u32..33u32, (1e-4f64..10.0).log_scale())
+                .build_cartesian_2d(15u32..33u32, crate::plot::log_axis(1e-4, 10.0))
                 .ok()?;
             chart
                 .configure_mesh()
+                .light_line_style(TRANSPARENT)
                 .x_desc("bits per normal")
                 .y_desc("max error (degrees)")
+                .y_label_formatter(&crate::plot::tick_label)
                 .draw()
                 .ok()?;
             for (i, codec) in NormalCodec::packed(32).iter().enumerate() {
@@ -580,7 +583,7 @@ fn plot(rows: &[CodecRow]) -> Option<Plot> {
                 .ok()?
                 .label("covering bound")
                 .legend(|(x, y)| PathElement::new([(x, y), (x + 16, y)], BLACK));
-            crate::plot::legend(&mut chart, SeriesLabelPosition::MiddleRight)
+            crate::plot::legend(&mut chart)
         },
     )
 }

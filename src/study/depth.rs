@@ -470,7 +470,7 @@ fn plot(rows: &[DepthRow]) -> Option<Plot> {
     crate::plot::svg(
         "depth.svg",
         "Depth: relative error of rebuilt view depth",
-        (880, 560),
+        (880 + crate::plot::LEGEND_WIDTH, 560),
         |area| {
             let mut chart = ChartBuilder::on(area)
                 .caption(
@@ -478,16 +478,21 @@ fn plot(rows: &[DepthRow]) -> Option<Plot> {
                     ("sans-serif", 20),
                 )
                 .margin(12)
+                .margin_right(crate::plot::LEGEND_WIDTH)
                 .x_label_area_size(40)
                 .y_label_area_size(70)
-                .build_cartesian_2d((0.1f64..1e4).log_scale(), (FLOOR..1.0).log_scale())
+                .build_cartesian_2d(
+                    crate::plot::log_axis(0.1, 1e4),
+                    crate::plot::log_axis(FLOOR, 1.0),
+                )
                 .ok()?;
             chart
                 .configure_mesh()
+                .light_line_style(TRANSPARENT)
                 .x_desc("view depth (near 0.05)")
                 .y_desc("max relative error")
-                .x_label_formatter(&|v| format!("{v:e}"))
-                .y_label_formatter(&|v| format!("{v:.0e}"))
+                .x_label_formatter(&crate::plot::tick_label)
+                .y_label_formatter(&crate::plot::tick_label)
                 .draw()
                 .ok()?;
             for (i, setup) in setups(rows).into_iter().enumerate() {
@@ -531,7 +536,7 @@ fn plot(rows: &[DepthRow]) -> Option<Plot> {
                 .label("Reed 2015 model")
                 .legend(|(x, y)| PathElement::new([(x, y), (x + 16, y)], BLACK));
             chart.draw_series(model(DepthFormat::Float32, true)).ok()?;
-            crate::plot::legend(&mut chart, SeriesLabelPosition::UpperLeft)
+            crate::plot::legend(&mut chart)
         },
     )
 }

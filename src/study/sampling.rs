@@ -680,7 +680,10 @@ fn plot(rows: &[SamplingRow]) -> Option<crate::plot::Plot> {
     crate::plot::svg(
         "sampling.svg",
         "Sampling: RMSE (8-bit) against frame time",
-        (1100, 420 * panels.len().div_ceil(2) as u32),
+        (
+            1100 + 2 * crate::plot::LEGEND_WIDTH,
+            420 * panels.len().div_ceil(2) as u32,
+        ),
         |area| {
             let cells = area.split_evenly((panels.len().div_ceil(2), 2));
             for (&(lights, radius), cell) in panels.iter().zip(cells.iter()) {
@@ -700,14 +703,21 @@ fn plot(rows: &[SamplingRow]) -> Option<crate::plot::Plot> {
                 let mut chart = ChartBuilder::on(cell)
                     .caption(caption, (crate::plot::FONT, 16))
                     .margin(10)
+                    .margin_right(crate::plot::LEGEND_WIDTH)
                     .x_label_area_size(36)
                     .y_label_area_size(60)
-                    .build_cartesian_2d((t_min..t_max).log_scale(), (FLOOR..e_max).log_scale())
+                    .build_cartesian_2d(
+                        crate::plot::log_axis(t_min, t_max),
+                        crate::plot::log_axis(FLOOR, e_max),
+                    )
                     .ok()?;
                 chart
                     .configure_mesh()
+                    .light_line_style(TRANSPARENT)
                     .x_desc("frame ms")
                     .y_desc("RMSE, 8-bit LSB")
+                    .x_label_formatter(&crate::plot::tick_label)
+                    .y_label_formatter(&crate::plot::tick_label)
                     .draw()
                     .ok()?;
                 for (i, f) in families.iter().enumerate() {
@@ -728,14 +738,9 @@ fn plot(rows: &[SamplingRow]) -> Option<crate::plot::Plot> {
                         })
                         .collect();
                     points.sort_by(|a, b| a.0.total_cmp(&b.0));
-                    crate::plot::line_with_points(
-                        &mut chart,
-                        points,
-                        crate::plot::series_color(i),
-                        f,
-                    )?;
+                    crate::plot::line_with_points(&mut chart, points, i, f)?;
                 }
-                crate::plot::legend(&mut chart, SeriesLabelPosition::UpperRight)?;
+                crate::plot::legend(&mut chart)?;
             }
             Some(())
         },

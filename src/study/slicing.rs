@@ -350,7 +350,7 @@ fn plot(rows: &[SlicingRow]) -> Option<Plot> {
     crate::plot::svg(
         "slicing.svg",
         "Z-slicing: useful evaluations against shading time",
-        (880, 520),
+        (880 + crate::plot::LEGEND_WIDTH, 520),
         |area| {
             let mut chart = ChartBuilder::on(area)
                 .caption(
@@ -358,14 +358,18 @@ fn plot(rows: &[SlicingRow]) -> Option<Plot> {
                     ("sans-serif", 20),
                 )
                 .margin(12)
+                .margin_right(crate::plot::LEGEND_WIDTH)
                 .x_label_area_size(40)
                 .y_label_area_size(60)
                 .build_cartesian_2d(0.0..max_ms, 0.0..100.0)
                 .ok()?;
             chart
                 .configure_mesh()
+                .light_line_style(TRANSPARENT)
                 .x_desc("shading pass, ms (median)")
                 .y_desc("useful / performed (%)")
+                .x_label_formatter(&crate::plot::tick_label)
+                .y_label_formatter(&crate::plot::tick_label)
                 .draw()
                 .ok()?;
             let names: Vec<&str> = schemes(0.1, 100.0).iter().map(|s| s.0).collect();
@@ -382,7 +386,7 @@ fn plot(rows: &[SlicingRow]) -> Option<Plot> {
                     .label(*name)
                     .legend(move |(x, y)| Circle::new((x + 8, y), 4, color.filled()));
             }
-            crate::plot::legend(&mut chart, SeriesLabelPosition::MiddleRight)
+            crate::plot::legend(&mut chart)
         },
     )
 }

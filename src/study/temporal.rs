@@ -320,7 +320,10 @@ fn plot(rows: &[TemporalRow]) -> Option<crate::plot::Plot> {
     crate::plot::svg(
         "temporal.svg",
         "Temporal: frame time against the fraction of moving lights",
-        (1100, 420 * panels.len().div_ceil(2) as u32),
+        (
+            1100 + 2 * crate::plot::LEGEND_WIDTH,
+            420 * panels.len().div_ceil(2) as u32,
+        ),
         |area| {
             let cells = area.split_evenly((panels.len().div_ceil(2), 2));
             for (&(lights, camera_moves), cell) in panels.iter().zip(cells.iter()) {
@@ -337,15 +340,18 @@ fn plot(rows: &[TemporalRow]) -> Option<crate::plot::Plot> {
                 let mut chart = ChartBuilder::on(cell)
                     .caption(caption, (crate::plot::FONT, 16))
                     .margin(10)
+                    .margin_right(crate::plot::LEGEND_WIDTH)
                     .x_label_area_size(36)
                     .y_label_area_size(60)
                     .build_cartesian_2d(0.0..100.0, 0.0..top)
                     .ok()?;
                 chart
                     .configure_mesh()
+                    .light_line_style(TRANSPARENT)
                     .x_desc("% of the lights moving")
                     .y_desc("frame ms")
-                    .x_label_formatter(&|x| format!("{x:.0}"))
+                    .x_label_formatter(&crate::plot::tick_label)
+                    .y_label_formatter(&crate::plot::tick_label)
                     .draw()
                     .ok()?;
                 for (i, name) in names.iter().enumerate() {
@@ -354,10 +360,9 @@ fn plot(rows: &[TemporalRow]) -> Option<crate::plot::Plot> {
                         .filter(|r| r.variant == *name)
                         .map(|r| (r.moving as f64 * 100.0, r.frame_ms))
                         .collect();
-                    let color = crate::plot::series_color(i);
-                    crate::plot::line_with_points(&mut chart, points, color, name)?;
+                    crate::plot::line_with_points(&mut chart, points, i, name)?;
                 }
-                crate::plot::legend(&mut chart, SeriesLabelPosition::UpperLeft)?;
+                crate::plot::legend(&mut chart)?;
             }
             Some(())
         },
