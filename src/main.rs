@@ -154,6 +154,10 @@ enum Command {
         /// its help says which).
         #[arg(long, value_delimiter = ',')]
         lights: Vec<u32>,
+        /// Variant files, folders of them, or names in variants/: msaa and scale run them
+        /// beside their own.
+        #[arg(long, num_args = 1..)]
+        variants: Vec<String>,
         /// Timed frames per run, at least 1 (default 3; the median is reported; temporal:
         /// the frames of each sequence after the first).
         #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
@@ -656,6 +660,7 @@ fn main() -> ExitCode {
             size,
             scenes,
             lights,
+            variants,
             frames,
             gpu,
         } => {
@@ -666,22 +671,26 @@ fn main() -> ExitCode {
                 (!scenes.is_empty(), Reads::Scenes),
                 (!lights.is_empty(), Reads::Lights),
                 (frames.is_some(), Reads::Frames),
+                (!variants.is_empty(), Reads::Variants),
             ]
             .into_iter()
             .filter_map(|(given, option)| given.then_some(option))
             .collect();
             let defaults = clusterlab::study::StudyOptions::default();
-            let mut options = clusterlab::study::StudyOptions {
-                samples: samples.unwrap_or(defaults.samples),
-                size,
-                lights,
-                frames: frames.unwrap_or(defaults.frames),
-                ..defaults
-            };
-            if !scenes.is_empty() {
-                options.scenes = scenes;
-            }
-            study(&name, &options, &given, json, &out, &gpu)
+            clusterlab::variant::load_args(&variants).and_then(|variants| {
+                let mut options = clusterlab::study::StudyOptions {
+                    samples: samples.unwrap_or(defaults.samples),
+                    size,
+                    lights,
+                    frames: frames.unwrap_or(defaults.frames),
+                    variants,
+                    ..defaults
+                };
+                if !scenes.is_empty() {
+                    options.scenes = scenes;
+                }
+                study(&name, &options, &given, json, &out, &gpu)
+            })
         }
     };
     match result {

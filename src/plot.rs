@@ -198,6 +198,9 @@ pub fn side_legend(area: &Area, title: &str, entries: &[Entry]) -> Option<()> {
     Some(())
 }
 
+/// The width of a legend entry's line, pixels.
+const LEGEND_SWATCH: i32 = 20;
+
 /// Marker size, pixels from the centre.
 const MARKER_SIZE: i32 = 4;
 
@@ -247,19 +250,21 @@ where
 {
     let color = series_color(i);
     let (line, fill, r) = (color.stroke_width(2), color.filled(), MARKER_SIZE);
-    let path =
-        move |(x, y)| EmptyElement::at((x, y)) + PathElement::new(vec![(0, 0), (16, 0)], line);
+    let path = move |(x, y)| {
+        EmptyElement::at((x, y)) + PathElement::new(vec![(0, 0), (LEGEND_SWATCH, 0)], line)
+    };
+    let mid = LEGEND_SWATCH / 2;
     let series = chart
         .draw_series(LineSeries::new(points.clone(), line))
         .ok()?
         .label(label);
     match shape(i) {
         Shape::Circle => {
-            series.legend(move |c| path(c) + Circle::new((8, 0), r, fill));
+            series.legend(move |c| path(c) + Circle::new((mid, 0), r, fill));
             chart.draw_series(points.iter().map(|&p| Circle::new(p, r, fill)))
         }
         Shape::Square => {
-            series.legend(move |c| path(c) + Rectangle::new([(8 - r, -r), (8 + r, r)], fill));
+            series.legend(move |c| path(c) + Rectangle::new([(mid - r, -r), (mid + r, r)], fill));
             chart.draw_series(
                 points
                     .iter()
@@ -267,11 +272,11 @@ where
             )
         }
         Shape::Triangle => {
-            series.legend(move |c| path(c) + TriangleMarker::new((8, 0), r + 1, fill));
+            series.legend(move |c| path(c) + TriangleMarker::new((mid, 0), r + 1, fill));
             chart.draw_series(points.iter().map(|&p| TriangleMarker::new(p, r + 1, fill)))
         }
         Shape::Cross => {
-            series.legend(move |c| path(c) + Cross::new((8, 0), r, line));
+            series.legend(move |c| path(c) + Cross::new((mid, 0), r, line));
             chart.draw_series(points.iter().map(|&p| Cross::new(p, r, line)))
         }
     }
@@ -288,6 +293,7 @@ pub fn legend<'a, X: Ranged, Y: Ranged>(
     chart
         .configure_series_labels()
         .position(SeriesLabelPosition::Coordinate(width + 10, 0))
+        .legend_area_size(LEGEND_SWATCH + 6)
         .background_style(WHITE)
         .border_style(WHITE)
         .label_font((FONT, 12))

@@ -323,3 +323,39 @@ fn unknown_names_say_where_they_were_looked_for_and_the_nearest() {
         ran.stderr
     );
 }
+
+/// The studies that compare variants run the user's beside their own, named; one that does
+/// not compare variants refuses `--variants` rather than ignore it.
+#[test]
+fn studies_that_compare_variants_run_the_users_beside_their_own() {
+    let dir = user_folder("study", None);
+    let ran = cli([
+        "study",
+        "scale",
+        "--variants",
+        "variants",
+        "--lights",
+        "64,256",
+        "--size",
+        "32x18",
+        "--frames",
+        "1",
+        "--out",
+        "out",
+    ])
+    .dir(&dir)
+    .run();
+    assert_eq!(ran.code, Some(0), "{}", ran.printed());
+    let csv = std::fs::read_to_string(dir.join("out/scale.csv")).unwrap();
+    let mine = csv
+        .lines()
+        .filter(|l| l.contains(",my_forward_plus,"))
+        .count();
+    assert_eq!(mine, 2, "{csv}");
+    let refused = cli(["study", "codecs", "--variants", "variants"])
+        .dir(&dir)
+        .run();
+    assert_eq!(refused.code, Some(1));
+    assert!(refused.stderr.contains("--variants"), "{}", refused.stderr);
+    let _ = std::fs::remove_dir_all(dir);
+}

@@ -113,6 +113,7 @@ pub(crate) fn render(args: &RenderArgs) -> Result<bool, String> {
             println!("  note: {note}");
         }
         println!("  timing: {}", r.timing_source);
+        println!("  {}", clusterlab::compose::shaders_line());
         // The result columns, as the matrix table and CSV have them.
         let m = r.measured();
         for col in clusterlab::matrix::COLUMNS {

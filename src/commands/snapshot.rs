@@ -35,6 +35,20 @@ pub(crate) fn snapshot(variants: &[String], accept: bool, gpu: &GpuArgs) -> Resu
     } else {
         variant::load_args(variants)?
     };
+    // A tree's tests hold its snapshots to variants/ alone: one from elsewhere would be a
+    // snapshot no test makes.
+    if Path::new(snapshot::table::PAGE).is_file()
+        && let Some(outside) = given.iter().find(|v| {
+            let at = v.path.canonicalize().ok();
+            !in_folder.iter().any(|f| f.path.canonicalize().ok() == at)
+        })
+    {
+        return Err(format!(
+            "{}: in a clusterlab tree the snapshots are those of {}/ alone (its tests check them): put the file there, or run `clusterlab snapshot` in a folder of your own",
+            outside.path.display(),
+            variant::FOLDER
+        ));
+    }
     let mut all = in_folder;
     for v in &given {
         match all.iter_mut().find(|a| a.name == v.name) {

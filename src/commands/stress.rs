@@ -55,6 +55,7 @@ pub(crate) fn stress(args: StressArgs, gpu: &GpuArgs) -> Result<bool, String> {
         subjects,
         &mut |p| match p {
             Progress::Starting(_) => {}
+            Progress::Note(note) => eprintln!("{note}"),
             Progress::CaseDone {
                 case,
                 runs,

@@ -671,10 +671,11 @@ struct Planned<'c> {
     variant: Result<Variant, String>,
 }
 
-/// What a stress run says as it goes: a run about to start, and each case once its runs are
-/// done, with how many of the applicable runs are done of how many.
+/// What a stress run says as it goes: a run about to start, a device replaced, and each case
+/// once its runs are done, with how many of the applicable runs are done of how many.
 pub enum Progress<'a> {
     Starting(&'a str),
+    Note(&'a str),
     CaseDone {
         case: &'a str,
         runs: &'a [CaseRun],
@@ -775,7 +776,7 @@ pub fn run(
                 if !run.ok {
                     match gpu.renew_if_unusable() {
                         Ok(None) => {}
-                        Ok(Some(broken)) => progress(Progress::Starting(&format!(
+                        Ok(Some(broken)) => progress(Progress::Note(&format!(
                             "device unusable after {} / {} ({broken}); opened a new one",
                             case.name, p.name
                         ))),

@@ -112,6 +112,8 @@ pub struct StudyOptions {
     pub frames: u32,
     /// Depth: pixel columns (one distance each) and rows of the frame.
     pub depth_columns: u32,
+    /// The user's variants, run beside the study's own where it compares variants.
+    pub variants: Vec<crate::variant::LoadedVariant>,
     pub depth_rows: u32,
 }
 
@@ -175,6 +177,7 @@ impl Default for StudyOptions {
             frames: 3,
             depth_columns: 1000,
             depth_rows: 4,
+            variants: Vec::new(),
         }
     }
 }
@@ -347,6 +350,7 @@ pub enum Reads {
     Scenes,
     Lights,
     Frames,
+    Variants,
 }
 
 impl Reads {
@@ -357,6 +361,7 @@ impl Reads {
             Reads::Scenes => "--scenes",
             Reads::Lights => "--lights",
             Reads::Frames => "--frames",
+            Reads::Variants => "--variants",
         }
     }
 }
@@ -460,15 +465,14 @@ fn csv_of<T: Serialize>(rows: &[T]) -> Result<String, StudyError> {
     String::from_utf8(bytes).map_err(|e| StudyError::Io(e.to_string()))
 }
 
-/// The shipped variants `names` (`variants/NAME.ron`).
+/// The shipped variants `names`, found as `variant::locate` finds a name (the working
+/// folder's `variants/`, then the tree's).
 pub(crate) fn shipped(names: &[&str]) -> Result<Vec<crate::variant::LoadedVariant>, StudyError> {
     names
         .iter()
         .map(|name| {
-            let path = Path::new("variants").join(format!("{name}.ron"));
-            crate::variant::load(&path).map_err(|e| {
-                StudyError::Usage(format!("{e} (run the study from the project folder)"))
-            })
+            let path = crate::variant::locate(name).map_err(StudyError::Usage)?;
+            crate::variant::load(&path).map_err(|e| StudyError::Usage(e.to_string()))
         })
         .collect()
 }

@@ -80,17 +80,24 @@ fn named(p: &Point) -> MsaaRow {
 
 impl super::Study for MsaaStudy {
     const NAME: &'static str = "msaa";
-    const READS: &'static [Reads] = &[Reads::Scenes, Reads::Size, Reads::Lights, Reads::Frames];
+    const READS: &'static [Reads] = &[
+        Reads::Scenes,
+        Reads::Size,
+        Reads::Lights,
+        Reads::Frames,
+        Reads::Variants,
+    ];
     const ABOUT: &'static str = "Naive forward, Forward+ and clustered deferred (tiled and \
         two-level both ways) at every sample count the adapter multisamples, 1024 lights: \
         time, memory, edge pixels, and where deferred and forward cross over; every run \
-        within 1 LSB (--scenes, --size, --lights, --frames)";
+        within 1 LSB (--scenes, --size, --lights, --frames; --variants: yours beside them)";
     type Point = Point;
     type Row = MsaaRow;
 
     fn plan(gpu: &Gpu, options: &StudyOptions) -> Result<(Self, Vec<Point>), StudyError> {
         let counts = gpu.multisample_counts();
-        let variants = super::shipped(&crate::matrix::MSAA_GROUP)?;
+        let mut variants = super::shipped(&crate::matrix::MSAA_GROUP)?;
+        variants.extend(options.variants.iter().cloned());
         let mut points = Vec::new();
         for name in &options.scenes {
             for params in options.params_for(name, &[DEFAULT_LIGHTS])? {

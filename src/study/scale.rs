@@ -94,7 +94,7 @@ pub struct ScaleStudy {
 /// One method at one light count.
 pub struct Point {
     variant: LoadedVariant,
-    method: &'static str,
+    method: String,
     scene: Arc<Scene>,
     references: Arc<ReferenceCache>,
 }
@@ -104,7 +104,7 @@ fn named(p: &Point) -> ScaleRow {
     let params = &p.scene.params;
     ScaleRow {
         lights: params.lights,
-        method: p.method.to_string(),
+        method: p.method.clone(),
         variant: p.variant.name.clone(),
         width: params.width,
         height: params.height,
@@ -116,12 +116,12 @@ fn named(p: &Point) -> ScaleRow {
 
 impl super::Study for ScaleStudy {
     const NAME: &'static str = "scale";
-    const READS: &'static [Reads] = &[Reads::Size, Reads::Lights, Reads::Frames];
+    const READS: &'static [Reads] = &[Reads::Size, Reads::Lights, Reads::Frames, Reads::Variants];
     const ABOUT: &'static str = "The exact culling methods from 4096 lights to a million on \
         the atrium (radius scaled with the count): frame, assignment and shading time, \
         evaluations per useful one, the assignment's work, list bytes and exactness; \
         1920x1080, or 640x360 and up to 262144 lights on a software adapter (--size, \
-        --lights, --frames)";
+        --lights, --frames; --variants: yours beside them)";
     type Point = Point;
     type Row = ScaleRow;
 
@@ -146,7 +146,12 @@ impl super::Study for ScaleStudy {
         });
         let size = options.size.unwrap_or(size);
         let files: Vec<&str> = METHODS.iter().map(|(file, _)| *file).collect();
-        let variants = super::shipped(&files)?;
+        // The shipped methods by their labels, then the user's by their names.
+        let methods: Vec<(LoadedVariant, String)> = super::shipped(&files)?
+            .into_iter()
+            .zip(METHODS.iter().map(|(_, label)| label.to_string()))
+            .chain(options.variants.iter().map(|v| (v.clone(), v.name.clone())))
+            .collect();
         let defaults = super::scene_defaults("atrium")?;
         let mut points = Vec::new();
         for lights in options.lights_or(&counts) {
@@ -159,10 +164,10 @@ impl super::Study for ScaleStudy {
             };
             let scene = Arc::new(super::generate("atrium", params)?);
             let references = Arc::new(ReferenceCache::default());
-            for (variant, (_, method)) in variants.iter().zip(METHODS) {
+            for (variant, method) in &methods {
                 points.push(Point {
                     variant: variant.clone(),
-                    method,
+                    method: method.clone(),
                     scene: scene.clone(),
                     references: references.clone(),
                 });
@@ -295,18 +300,25 @@ fn plot(rows: &[ScaleRow]) -> Option<Plot> {
     if counts.len() < 2 {
         return None;
     }
+    // Every method in the order the rows first name it.
+    let mut methods: Vec<String> = Vec::new();
+    for r in &ok {
+        if !methods.contains(&r.method) {
+            methods.push(r.method.clone());
+        }
+    }
     let panel = |label, value: Measure| crate::plot::Panel {
         label,
         values: ok.iter().map(|r| value(r)).collect(),
-        series: METHODS
+        series: methods
             .iter()
-            .map(|(_, method)| {
+            .map(|method| {
                 let points = ok
                     .iter()
                     .filter(|r| r.method == *method && value(r) > 0.0)
                     .map(|r| (r.lights as f64, value(r)))
                     .collect();
-                (*method, points)
+                (method.as_str(), points)
             })
             .collect(),
     };
