@@ -161,12 +161,13 @@ pub fn legend_column<'a>(area: &Area<'a>) -> (Area<'a>, Area<'a>) {
     area.split_horizontally(width - LEGEND_WIDTH as i32)
 }
 
-/// A series' entry in a legend: its name, colour and marker (`marker`'s index).
-pub type Entry = (String, RGBColor, usize);
+/// A series' entry in a legend: its name, colour and marker (a series index whose marker
+/// it shows; None: a line alone).
+pub type Entry = (String, RGBColor, Option<usize>);
 
 /// Series i's legend entry: its colour and marker.
 pub fn series_entry(name: &str, i: usize) -> Entry {
-    (name.to_string(), series_color(i), i)
+    (name.to_string(), series_color(i), Some(i))
 }
 
 /// The legend in its own column (`legend_column`): per series its marker on a short line in
@@ -183,14 +184,16 @@ pub fn side_legend(area: &Area, title: &str, entries: &[Entry]) -> Option<()> {
         let y = 36 + line * k as i32;
         let color = *color;
         area.draw(&PathElement::new(
-            vec![(6, y), (30, y)],
+            vec![(6, y), (6 + LEGEND_SWATCH, y)],
             color.stroke_width(2),
         ))
         .ok()?;
-        draw_marker(area, *i, (18, y), color)?;
+        if let Some(i) = i {
+            draw_marker(area, *i, (6 + LEGEND_SWATCH / 2, y), color)?;
+        }
         area.draw(&Text::new(
             name.clone(),
-            (36, y - 7),
+            (12 + LEGEND_SWATCH, y - 7),
             (FONT, 12).into_font().color(&RGBColor(30, 30, 30)),
         ))
         .ok()?;
@@ -236,13 +239,12 @@ fn draw_marker(area: &Area, i: usize, at: (i32, i32), color: RGBColor) -> Option
     .ok()
 }
 
-/// Series `i` in its colour and marker: a line through `points`, a marker at each, and its
-/// legend entry `label`.
+/// Series `i` in its colour and marker: a line through `points`, a marker at each. Its
+/// legend entry is `series_entry(name, i)`.
 pub fn line_with_points<'a, X, Y>(
     chart: &mut ChartContext<'a, SVGBackend<'a>, Cartesian2d<X, Y>>,
     points: Vec<(f64, f64)>,
     i: usize,
-    label: &str,
 ) -> Option<()>
 where
     X: Ranged<ValueType = f64>,
@@ -250,55 +252,33 @@ where
 {
     let color = series_color(i);
     let (line, fill, r) = (color.stroke_width(2), color.filled(), MARKER_SIZE);
-    let path = move |(x, y)| {
-        EmptyElement::at((x, y)) + PathElement::new(vec![(0, 0), (LEGEND_SWATCH, 0)], line)
-    };
-    let mid = LEGEND_SWATCH / 2;
-    let series = chart
+    chart
         .draw_series(LineSeries::new(points.clone(), line))
-        .ok()?
-        .label(label);
+        .ok()?;
     match shape(i) {
-        Shape::Circle => {
-            series.legend(move |c| path(c) + Circle::new((mid, 0), r, fill));
-            chart.draw_series(points.iter().map(|&p| Circle::new(p, r, fill)))
-        }
-        Shape::Square => {
-            series.legend(move |c| path(c) + Rectangle::new([(mid - r, -r), (mid + r, r)], fill));
-            chart.draw_series(
-                points
-                    .iter()
-                    .map(|&p| EmptyElement::at(p) + Rectangle::new([(-r, -r), (r, r)], fill)),
-            )
-        }
+        Shape::Circle => chart.draw_series(points.iter().map(|&p| Circle::new(p, r, fill))),
+        Shape::Square => chart.draw_series(
+            points
+                .iter()
+                .map(|&p| EmptyElement::at(p) + Rectangle::new([(-r, -r), (r, r)], fill)),
+        ),
         Shape::Triangle => {
-            series.legend(move |c| path(c) + TriangleMarker::new((mid, 0), r + 1, fill));
             chart.draw_series(points.iter().map(|&p| TriangleMarker::new(p, r + 1, fill)))
         }
-        Shape::Cross => {
-            series.legend(move |c| path(c) + Cross::new((mid, 0), r, line));
-            chart.draw_series(points.iter().map(|&p| Cross::new(p, r, line)))
-        }
+        Shape::Cross => chart.draw_series(points.iter().map(|&p| Cross::new(p, r, line))),
     }
     .ok()?;
     Some(())
 }
 
-/// The legend of a chart built with `.margin_right(LEGEND_WIDTH)`: in that margin, beside
-/// the data, never over a line or a point.
-pub fn legend<'a, X: Ranged, Y: Ranged>(
-    chart: &mut ChartContext<'a, SVGBackend<'a>, Cartesian2d<X, Y>>,
-) -> Option<()> {
-    let width = chart.plotting_area().dim_in_pixel().0 as i32;
-    chart
-        .configure_series_labels()
-        .position(SeriesLabelPosition::Coordinate(width + 10, 0))
-        .legend_area_size(LEGEND_SWATCH + 6)
-        .background_style(WHITE)
-        .border_style(WHITE)
-        .label_font((FONT, 12))
-        .draw()
-        .ok()
+/// The legend of a chart built on `area` with `.margin_right(LEGEND_WIDTH)`: in that margin,
+/// beside the data, never over a line or a point.
+pub fn legend(area: &Area, entries: &[Entry]) -> Option<()> {
+    let (w, h) = area.dim_in_pixel();
+    let strip = area
+        .clone()
+        .shrink((w - LEGEND_WIDTH, 20), (LEGEND_WIDTH, h - 20));
+    side_legend(&strip, "", entries)
 }
 
 /// A key beside a scatter plot whose points carry numbers instead of names: one line per
@@ -384,8 +364,8 @@ pub fn against_lights(
                 .y_label_formatter(&tick_label)
                 .draw()
                 .ok()?;
-            for (i, (name, points)) in panel.series.iter().enumerate() {
-                line_with_points(&mut chart, points.clone(), i, name)?;
+            for (i, (_, points)) in panel.series.iter().enumerate() {
+                line_with_points(&mut chart, points.clone(), i)?;
             }
         }
         let entries: Vec<Entry> = panels

@@ -170,7 +170,7 @@ fn bad_requests_get_a_clear_message_and_exit_code_1() {
     let cases: [(&[&str], &str, i32); 6] = [
         (
             &["--scene", "atrum"],
-            "unknown scene `atrum`; the built-in scenes are: atrium",
+            "unknown scene `atrum`; nearest: `atrium`; the built-in scenes are: atrium",
             1,
         ),
         (

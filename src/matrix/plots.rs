@@ -125,7 +125,7 @@ fn time_error(area: &Area, cells: &[&CellRecord]) -> Drawn {
         .collect();
     front.sort_by(|a, b| a.0.total_cmp(&b.0));
     chart.draw_series(LineSeries::new(front, BLACK.stroke_width(2)))?;
-    let mut legend = vec![("Pareto front".to_string(), BLACK, 0)];
+    let mut legend = vec![("Pareto front".to_string(), BLACK, None)];
     for (name, pipeline) in [
         ("naive forward", "NaiveForward"),
         ("clustered forward", "ClusteredForward"),
@@ -144,7 +144,7 @@ fn time_error(area: &Area, cells: &[&CellRecord]) -> Drawn {
             mine.iter()
                 .map(|p| Circle::new((p.0, p.1), 5, color.filled())),
         )?;
-        legend.push((name.to_string(), color, 0));
+        legend.push((name.to_string(), color, Some(0)));
     }
     let at: Vec<(f64, f64)> = points.iter().map(|p| (p.0, p.1)).collect();
     plot::number_points(&mut chart, &at).ok_or("the point numbers did not draw")?;
@@ -272,7 +272,7 @@ fn passes(area: &Area, cells: &[&CellRecord]) -> Drawn {
             ))
         });
         chart.draw_series(bars)?;
-        legend.push((name.clone(), color, SQUARE));
+        legend.push((name.clone(), color, Some(SQUARE)));
     }
     plot::side_legend(&legend_area, "pass", &legend);
     Ok(true)
@@ -318,7 +318,7 @@ fn time_lights(area: &Area, results: &Results) -> Drawn {
     let mut legend = Vec::new();
     for (i, (name, mut pts)) in series.into_iter().enumerate() {
         pts.sort_by(|a, b| a.0.total_cmp(&b.0));
-        plot::line_with_points(&mut chart, pts, i, &name).ok_or("a series did not draw")?;
+        plot::line_with_points(&mut chart, pts, i).ok_or("a series did not draw")?;
         legend.push(plot::series_entry(&name, i));
     }
     plot::side_legend(&legend_area, "variant", &legend);

@@ -132,11 +132,8 @@ pub fn frame_plot(report: &SequenceReport, file: &str) -> Option<Plot> {
             .iter()
             .map(|f| (f.frame as f64, f.total_ms()))
             .collect();
-        chart
-            .draw_series(line(total, BLACK.stroke_width(2)))
-            .ok()?
-            .label("frame")
-            .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 16, y)], BLACK.stroke_width(2)));
+        chart.draw_series(line(total, BLACK.stroke_width(2))).ok()?;
+        let mut legend = vec![("frame".to_string(), BLACK, None)];
         for (i, name) in names.iter().enumerate() {
             let color = plot::series_color(i);
             let values = frames
@@ -145,11 +142,10 @@ pub fn frame_plot(report: &SequenceReport, file: &str) -> Option<Plot> {
                 .collect();
             chart
                 .draw_series(line(values, color.stroke_width(1)))
-                .ok()?
-                .label(name.as_str())
-                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 16, y)], color));
+                .ok()?;
+            legend.push((name.clone(), color, None));
         }
-        plot::legend(&mut chart)
+        plot::legend(area, &legend)
     })
 }
 

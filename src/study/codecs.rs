@@ -556,6 +556,7 @@ fn plot(rows: &[CodecRow]) -> Option<Plot> {
                 .y_label_formatter(&crate::plot::tick_label)
                 .draw()
                 .ok()?;
+            let mut legend = Vec::new();
             for (i, codec) in NormalCodec::packed(32).iter().enumerate() {
                 let color = crate::plot::series_color(i);
                 let points: Vec<(u32, f64)> = rows
@@ -567,12 +568,11 @@ fn plot(rows: &[CodecRow]) -> Option<Plot> {
                     .collect();
                 chart
                     .draw_series(LineSeries::new(points.clone(), color.stroke_width(2)))
-                    .ok()?
-                    .label(codec.label())
-                    .legend(move |(x, y)| PathElement::new([(x, y), (x + 16, y)], color));
+                    .ok()?;
                 chart
                     .draw_series(points.iter().map(|&p| Circle::new(p, 4, color.filled())))
                     .ok()?;
+                legend.push((codec.label().to_string(), color, Some(0)));
             }
             let bound: Vec<(u32, f64)> = (16..=32)
                 .step_by(4)
@@ -580,10 +580,9 @@ fn plot(rows: &[CodecRow]) -> Option<Plot> {
                 .collect();
             chart
                 .draw_series(LineSeries::new(bound, BLACK.stroke_width(1)))
-                .ok()?
-                .label("covering bound")
-                .legend(|(x, y)| PathElement::new([(x, y), (x + 16, y)], BLACK));
-            crate::plot::legend(&mut chart)
+                .ok()?;
+            legend.push(("covering bound".to_string(), BLACK, None));
+            crate::plot::legend(area, &legend)
         },
     )
 }

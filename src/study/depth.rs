@@ -495,6 +495,7 @@ fn plot(rows: &[DepthRow]) -> Option<Plot> {
                 .y_label_formatter(&crate::plot::tick_label)
                 .draw()
                 .ok()?;
+            let mut legend = Vec::new();
             for (i, setup) in setups(rows).into_iter().enumerate() {
                 let color = crate::plot::series_color(i);
                 let curve: Vec<(f64, f64)> = rows
@@ -508,9 +509,8 @@ fn plot(rows: &[DepthRow]) -> Option<Plot> {
                     .collect();
                 chart
                     .draw_series(LineSeries::new(points, color.stroke_width(2)))
-                    .ok()?
-                    .label(setup.to_string())
-                    .legend(move |(x, y)| PathElement::new([(x, y), (x + 16, y)], color));
+                    .ok()?;
+                legend.push((setup.to_string(), color, None));
             }
             // Reed's model for the three distinct cases: fixed point (either direction),
             // standard float, reversed float.
@@ -530,13 +530,10 @@ fn plot(rows: &[DepthRow]) -> Option<Plot> {
                     .collect();
                 DashedLineSeries::new(points, 6, 4, BLACK.stroke_width(1))
             };
-            chart
-                .draw_series(model(DepthFormat::Unorm24, false))
-                .ok()?
-                .label("Reed 2015 model")
-                .legend(|(x, y)| PathElement::new([(x, y), (x + 16, y)], BLACK));
+            chart.draw_series(model(DepthFormat::Unorm24, false)).ok()?;
             chart.draw_series(model(DepthFormat::Float32, true)).ok()?;
-            crate::plot::legend(&mut chart)
+            legend.push(("Reed 2015 model (dashed)".to_string(), BLACK, None));
+            crate::plot::legend(area, &legend)
         },
     )
 }

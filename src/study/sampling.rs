@@ -738,9 +738,14 @@ fn plot(rows: &[SamplingRow]) -> Option<crate::plot::Plot> {
                         })
                         .collect();
                     points.sort_by(|a, b| a.0.total_cmp(&b.0));
-                    crate::plot::line_with_points(&mut chart, points, i, f)?;
+                    crate::plot::line_with_points(&mut chart, points, i)?;
                 }
-                crate::plot::legend(&mut chart)?;
+                let legend: Vec<_> = families
+                    .iter()
+                    .enumerate()
+                    .map(|(i, f)| crate::plot::series_entry(f, i))
+                    .collect();
+                crate::plot::legend(cell, &legend)?;
             }
             Some(())
         },

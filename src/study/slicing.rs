@@ -373,6 +373,7 @@ fn plot(rows: &[SlicingRow]) -> Option<Plot> {
                 .draw()
                 .ok()?;
             let names: Vec<&str> = schemes(0.1, 100.0).iter().map(|s| s.0).collect();
+            let mut legend = Vec::new();
             for (i, name) in names.iter().enumerate() {
                 let color = crate::plot::series_color(i);
                 let points: Vec<(f64, f64)> = ok
@@ -382,11 +383,10 @@ fn plot(rows: &[SlicingRow]) -> Option<Plot> {
                     .collect();
                 chart
                     .draw_series(points.iter().map(|&p| Circle::new(p, 4, color.filled())))
-                    .ok()?
-                    .label(*name)
-                    .legend(move |(x, y)| Circle::new((x + 8, y), 4, color.filled()));
+                    .ok()?;
+                legend.push((name.to_string(), color, Some(0)));
             }
-            crate::plot::legend(&mut chart)
+            crate::plot::legend(area, &legend)
         },
     )
 }

@@ -331,8 +331,7 @@ fn plot(rows: &[TemporalRow]) -> Option<crate::plot::Plot> {
                     .iter()
                     .filter(|r| r.lights == lights && r.camera_moves == camera_moves)
                     .collect();
-                // Headroom above the lines for the legend.
-                let top = here.iter().map(|r| r.frame_ms).fold(0.0, f64::max) * 1.6 + 1e-3;
+                let top = here.iter().map(|r| r.frame_ms).fold(0.0, f64::max) * 1.1 + 1e-3;
                 let caption = format!(
                     "{lights} lights, camera {}",
                     if camera_moves { "moving" } else { "still" }
@@ -360,9 +359,14 @@ fn plot(rows: &[TemporalRow]) -> Option<crate::plot::Plot> {
                         .filter(|r| r.variant == *name)
                         .map(|r| (r.moving as f64 * 100.0, r.frame_ms))
                         .collect();
-                    crate::plot::line_with_points(&mut chart, points, i, name)?;
+                    crate::plot::line_with_points(&mut chart, points, i)?;
                 }
-                crate::plot::legend(&mut chart)?;
+                let legend: Vec<_> = names
+                    .iter()
+                    .enumerate()
+                    .map(|(i, name)| crate::plot::series_entry(name, i))
+                    .collect();
+                crate::plot::legend(cell, &legend)?;
             }
             Some(())
         },

@@ -137,7 +137,8 @@ pub const FOLDER: &str = "variants";
 /// looked for and names the nearest variants there.
 pub fn locate(arg: &str) -> Result<PathBuf, String> {
     let path = PathBuf::from(arg);
-    if path.exists() {
+    // Anything there, a broken or looping link too: reading it says what is wrong with it.
+    if std::fs::symlink_metadata(&path).is_ok() {
         return Ok(path);
     }
     let folders = [
