@@ -76,25 +76,25 @@ fn parse_backends(list: &str, from: &'static str) -> Result<wgpu::Backends, GpuE
 /// Every adapter of `backends`, best first: real GPUs before software ones, Vulkan before
 /// other backends of the same kind.
 ///
-/// The process enumerates each set of backends once and keeps the instance and adapters:
-/// every device comes from them. OpenGL's EGL display and context are global state that
-/// wgpu's GL adapter guards with a lock of its own; instances made and dropped on several
-/// threads (a test harness's) crashed llvmpipe now and then (gfx-rs/wgpu#4293, open
-/// upstream), and two adapters enumerated apart would share one context under two locks.
+/// Each call makes its own instance, so each device has its own OpenGL context (devices of
+/// one GL instance share its context, and their state mixes: frames came out wrong). An
+/// instance with OpenGL among its backends is never dropped: wgpu's GL instance dropped off
+/// the main thread, as a test harness's threads do, crashed llvmpipe now and then
+/// (gfx-rs/wgpu#4293 and gfx-rs/wgpu-rs#770, open upstream). Each one kept holds an EGL
+/// context: one per device a process opens, a few in a command, hundreds in the tests.
 pub fn enumerate(backends: wgpu::Backends) -> Vec<wgpu::Adapter> {
-    type Enumerated = (wgpu::Backends, wgpu::Instance, Vec<wgpu::Adapter>);
-    static ENUMERATED: std::sync::Mutex<Vec<Enumerated>> = std::sync::Mutex::new(Vec::new());
-    let mut enumerated = ENUMERATED.lock().unwrap_or_else(|e| e.into_inner());
-    if let Some((_, _, adapters)) = enumerated.iter().find(|(b, _, _)| *b == backends) {
-        return adapters.clone();
-    }
+    static KEPT: std::sync::Mutex<Vec<wgpu::Instance>> = std::sync::Mutex::new(Vec::new());
     let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
     desc.backends = backends;
     desc.flags = wgpu::InstanceFlags::empty().with_env();
     let instance = wgpu::Instance::new(desc);
     let mut adapters = pollster::block_on(instance.enumerate_adapters(backends));
     adapters.sort_by_key(|a| rank(&a.get_info()));
-    enumerated.push((backends, instance, adapters.clone()));
+    if backends.contains(wgpu::Backends::GL) {
+        KEPT.lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .push(instance);
+    }
     adapters
 }
 
