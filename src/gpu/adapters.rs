@@ -80,8 +80,8 @@ fn parse_backends(list: &str, from: &'static str) -> Result<wgpu::Backends, GpuE
 /// one GL instance share its context, and their state mixes: frames came out wrong). An
 /// instance with OpenGL among its backends is never dropped: wgpu's GL instance dropped off
 /// the main thread, as a test harness's threads do, crashed llvmpipe now and then
-/// (gfx-rs/wgpu#4293 and gfx-rs/wgpu-rs#770, open upstream). Each one kept holds an EGL
-/// context: one per device a process opens, a few in a command, hundreds in the tests.
+/// (gfx-rs/wgpu#4293, open upstream; gfx-rs/wgpu-rs#770 before it). Each one kept holds
+/// an EGL context: one per device a process opens, a few in a command, hundreds in tests.
 pub fn enumerate(backends: wgpu::Backends) -> Vec<wgpu::Adapter> {
     static KEPT: std::sync::Mutex<Vec<wgpu::Instance>> = std::sync::Mutex::new(Vec::new());
     let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
