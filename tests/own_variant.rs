@@ -359,3 +359,22 @@ fn studies_that_compare_variants_run_the_users_beside_their_own() {
     assert!(refused.stderr.contains("--variants"), "{}", refused.stderr);
     let _ = std::fs::remove_dir_all(dir);
 }
+
+/// Outside the tree, `variants` (the default of `validate` and `matrix`) is the tree's
+/// folder: a newcomer's first commands work from any folder.
+#[test]
+fn the_shipped_variants_are_found_from_any_folder() {
+    let dir = scratch("anywhere");
+    let ran = cli(["validate"]).dir(&dir).run();
+    assert_eq!(ran.code, Some(0), "{}", ran.printed());
+    let shipped = clusterlab::variant::find_files(Path::new("variants"))
+        .unwrap()
+        .len();
+    assert!(
+        ran.stdout
+            .contains(&format!("{shipped} variants: {shipped} ok, 0 failed")),
+        "{}",
+        ran.stdout
+    );
+    let _ = std::fs::remove_dir_all(dir);
+}

@@ -10,6 +10,7 @@ pub(crate) fn validate(paths: &[PathBuf], json: bool) -> Result<bool, String> {
     let (mut ok, mut failed) = (0, 0);
     let mut records = Vec::new();
     for path in paths {
+        let path = &variant::locate(&path.to_string_lossy())?;
         let files = variant::find_files(path)?;
         if files.is_empty() {
             return Err(format!("{}: no .ron variant files there", path.display()));

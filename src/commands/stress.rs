@@ -114,7 +114,11 @@ fn summary(runs: &[stress::CaseRun]) -> String {
     if ran.is_empty() {
         "not applicable".into()
     } else if failed.is_empty() {
-        format!("ok ({} runs)", ran.len())
+        format!(
+            "ok ({} run{})",
+            ran.len(),
+            if ran.len() == 1 { "" } else { "s" }
+        )
     } else {
         format!(
             "{} of {} FAILED: {}",

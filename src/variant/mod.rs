@@ -133,8 +133,9 @@ pub const FOLDER: &str = "variants";
 
 /// A variant argument: a path, or the name of a file in the working folder's `variants/`
 /// (`forward_plus` is `variants/forward_plus.ron`) or else in the shipped `variants/` of the
-/// tree the program was built from. An unknown one is an error that says where it was
-/// looked for and names the nearest variants there.
+/// tree the program was built from (and `variants` itself, where the working folder has
+/// none, the tree's folder). An unknown one is an error that says where it was looked for
+/// and names the nearest variants there.
 pub fn locate(arg: &str) -> Result<PathBuf, String> {
     let path = PathBuf::from(arg);
     // Anything there, a broken or looping link too: reading it says what is wrong with it.
@@ -145,6 +146,10 @@ pub fn locate(arg: &str) -> Result<PathBuf, String> {
         PathBuf::from(FOLDER),
         Path::new(env!("CARGO_MANIFEST_DIR")).join(FOLDER),
     ];
+    // `variants` itself (the default of `matrix` and `validate`) outside a tree: the tree's.
+    if arg == FOLDER && folders[1].is_dir() {
+        return Ok(folders[1].clone());
+    }
     let file = format!("{arg}.ron");
     if let Some(found) = folders.iter().map(|f| f.join(&file)).find(|p| p.is_file()) {
         return Ok(found);
