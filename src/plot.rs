@@ -165,9 +165,13 @@ pub fn legend_column<'a>(area: &Area<'a>) -> (Area<'a>, Area<'a>) {
 /// it shows; None: a line alone).
 pub type Entry = (String, RGBColor, Option<usize>);
 
-/// Series i's legend entry: its colour and marker.
-pub fn series_entry(name: &str, i: usize) -> Entry {
-    (name.to_string(), series_color(i), Some(i))
+/// The legend of series named `names`, in order: the i-th in series i's colour and marker.
+pub fn series_legend<S: AsRef<str>>(names: impl IntoIterator<Item = S>) -> Vec<Entry> {
+    names
+        .into_iter()
+        .enumerate()
+        .map(|(i, name)| (name.as_ref().to_string(), series_color(i), Some(i)))
+        .collect()
 }
 
 /// The legend in its own column (`legend_column`): per series its marker on a short line in
@@ -240,7 +244,7 @@ fn draw_marker(area: &Area, i: usize, at: (i32, i32), color: RGBColor) -> Option
 }
 
 /// Series `i` in its colour and marker: a line through `points`, a marker at each. Its
-/// legend entry is `series_entry(name, i)`.
+/// legend entry is the i-th of `series_legend`.
 pub fn line_with_points<'a, X, Y>(
     chart: &mut ChartContext<'a, SVGBackend<'a>, Cartesian2d<X, Y>>,
     points: Vec<(f64, f64)>,
@@ -368,13 +372,7 @@ pub fn against_lights(
                 line_with_points(&mut chart, points.clone(), i)?;
             }
         }
-        let entries: Vec<Entry> = panels
-            .first()?
-            .series
-            .iter()
-            .enumerate()
-            .map(|(i, (name, _))| series_entry(name, i))
-            .collect();
+        let entries = series_legend(panels.first()?.series.iter().map(|(name, _)| name));
         side_legend(&key, "series", &entries)
     })
 }

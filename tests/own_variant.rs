@@ -8,6 +8,15 @@ use std::process::Command;
 
 use crate::common::{binary, cli, copy_tree, scratch};
 
+/// Everything a finished process printed: standard output, then standard error.
+fn printed(out: &std::process::Output) -> String {
+    format!(
+        "{}{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    )
+}
+
 /// The lines of README's quick start: the `sh` block under its heading.
 fn quick_start() -> Vec<String> {
     let readme = std::fs::read_to_string("README.md").expect("README.md");
@@ -55,11 +64,7 @@ fn readme_quick_start_runs_on_a_new_variant_outside_the_tree() {
         .env(clusterlab::gpu::disk_cache::CACHE_VAR, "off")
         .output()
         .expect("sh");
-    let printed = format!(
-        "{}{}",
-        String::from_utf8_lossy(&out.stdout),
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let printed = printed(&out);
     assert!(out.status.success(), "{printed}");
     assert_eq!(
         printed.matches("step done: ").count(),
@@ -98,11 +103,7 @@ fn suite_in(tree: &Path) -> (bool, String) {
         .env(clusterlab::gpu::disk_cache::CACHE_VAR, "off")
         .output()
         .expect("the test binary");
-    let printed = format!(
-        "{}{}",
-        String::from_utf8_lossy(&out.stdout),
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let printed = printed(&out);
     (
         out.status.success() && printed.contains("test result: ok"),
         printed,

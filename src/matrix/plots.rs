@@ -315,11 +315,10 @@ fn time_lights(area: &Area, results: &Results) -> Drawn {
         .y_label_formatter(&tick_label)
         .label_style((FONT, 14))
         .draw()?;
-    let mut legend = Vec::new();
-    for (i, (name, mut pts)) in series.into_iter().enumerate() {
+    let legend = plot::series_legend(series.iter().map(|(name, _)| name));
+    for (i, (_, mut pts)) in series.into_iter().enumerate() {
         pts.sort_by(|a, b| a.0.total_cmp(&b.0));
         plot::line_with_points(&mut chart, pts, i).ok_or("a series did not draw")?;
-        legend.push(plot::series_entry(&name, i));
     }
     plot::side_legend(&legend_area, "variant", &legend);
     Ok(true)

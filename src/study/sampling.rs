@@ -740,12 +740,7 @@ fn plot(rows: &[SamplingRow]) -> Option<crate::plot::Plot> {
                     points.sort_by(|a, b| a.0.total_cmp(&b.0));
                     crate::plot::line_with_points(&mut chart, points, i)?;
                 }
-                let legend: Vec<_> = families
-                    .iter()
-                    .enumerate()
-                    .map(|(i, f)| crate::plot::series_entry(f, i))
-                    .collect();
-                crate::plot::legend(cell, &legend)?;
+                crate::plot::legend(cell, &crate::plot::series_legend(&families))?;
             }
             Some(())
         },

@@ -361,12 +361,7 @@ fn plot(rows: &[TemporalRow]) -> Option<crate::plot::Plot> {
                         .collect();
                     crate::plot::line_with_points(&mut chart, points, i)?;
                 }
-                let legend: Vec<_> = names
-                    .iter()
-                    .enumerate()
-                    .map(|(i, name)| crate::plot::series_entry(name, i))
-                    .collect();
-                crate::plot::legend(cell, &legend)?;
+                crate::plot::legend(cell, &crate::plot::series_legend(&names))?;
             }
             Some(())
         },
