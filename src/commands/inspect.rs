@@ -5,11 +5,66 @@ use clusterlab::variant;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-pub(crate) fn validate(paths: &[PathBuf], json: bool) -> Result<bool, String> {
+use super::args::parse_fraction;
+
+/// `validate`: which variants, and how to print.
+#[derive(clap::Args)]
+pub(crate) struct ValidateArgs {
+    /// Variant files or folders of them.
+    #[arg(default_value = "variants")]
+    pub paths: Vec<PathBuf>,
+    /// Print one JSON object: each variant's passes, error, and needs of a device's
+    /// limits (bindings per stage, bind groups, workgroup storage and size, colour
+    /// attachment bytes) beside WebGPU's and wgpu's downlevel defaults.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// `wgsl`: a variant and perhaps one pass.
+#[derive(clap::Args)]
+pub(crate) struct WgslArgs {
+    /// A variant file, or the name of one in variants/.
+    pub variant: String,
+    /// Only this pass (see the pass names in the output without it).
+    #[arg(long)]
+    pub pass: Option<String>,
+}
+
+/// `scenes`: list them, or write one as glTF.
+#[derive(clap::Args)]
+pub(crate) struct ScenesArgs {
+    /// Write built-in scene NAME (meshes, materials, lights, camera and its motion) to
+    /// FILE as binary glTF (.glb); `--scene FILE` then loads it.
+    #[arg(long, num_args = 2, value_names = ["NAME", "FILE"])]
+    pub export: Option<Vec<String>>,
+    /// With --export: number of lights (default: the scene's).
+    #[arg(long, requires = "export")]
+    pub lights: Option<u32>,
+    /// With --export: seed of the scene generator.
+    #[arg(long, requires = "export")]
+    pub seed: Option<u64>,
+    /// With --export: fraction of the lights that are spots, in 0..=1.
+    #[arg(long, requires = "export", value_parser = parse_fraction)]
+    pub spots: Option<f32>,
+}
+
+/// `adapters`: how to print, and which backend to choose for.
+#[derive(clap::Args)]
+pub(crate) struct AdaptersArgs {
+    /// Print one JSON object instead.
+    #[arg(long)]
+    pub json: bool,
+    /// Show the choice for this backend (vulkan, gl, ...), as `--backend` would make it.
+    #[arg(long)]
+    pub backend: Option<String>,
+}
+
+pub(crate) fn validate(args: &ValidateArgs) -> Result<bool, String> {
+    let json = args.json;
     let composer = Composer::default();
     let (mut ok, mut failed) = (0, 0);
     let mut records = Vec::new();
-    for path in paths {
+    for path in &args.paths {
         let path = &variant::locate(&path.to_string_lossy())?;
         let files = variant::find_files(path)?;
         if files.is_empty() {
@@ -102,8 +157,9 @@ fn validated_json(
     })
 }
 
-pub(crate) fn wgsl(arg: &str, only: Option<&str>) -> Result<bool, String> {
-    let loaded = variant::load(&variant::locate(arg)?).map_err(|e| e.to_string())?;
+pub(crate) fn wgsl(args: &WgslArgs) -> Result<bool, String> {
+    let only = args.pass.as_deref();
+    let loaded = variant::load(&variant::locate(&args.variant)?).map_err(|e| e.to_string())?;
     let all = passes(&loaded.variant);
     let selected: Vec<_> = all
         .iter()
@@ -133,7 +189,16 @@ pub(crate) fn wgsl(arg: &str, only: Option<&str>) -> Result<bool, String> {
     Ok(true)
 }
 
-pub(crate) fn scenes() {
+pub(crate) fn scenes(args: &ScenesArgs) -> Result<bool, String> {
+    if let Some(export) = &args.export {
+        return export_scene(
+            &export[0],
+            Path::new(&export[1]),
+            args.lights,
+            args.seed,
+            args.spots,
+        );
+    }
     for s in clusterlab::scene::SCENES {
         let d = &s.defaults;
         println!("{:<10} {}", s.name, s.description);
@@ -152,9 +217,10 @@ pub(crate) fn scenes() {
     println!(
         "\nAny glTF 2.0 file is a scene too: --scene FILE.gltf or FILE.glb (its meshes, materials,\nlights and first camera; see README). `clusterlab scenes --export NAME FILE.glb` writes a\nbuilt-in scene as glTF."
     );
+    Ok(true)
 }
 
-pub(crate) fn export_scene(
+fn export_scene(
     name: &str,
     file: &Path,
     lights: Option<u32>,
@@ -183,9 +249,9 @@ pub(crate) fn export_scene(
     Ok(true)
 }
 
-pub(crate) fn adapters(json: bool, backend: Option<&str>) -> Result<bool, String> {
-    let survey = clusterlab::gpu::adapters::survey(backend);
-    if json {
+pub(crate) fn adapters(args: &AdaptersArgs) -> Result<bool, String> {
+    let survey = clusterlab::gpu::adapters::survey(args.backend.as_deref());
+    if args.json {
         println!(
             "{}",
             serde_json::to_string_pretty(&survey).map_err(|e| e.to_string())?

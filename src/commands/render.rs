@@ -1,10 +1,80 @@
 //! `render` and `view`: one variant on one scene, measured, or in a window.
 
-use crate::{RenderArgs, ViewArgs};
+use super::args::{CellArgs, GpuArgs, SceneOptions};
 use clusterlab::compose::Composer;
 use clusterlab::measure::Frames;
 use clusterlab::variant;
+use clusterlab::variant::DebugView;
 use std::path::{Path, PathBuf};
+
+#[derive(clap::Args)]
+pub(crate) struct RenderArgs {
+    #[command(flatten)]
+    pub cell: CellArgs,
+    /// Frames to render (at least 1); times are the median per pass.
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..))]
+    pub frames: u32,
+    /// Untimed frames before them (software rasterisers compile on first use).
+    #[arg(long, default_value_t = 1)]
+    pub warmup: u32,
+    /// Show a debug view instead of the shaded image: cluster-index, lights-per-cluster,
+    /// z-slice, gbuffer-position, gbuffer-normal, gbuffer-albedo or gbuffer-depth.
+    #[arg(long, value_parser = parse_debug_view)]
+    pub debug_view: Option<DebugView>,
+    /// Skip the instrumented frame that counts light evaluations.
+    #[arg(long)]
+    pub no_stats: bool,
+    /// Samples per pixel instead of the variant's msaa.samples: 1, 2, 4 or 8.
+    #[arg(long)]
+    pub samples: Option<u32>,
+    /// Place the camera instead of the scene's own: EX,EY,EZ,TX,TY,TZ, its eye and the
+    /// point it looks at (+Y up; the scene's field of view and near plane; still). The
+    /// viewer shows its flown camera as this argument.
+    #[arg(long, value_parser = clusterlab::scene::CameraPose::parse)]
+    pub camera: Option<clusterlab::scene::CameraPose>,
+    /// Folder for the PNG and its heat map.
+    #[arg(long, default_value = "out")]
+    pub out: PathBuf,
+    #[command(flatten)]
+    pub gpu: GpuArgs,
+    /// Print one JSON object instead of a summary.
+    #[arg(long)]
+    pub json: bool,
+}
+
+#[derive(clap::Args)]
+pub(crate) struct ViewArgs {
+    /// Variant files or names to offer beside those in variants/; the first is shown first
+    /// (default: forward_plus).
+    #[arg(long)]
+    pub variant: Vec<String>,
+    /// A built-in scene (see `clusterlab scenes`), or a glTF file (.gltf or .glb).
+    #[arg(long, default_value = "atrium")]
+    pub scene: String,
+    #[command(flatten)]
+    pub options: SceneOptions,
+    /// Start on this camera, EX,EY,EZ,TX,TY,TZ (as `render --camera`).
+    #[arg(long, value_parser = clusterlab::scene::CameraPose::parse)]
+    pub camera: Option<clusterlab::scene::CameraPose>,
+    /// Folder for screenshots and recordings.
+    #[arg(long, default_value = "out")]
+    pub out: PathBuf,
+    /// Play the timed inputs of this RON file, then exit (non-zero if a step failed).
+    #[arg(long)]
+    pub script: Option<PathBuf>,
+    #[command(flatten)]
+    pub gpu: GpuArgs,
+}
+
+fn parse_debug_view(s: &str) -> Result<DebugView, String> {
+    DebugView::named(s).ok_or_else(|| {
+        let names: Vec<String> = DebugView::every()
+            .into_iter()
+            .map(DebugView::name)
+            .collect();
+        format!("`{s}` is not a debug view; use one of {}", names.join(", "))
+    })
+}
 
 pub(crate) fn view(args: &ViewArgs) -> Result<bool, String> {
     clusterlab::files::write::check_folder(&args.out, "--out")?;

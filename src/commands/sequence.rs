@@ -1,7 +1,36 @@
 //! `sequence`: frames that follow each other, each measured.
 
-use crate::SequenceArgs;
+use super::args::{CellArgs, GpuArgs, parse_fraction};
 use clusterlab::compose::Composer;
+use std::path::PathBuf;
+
+#[derive(clap::Args)]
+pub(crate) struct SequenceArgs {
+    #[command(flatten)]
+    pub cell: CellArgs,
+    /// Frames, 1 to 3600, one frame step (1/30 s) apart.
+    #[arg(long, default_value_t = 30, value_parser = clap::value_parser!(u32).range(1..=clusterlab::sequence::MAX_FRAMES as i64))]
+    pub frames: u32,
+    /// Fraction of the lights that move, in 0..=1 (the rest stand where they were at the
+    /// first frame; default: all of them, none of a glTF file's own lights, which cannot
+    /// move).
+    #[arg(long, value_parser = parse_fraction)]
+    pub moving: Option<f32>,
+    /// Keep the camera where it is at the first frame.
+    #[arg(long)]
+    pub still_camera: bool,
+    /// Check every K-th frame (and the first and last) against its reference, K >= 1.
+    #[arg(long, default_value_t = 10, value_parser = clap::value_parser!(u32).range(1..))]
+    pub check_every: u32,
+    /// Folder for the animation, plot, table, report and the last frame's image.
+    #[arg(long, default_value = "out")]
+    pub out: PathBuf,
+    #[command(flatten)]
+    pub gpu: GpuArgs,
+    /// Print the report as JSON instead of the table.
+    #[arg(long)]
+    pub json: bool,
+}
 
 pub(crate) fn sequence(args: &SequenceArgs) -> Result<bool, String> {
     clusterlab::files::write::check_folder(&args.out, "--out")?;

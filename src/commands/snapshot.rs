@@ -2,14 +2,28 @@
 
 use std::path::Path;
 
-use crate::GpuArgs;
+use super::args::GpuArgs;
 use clusterlab::compose::Composer;
 use clusterlab::snapshot;
 use clusterlab::variant::{self, LoadedVariant};
 
-pub(crate) fn snapshot(variants: &[String], accept: bool, gpu: &GpuArgs) -> Result<bool, String> {
+/// `snapshot`: which variants, or take the pending snapshots in.
+#[derive(clap::Args)]
+pub(crate) struct SnapshotArgs {
+    /// Variant files, folders of them, or names in variants/ (default: variants/).
+    #[arg(long, num_args = 1..)]
+    pub variants: Vec<String>,
+    /// Take every pending snapshot in: each replaces its reviewed one.
+    #[arg(long, conflicts_with = "variants")]
+    pub accept: bool,
+    #[command(flatten)]
+    pub gpu: GpuArgs,
+}
+
+pub(crate) fn snapshot(args: &SnapshotArgs) -> Result<bool, String> {
+    let (variants, gpu) = (&args.variants, &args.gpu);
     let root = Path::new("");
-    if accept {
+    if args.accept {
         let taken = snapshot::accept(root)?;
         for path in &taken {
             println!("accepted {}", path.display());

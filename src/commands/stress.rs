@@ -2,38 +2,52 @@
 
 use std::time::Instant;
 
-use crate::GpuArgs;
+use super::args::GpuArgs;
 use clusterlab::compose::Composer;
 use clusterlab::stress::{self, Progress, Subjects};
 
-/// What `stress` was asked for.
-pub(crate) struct StressArgs<'a> {
+/// `stress` as given on the command line.
+#[derive(clap::Args)]
+pub(crate) struct StressCommand {
+    /// Only the cases whose name contains this (as --cases).
+    pub filter: Option<String>,
     /// Only the cases whose name contains this.
-    pub cases: Option<&'a str>,
-    /// Variant files, folders or names to run instead of each case's own.
-    pub variants: &'a [String],
+    #[arg(long, conflicts_with = "filter")]
+    pub cases: Option<String>,
+    /// Variant files, folders of them, or names in variants/: every case that applies
+    /// runs on these (with what the case sets: a grid, a slicing, a depth mapping, a
+    /// sample count) instead of its own variants; one that cannot apply says why.
+    #[arg(long, num_args = 1..)]
+    pub variants: Vec<String>,
+    /// List the cases, and with --variants the runs each makes, then stop.
+    #[arg(long)]
     pub list: bool,
+    /// Print the runs as JSON.
+    #[arg(long)]
     pub json: bool,
+    #[command(flatten)]
+    pub gpu: GpuArgs,
 }
 
-pub(crate) fn stress(args: StressArgs, gpu: &GpuArgs) -> Result<bool, String> {
-    let cases = stress::selected(args.cases);
+pub(crate) fn stress(args: &StressCommand) -> Result<bool, String> {
+    let wanted = args.cases.as_deref().or(args.filter.as_deref());
+    let cases = stress::selected(wanted);
     if cases.is_empty() {
         return Err(format!(
             "no stress case matches `{}`; `clusterlab stress --list` lists them",
-            args.cases.unwrap_or_default()
+            wanted.unwrap_or_default()
         ));
     }
     let given = if args.variants.is_empty() {
         Vec::new()
     } else {
-        clusterlab::variant::load_args(args.variants)?
+        clusterlab::variant::load_args(&args.variants)?
     };
     if args.list {
         print!("{}", list(&cases, &given));
         return Ok(true);
     }
-    let mut gpu = gpu.open()?;
+    let mut gpu = args.gpu.open()?;
     eprintln!(
         "stress suite on {} ({}, {}); {}",
         gpu.adapter.name,
