@@ -79,11 +79,13 @@ impl Crate {
         let source = &self.files[module];
         let mut found = Vec::new();
         for (start, scope) in path_starts(source, &self.children(module)) {
-            if reexport_at(source, start) {
-                continue;
-            }
+            let reexport = reexport_at(source, start);
             let base: ModPath = module.iter().chain(&scope).cloned().collect();
             for written in use_tree(&source[start..]) {
+                // A re-export is an import only where the file itself uses the name.
+                if reexport && !used_outside(source, start, written.last().unwrap()) {
+                    continue;
+                }
                 if let Some(target) = self.absolute(&base, &written)
                     && let Some(defining) = self.defining(&target, 0)
                     && &defining != module
@@ -305,6 +307,23 @@ fn inline_modules(code: &str) -> Vec<(String, usize, usize)> {
         }
     }
     found
+}
+
+/// Whether `name` occurs as a word in `code` outside the statement that holds `start`, and
+/// not as a method, another path's item or a module declared (`.name`, `x::name`,
+/// `mod name`).
+fn used_outside(code: &str, start: usize, name: &str) -> bool {
+    let begin = code[..start].rfind(';').map_or(0, |i| i + 1);
+    let end = code[start..].find(';').map_or(code.len(), |i| start + i);
+    let word = |c: u8| c.is_ascii_alphanumeric() || c == b'_';
+    let bytes = code.as_bytes();
+    code.match_indices(name).any(|(i, _)| {
+        let j = i + name.len();
+        !(begin..end).contains(&i)
+            && !code[..i].ends_with("mod ")
+            && (i == 0 || !(word(bytes[i - 1]) || bytes[i - 1] == b'.' || bytes[i - 1] == b':'))
+            && (j == code.len() || !word(bytes[j]))
+    })
 }
 
 /// Whether the path at `start` belongs to a `pub use` (or `pub(crate) use`) statement.

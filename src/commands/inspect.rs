@@ -228,7 +228,7 @@ fn export_scene(
     spots: Option<f32>,
 ) -> Result<bool, String> {
     let info = clusterlab::scene::find_scene(name)
-        .ok_or_else(|| clusterlab::scene::SceneError::Unknown(name.to_string()).to_string())?;
+        .ok_or_else(|| clusterlab::scene::unknown(name).to_string())?;
     let mut params = info.defaults;
     params.lights = lights.unwrap_or(params.lights);
     params.seed = seed.unwrap_or(params.seed);

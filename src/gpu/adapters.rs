@@ -3,8 +3,42 @@
 
 use serde::Serialize;
 
-use super::GpuError;
-use super::expect::DEVIATIONS;
+use super::deviations::DEVIATIONS;
+use super::error::GpuError;
+
+/// What the adapter is, as reports print it.
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct AdapterSummary {
+    pub name: String,
+    pub backend: String,
+    pub driver: String,
+    /// Optional features the adapter has that `CLUSTERLAB_WITHOUT` masked from the device.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub without: Vec<String>,
+}
+
+/// The variable that sets how many threads Mesa's software GPU (llvmpipe, lavapipe) splits
+/// each pass among (`clusterlab` sets twice the cores unless it is set).
+pub const SOFTWARE_GPU_THREADS: &str = "LP_NUM_THREADS";
+
+/// The software GPU's thread count as this process has it, for the record: the variable's
+/// value, or None when unset (one thread per core).
+pub fn software_gpu_threads() -> Option<String> {
+    crate::environment::var(SOFTWARE_GPU_THREADS)
+}
+
+/// Why a multisampled frame cannot run on wgpu 30's OpenGL backend, though the driver
+/// offers the sample counts.
+pub const MSAA_ON_GL: &str = "wgpu's OpenGL backend creates a multisampled texture that shaders read with the target GL_TEXTURE_2D, which OpenGL rejects (GL_INVALID_ENUM; gfx-rs/wgpu#6084), so nothing renders into it and no pass can read its samples";
+
+/// The driver's name and version, as one line.
+pub(super) fn driver_string(info: &wgpu::AdapterInfo) -> String {
+    [info.driver.trim(), info.driver_info.trim()]
+        .into_iter()
+        .filter(|s| !s.is_empty())
+        .collect::<Vec<_>>()
+        .join(" ")
+}
 
 /// Where the backends to try came from.
 #[derive(Clone, Debug)]
@@ -468,7 +502,7 @@ fn report(adapter: &wgpu::Adapter, chosen: bool) -> AdapterReport {
         unusable: missing_requirements(adapter),
         backend: info.backend.to_string(),
         device_type: format!("{:?}", info.device_type),
-        driver: super::driver_string(&info),
+        driver: driver_string(&info),
         vendor_id: info.vendor,
         device_id: info.device,
         capabilities: capabilities(adapter),
@@ -602,8 +636,7 @@ impl Survey {
                 let _ = writeln!(s, "   {why}");
             }
             if a.name.starts_with("llvmpipe") {
-                let threads =
-                    crate::gpu::software_gpu_threads().unwrap_or_else(|| "one per core".into());
+                let threads = software_gpu_threads().unwrap_or_else(|| "one per core".into());
                 let _ = writeln!(s, "   threads per pass: {threads} (LP_NUM_THREADS)");
             }
             let _ = writeln!(
@@ -619,7 +652,7 @@ impl Survey {
                 .collect();
             let _ = writeln!(s, "   sample counts: {}", counts.join(", "));
             if a.backend == wgpu::Backend::Gl.to_string() {
-                let _ = writeln!(s, "   multisampling: refused: {}", super::MSAA_ON_GL);
+                let _ = writeln!(s, "   multisampling: refused: {}", MSAA_ON_GL);
             }
             let _ = writeln!(s, "   pass times: {}", a.timing);
             let _ = writeln!(

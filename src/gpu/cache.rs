@@ -3,51 +3,10 @@
 //! matrix whose passes compose to the same WGSL (most bounds, assignment and tonemap passes)
 //! share one pipeline. Held by the device: a replaced device starts with an empty cache.
 
-use std::collections::HashMap;
-use std::sync::Mutex;
 use std::time::Instant;
 
-use serde::{Deserialize, Serialize};
-
+use super::pipeline_store::{Kept, LayoutObjects, PipelineStats};
 use super::{Gpu, GpuError};
-
-/// What the cache did over a run.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
-pub struct PipelineStats {
-    /// Pipelines created (each compiled once).
-    pub created: u32,
-    /// Requests answered with a pipeline created earlier in the run.
-    pub reused: u32,
-    /// Wall-clock milliseconds spent creating shader modules, layouts and pipelines.
-    pub creation_ms: f64,
-}
-
-/// The bind group layouts of a pass (a gap where it uses no group) and its pipeline layout.
-#[derive(Clone, Debug)]
-pub struct LayoutObjects {
-    pub groups: Vec<Option<wgpu::BindGroupLayout>>,
-    pub pipeline: wgpu::PipelineLayout,
-}
-
-#[derive(Default)]
-pub struct PipelineCache {
-    inner: Mutex<Inner>,
-}
-
-/// What the cache keeps, by kind.
-enum Kept {
-    Module(wgpu::ShaderModule),
-    Layout(LayoutObjects),
-    Render(wgpu::RenderPipeline),
-    Compute(wgpu::ComputePipeline),
-}
-
-#[derive(Default)]
-struct Inner {
-    /// By kind and key (a module and a layout share their WGSL as key).
-    kept: HashMap<(&'static str, String), Kept>,
-    stats: PipelineStats,
-}
 
 impl Gpu {
     /// What the pipeline cache did since the device was opened.
@@ -151,12 +110,5 @@ impl Gpu {
         cache.stats.created += u32::from(pipeline);
         cache.kept.insert(key, wrap(t.clone()));
         Ok(t)
-    }
-}
-
-impl PipelineCache {
-    fn lock(&self) -> std::sync::MutexGuard<'_, Inner> {
-        // A panic while the lock was held left at worst an entry missing: keep going.
-        self.inner.lock().unwrap_or_else(|p| p.into_inner())
     }
 }

@@ -8,8 +8,6 @@
 
 use std::path::{Path, PathBuf};
 
-use super::Gpu;
-
 /// The variable naming the cache folder, or `off`.
 pub const CACHE_VAR: &str = "CLUSTERLAB_CACHE";
 
@@ -45,15 +43,20 @@ pub fn folder() -> Option<PathBuf> {
     }
 }
 
-impl Gpu {
+impl DiskCache {
     /// Attach the pipeline cache of this adapter in `folder`, loading what an earlier run
     /// of this clusterlab version on this adapter saved there. Returns a note for the user:
     /// where the cache is, or why it was not loaded or is not kept.
-    pub fn attach_disk_cache(&mut self, folder: &Path) -> String {
-        let (Some(key), identity) = &self.cache_identity else {
-            return format!(
-                "pipeline cache: none on {} (wgpu keeps one on Vulkan only)",
-                self.adapter.backend
+    pub(super) fn attach(
+        device: &wgpu::Device,
+        folder: &Path,
+        (key, identity): &(Option<String>, String),
+        backend: &str,
+    ) -> (Option<DiskCache>, String) {
+        let Some(key) = key else {
+            return (
+                None,
+                format!("pipeline cache: none on {backend} (wgpu keeps one on Vulkan only)"),
             );
         };
         let path = folder.join(format!("{key}.bin"));
@@ -63,9 +66,12 @@ impl Gpu {
         );
         let (data, note) = match crate::files::read(&path, READ) {
             Ok(bytes) if !bytes.starts_with(format!("{MAGIC}\n").as_bytes()) => {
-                return format!(
-                    "pipeline cache: none kept: {} is not one clusterlab wrote (no `{MAGIC}` header), so it is left alone",
-                    path.display()
+                return (
+                    None,
+                    format!(
+                        "pipeline cache: none kept: {} is not one clusterlab wrote (no `{MAGIC}` header), so it is left alone",
+                        path.display()
+                    ),
                 );
             }
             Ok(bytes) => match bytes.strip_prefix(header.as_bytes()) {
@@ -84,37 +90,29 @@ impl Gpu {
                 ),
             },
             Err(e) if e.missing => (None, format!("pipeline cache: {} (new)", path.display())),
-            Err(e) => return format!("pipeline cache: not used: {e}"),
+            Err(e) => return (None, format!("pipeline cache: not used: {e}")),
         };
         // SAFETY: the data is what `PipelineCache::get_data` returned on an adapter with
         // this identity (our header says so), and wgpu validates its own header behind it
         // (`fallback: true` starts empty where that fails).
         let cache = unsafe {
-            self.device
-                .create_pipeline_cache(&wgpu::PipelineCacheDescriptor {
-                    label: Some("clusterlab pipelines"),
-                    data: data.as_deref(),
-                    fallback: true,
-                })
+            device.create_pipeline_cache(&wgpu::PipelineCacheDescriptor {
+                label: Some("clusterlab pipelines"),
+                data: data.as_deref(),
+                fallback: true,
+            })
         };
-        self.disk_cache = Some(DiskCache {
+        let kept = DiskCache {
             cache,
             path,
             header,
-        });
-        note
-    }
-
-    /// The attached pipeline cache, for pipeline descriptors.
-    pub fn pipeline_cache(&self) -> Option<&wgpu::PipelineCache> {
-        self.disk_cache.as_ref().map(|d| &d.cache)
-    }
-
-    /// Save the attached cache (nothing when none is attached or the driver gives no data).
-    pub fn save_disk_cache(&self) -> Result<(), String> {
-        let Some(d) = &self.disk_cache else {
-            return Ok(());
         };
+        (Some(kept), note)
+    }
+
+    /// Save the cache (nothing when the driver gives no data).
+    pub(super) fn save(&self) -> Result<(), String> {
+        let d = self;
         let Some(data) = d.cache.get_data() else {
             return Ok(());
         };

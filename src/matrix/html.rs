@@ -4,7 +4,7 @@
 use std::fmt::Write as _;
 
 use super::columns::{self, Measured};
-use super::report::{grouped, label};
+use super::record::{grouped, label};
 use super::{CellRecord, Results};
 use crate::measure::{Interval, Verdict};
 use crate::plot::Plot;

@@ -3,7 +3,7 @@
 
 use plotters::prelude::*;
 
-use super::report::{grouped, label};
+use super::record::{grouped, label};
 use super::{CellRecord, Results};
 use crate::plot::{self, Area, FONT, Plot, log_axis, numbered_key, series_color, tick_label};
 

@@ -6,7 +6,8 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 use super::columns::{self, Measured};
-use super::{CellRecord, Results, html, plots};
+use super::record::{CellRecord, Results, grouped, label};
+use super::{html, plots};
 
 use crate::files::write_file;
 
@@ -23,42 +24,6 @@ pub fn write_report(dir: &Path, results: &Results) -> Result<(), String> {
     }
     let page = html::page(results, &plots);
     write_file(&dir.join("index.html"), page.as_bytes())
-}
-
-/// The variant with what was swept, apart from the light count (a column of its own).
-pub(crate) fn label(c: &CellRecord) -> String {
-    let extra: Vec<String> = c
-        .spec
-        .sweep
-        .iter()
-        .filter(|(k, _)| *k != "lights")
-        .map(|(k, v)| format!("{k}={v}"))
-        .collect();
-    if extra.is_empty() {
-        c.spec.variant.clone()
-    } else {
-        format!("{}[{}]", c.spec.variant, extra.join(","))
-    }
-}
-
-/// Cells grouped by scene and parameters (in order of first appearance), each group
-/// fastest first, failed cells last.
-pub(crate) fn grouped(results: &Results) -> Vec<(String, Vec<&CellRecord>)> {
-    let mut groups: Vec<(String, Vec<&CellRecord>)> = Vec::new();
-    for c in &results.cells {
-        let g = c.spec.group();
-        match groups.iter_mut().find(|(k, _)| *k == g) {
-            Some((_, v)) => v.push(c),
-            None => groups.push((g, vec![c])),
-        }
-    }
-    for (_, cells) in &mut groups {
-        cells.sort_by(|a, b| {
-            let key = |c: &CellRecord| c.total_ms().unwrap_or(f64::INFINITY);
-            key(a).total_cmp(&key(b))
-        });
-    }
-    groups
 }
 
 /// The terminal table: one row per cell, grouped by scene and parameters, with the result

@@ -4,7 +4,7 @@ use glam::DVec3;
 use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg64Mcg;
 
-use super::{Camera, FRAME_DT, Light, MeshBuilder, Motion, Scene, SceneParams};
+use super::{Camera, FRAME_DT, Light, MeshBuilder, Motion, Scene, SceneError, SceneParams};
 
 /// A built-in scene: its name, what it is for, and its default parameters.
 pub struct SceneInfo {
@@ -24,6 +24,16 @@ const fn defaults(lights: u32, radius_range: (f32, f32)) -> SceneParams {
         time: 1.0,
         spots: 0.0,
         motion: Motion::ALL,
+    }
+}
+
+/// The error for `name`, neither a built-in scene nor a glTF file: the nearest built-in name
+/// and all of them.
+pub fn unknown(name: &str) -> SceneError {
+    SceneError::Unknown {
+        name: name.to_string(),
+        near: crate::names::did_you_mean(name, SCENES.iter().map(|s| s.name)),
+        names: SCENES.iter().map(|s| s.name).collect::<Vec<_>>().join(", "),
     }
 }
 

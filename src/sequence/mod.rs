@@ -8,6 +8,7 @@
 //! scratch by a new renderer (bit for bit, and its light lists as sets), which no reuse may
 //! change.
 
+pub mod animation;
 pub mod output;
 
 use std::collections::BTreeSet;
@@ -190,9 +191,9 @@ pub struct SequenceReport {
 /// A sequence's report, and what its outputs are made from.
 pub struct SequenceRun {
     pub report: SequenceReport,
-    /// The frames of the animation (at most `output::ANIMATION_FRAMES`, evenly spread),
-    /// each the 8-bit image made smaller (`output::thumbnail`).
-    pub animation: Vec<output::Thumbnail>,
+    /// The frames of the animation (at most `animation::ANIMATION_FRAMES`, evenly spread),
+    /// each the 8-bit image made smaller (`animation::thumbnail`).
+    pub animation: Vec<animation::Thumbnail>,
     /// The last frame and its reference.
     pub last: FrameOutput,
     pub last_reference: Arc<ReferenceFrame>,
@@ -227,7 +228,7 @@ pub fn run(
     let mut renderer = Renderer::new(gpu, composer, v, &first)?;
     // Compiles what is new, untimed, and leaves no trace (`draw_without_lights`).
     renderer.draw_without_lights()?;
-    let every = spec.frames.div_ceil(output::ANIMATION_FRAMES).max(1);
+    let every = spec.frames.div_ceil(animation::ANIMATION_FRAMES).max(1);
     let mut records = Vec::with_capacity(spec.frames as usize);
     let mut animation = Vec::new();
     let mut timestamps = false;
@@ -249,7 +250,7 @@ pub fn run(
             timestamps = frame.timings.gpu_timestamps;
         }
         if i % every == 0 || i + 1 == spec.frames {
-            animation.push(output::thumbnail(&frame));
+            animation.push(animation::thumbnail(&frame));
         }
         lap(&mut frames_ms);
         let check = if spec.checks(i) {

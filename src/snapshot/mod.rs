@@ -5,6 +5,7 @@
 //! WGSL index and, in a clusterlab tree, `docs/variants.md` (`table`). The tests hold the
 //! tree's variants to the same snapshots and the same generators.
 
+mod format;
 pub mod images;
 pub mod shaders;
 pub mod table;
@@ -15,26 +16,13 @@ use crate::compose::Composer;
 use crate::files::write::{create_folder, promote, remove_own_file, write_file};
 use crate::gpu::Gpu;
 use crate::variant::LoadedVariant;
+use format::contents;
 
 /// The snapshot folder, in the working folder.
 pub const FOLDER: &str = "snapshots";
 
 /// What a pending snapshot's name adds to the reviewed one's (insta's own naming).
 const PENDING: &str = ".new";
-
-/// A snapshot file's text as insta writes it: its header, then the contents.
-fn insta_text(source: &str, description: &str, expression: &str, contents: &str) -> String {
-    format!(
-        "---\nsource: {source}\ndescription: \"{description}\"\nexpression: {expression}\n---\n{contents}\n"
-    )
-}
-
-/// The contents of a snapshot file's text: what follows its header.
-fn contents(text: &str) -> Option<&str> {
-    let rest = text.strip_prefix("---\n")?;
-    let end = rest.find("\n---\n")?;
-    Some(&rest[end + "\n---\n".len()..])
-}
 
 /// What one snapshot run found.
 #[derive(Default)]

@@ -37,7 +37,7 @@ impl Shader {
 
     /// The snapshot file's text, as insta writes it.
     pub fn file(&self) -> String {
-        super::insta_text(
+        super::format::insta_text(
             "tests/compose.rs",
             &format!("pass `{}`", self.pass),
             "wgsl",

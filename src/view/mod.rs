@@ -14,6 +14,8 @@ pub mod session;
 pub mod watch;
 mod window;
 
+pub use window::{missing_display, run};
+
 use std::path::PathBuf;
 
 /// What `view` was asked for.
@@ -30,29 +32,4 @@ pub struct ViewOptions {
     pub out: PathBuf,
     /// Inputs to play, after which the viewer exits.
     pub script: Option<PathBuf>,
-}
-
-/// Why there is no window to open, if there is none: on Linux and the BSDs a window needs
-/// an X11 or Wayland display.
-pub fn missing_display() -> Option<String> {
-    let unix_desktop = cfg!(all(
-        unix,
-        not(target_os = "macos"),
-        not(target_os = "android")
-    ));
-    let display = ["DISPLAY", "WAYLAND_DISPLAY"]
-        .iter()
-        .any(|v| crate::environment::var_os(v).is_some_and(|d| !d.is_empty()));
-    (unix_desktop && !display).then(|| {
-        "`view` opens a window and this machine has no display (neither DISPLAY nor WAYLAND_DISPLAY is set): run it under a virtual one, `xvfb-run -a clusterlab view ...` (Debian's package xvfb); every other command needs none".to_string()
-    })
-}
-
-/// Open the window and run until it is closed or the script ends: `Ok(false)` when a
-/// script step failed.
-pub fn run(options: ViewOptions, gpu: &crate::gpu::Gpu) -> Result<bool, String> {
-    if let Some(why) = missing_display() {
-        return Err(why);
-    }
-    window::run(options, gpu)
 }

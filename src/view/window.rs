@@ -18,7 +18,7 @@ use super::session::{Session, Setup};
 use super::watch::{Changed, Watch};
 use crate::gpu::Gpu;
 use crate::scene::{CameraPose, FRAME_DT};
-use crate::sequence::output::{ANIMATION_FRAMES, Thumbnail};
+use crate::sequence::animation::{ANIMATION_FRAMES, Thumbnail};
 use crate::variant::{DebugView, SAMPLE_COUNTS};
 
 /// A change on disk woke the loop.
@@ -30,7 +30,32 @@ const MAX_FLIGHT_DT: f32 = 0.1;
 /// Width of the panel, points.
 const PANEL_WIDTH: f32 = 330.0;
 
+/// Why there is no window to open, if there is none: on Linux and the BSDs a window needs
+/// an X11 or Wayland display.
+pub fn missing_display() -> Option<String> {
+    let unix_desktop = cfg!(all(
+        unix,
+        not(target_os = "macos"),
+        not(target_os = "android")
+    ));
+    let display = ["DISPLAY", "WAYLAND_DISPLAY"]
+        .iter()
+        .any(|v| crate::environment::var_os(v).is_some_and(|d| !d.is_empty()));
+    (unix_desktop && !display).then(|| {
+        "`view` opens a window and this machine has no display (neither DISPLAY nor WAYLAND_DISPLAY is set): run it under a virtual one, `xvfb-run -a clusterlab view ...` (Debian's package xvfb); every other command needs none".to_string()
+    })
+}
+
+/// Open the window and run until it is closed or the script ends: `Ok(false)` when a
+/// script step failed.
 pub fn run(options: ViewOptions, gpu: &Gpu) -> Result<bool, String> {
+    if let Some(why) = missing_display() {
+        return Err(why);
+    }
+    open(options, gpu)
+}
+
+fn open(options: ViewOptions, gpu: &Gpu) -> Result<bool, String> {
     let steps = options
         .script
         .as_deref()
@@ -478,7 +503,7 @@ impl App<'_, '_> {
         {
             rec.last = self.session.frames;
             rec.frames
-                .push(crate::sequence::output::thumbnail(&shown.frame));
+                .push(crate::sequence::animation::thumbnail(&shown.frame));
             if let Some(left) = &mut rec.left {
                 *left = left.saturating_sub(1);
             }
@@ -499,7 +524,7 @@ impl App<'_, '_> {
         let stem =
             crate::run::safe_file_name(&format!("{}@{}", shown.variant.name, shown.scene.name));
         let path = self.options.out.join(format!("{stem}.view.gif"));
-        let written = crate::sequence::output::gif(&rec.frames, FRAME_DT).and_then(|gif| {
+        let written = crate::sequence::animation::gif(&rec.frames, FRAME_DT).and_then(|gif| {
             crate::files::write::create_folder(&self.options.out)?;
             crate::files::write_file(&path, &gif)
         });

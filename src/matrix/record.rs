@@ -1,0 +1,426 @@
+//! What a matrix run records: each cell (its spec, figures, images and rank), the run's
+//! provenance and cost, and the results file that holds them.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+use serde::{Deserialize, Serialize};
+use serde_json::{Map, Value};
+
+use crate::gpu::{AdapterSummary, PipelineStats};
+use crate::measure::{Interval, Stop};
+use crate::metrics::ErrorMetrics;
+use crate::render::FrameStats;
+use crate::run::{CellCost, RunError};
+use crate::sequence::SequenceSummary;
+
+use super::plan::{CellSpec, ParamsRecord};
+
+/// Everything a matrix run wrote about one cell.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct CellRecord {
+    #[serde(flatten)]
+    pub spec: CellSpec,
+    /// Why the cell failed; absent when it ran.
+    pub failure: Option<String>,
+    /// The adapter, or the limits `--limits` chose, lacks what the cell needs (`failure`
+    /// names what): the cell is counted as refused, not failed, and the run still succeeds.
+    #[serde(default)]
+    pub refused: bool,
+    /// Median milliseconds per pass over the timed frames, with `total`.
+    pub gpu_ms: Map<String, Value>,
+    /// [min, max] milliseconds per pass over the timed frames.
+    pub gpu_ms_spread: Map<String, Value>,
+    /// [lo, hi] milliseconds per pass: the median's confidence interval at
+    /// `interval_level` (`measure::median_interval`); empty with too few frames for one.
+    #[serde(default)]
+    pub gpu_ms_interval: Map<String, Value>,
+    /// The probability that each interval holds its median (at least `measure::LEVEL`).
+    #[serde(default)]
+    pub interval_level: Option<f64>,
+    /// Why the cell stopped timing frames.
+    #[serde(default)]
+    pub timing_stop: Option<Stop>,
+    pub timing_source: Option<String>,
+    pub frames: u32,
+    pub wall_ms: Option<f64>,
+    pub reference_ms: Option<f64>,
+    pub error: Option<ErrorMetrics>,
+    pub stats: Option<FrameStats>,
+    /// Distance from perfect culling (`efficiency`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub efficiency: Option<crate::efficiency::Efficiency>,
+    /// Image files, relative to the results folder.
+    pub images: Images,
+    /// Naive forward's total time over this cell's, on the same scene and parameters.
+    pub speedup_vs_naive: Option<f64>,
+    /// [lo, hi] of that speed-up, from the two times' intervals (absent where either has
+    /// none); a range holding 1 is a tie.
+    #[serde(default)]
+    pub speedup_interval: Option<[f64; 2]>,
+    /// On the time-error Pareto front of its scene and parameters: no other cell is both
+    /// faster (their intervals separate) and at least as accurate.
+    pub pareto: bool,
+    /// Where its time stands in its group: the fastest, tied with it, or slower.
+    #[serde(default)]
+    pub rank: Option<Rank>,
+    /// The run that made this record: its index in `provenance` (0 for this run's own
+    /// cells; a reused or merged cell keeps its own run's).
+    #[serde(default)]
+    pub run: usize,
+    /// The variant claimed to be within 1 LSB of the reference on its adapter
+    /// (`run::exact_claim`): a record over it that says it passed is refused.
+    #[serde(default)]
+    pub exact_claim: bool,
+    /// What the scene's loader left out or chose, and where the depth margin blunts
+    /// z-culling (`run::margin_note`).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub notes: Vec<String>,
+    /// Made with every depth marking read moved this many units in the last place
+    /// (`CLUSTERLAB_PERTURB_DEPTH_ULPS`, a test mode; 0 for a stock run).
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub perturbed_depth_ulps: u32,
+    /// Taken unchanged from an earlier run (`--reuse`): that run's date and revision.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reused_from: Option<String>,
+    /// Change against `--baseline` (a cell with the same id there).
+    pub vs_baseline: Option<BaselineChange>,
+    /// Passes the last timed frame skipped (not needed by this scene and variant).
+    #[serde(default)]
+    pub skipped_passes: Vec<String>,
+    /// Untimed frames run before the timed ones.
+    #[serde(default)]
+    pub warmup_frames: u32,
+    /// A frame without lights was drawn first, untimed (frames by budget; see
+    /// `measure::Budget`).
+    #[serde(default)]
+    pub frame_without_lights: bool,
+    /// Frames set aside because other processes took the cores (`measure::CpuClock`).
+    #[serde(default)]
+    pub disturbed_frames: u32,
+    /// Where the cell's wall-clock time went (absent for a failed cell).
+    #[serde(default)]
+    pub cost_ms: Option<CellCost>,
+    /// A sequence cell's figures (its times are of the frames after the first, its error
+    /// the worst checked frame's, its counters and images the last frame's).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sequence_summary: Option<SequenceSummary>,
+}
+
+/// Where a cell's time stands in its group (scene and parameters), told apart only where
+/// the intervals separate (`measure::Interval::compare`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Rank {
+    /// The lowest median of the group's cells with an interval.
+    Fastest,
+    /// Its interval overlaps the fastest's: they cannot be told apart.
+    TiedWithFastest,
+    /// Its interval lies wholly above the fastest's.
+    Slower,
+    /// Timed too few times for an interval (a frame of a second or more is timed once):
+    /// it is compared with no other.
+    TooFewFrames,
+}
+
+impl Rank {
+    pub fn label(self) -> &'static str {
+        match self {
+            Rank::Fastest => "fastest",
+            Rank::TiedWithFastest => "tie",
+            Rank::Slower => "slower",
+            Rank::TooFewFrames => "few frames",
+        }
+    }
+}
+
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+pub struct Images {
+    pub image: Option<String>,
+    pub heat: Option<String>,
+    /// Lights per cluster (clustered variants, cells without sweeps).
+    pub debug: Option<String>,
+    /// A sequence's animation (`images/NAME.gif`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub animation: Option<String>,
+    /// A sequence's time per pass over its frames (`plots/NAME.frames.svg`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub frames_plot: Option<String>,
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct BaselineChange {
+    /// This run's total GPU time over the baseline's.
+    pub time_ratio: f64,
+    pub max_abs_8bit_change: i64,
+    pub rmse_8bit_change: f64,
+}
+
+impl CellRecord {
+    pub fn ok(&self) -> bool {
+        self.failure.is_none()
+    }
+
+    /// Median total GPU milliseconds.
+    pub fn total_ms(&self) -> Option<f64> {
+        self.gpu_ms.get("total").and_then(Value::as_f64)
+    }
+
+    /// The total's confidence interval (`gpu_ms_interval.total`).
+    pub fn total_interval(&self) -> Option<Interval> {
+        let pair = self.gpu_ms_interval.get("total")?.as_array()?;
+        Some(Interval {
+            lo: pair.first()?.as_f64()?,
+            hi: pair.get(1)?.as_f64()?,
+            level: self.interval_level?,
+        })
+    }
+
+    /// A cell that did not run: refused when the adapter cannot run it (`RunError::refused`).
+    pub(super) fn not_run(spec: CellSpec, e: &RunError) -> Self {
+        let mut record = Self::failed(spec, e.to_string());
+        record.refused = e.refused();
+        record
+    }
+
+    pub(super) fn failed(spec: CellSpec, why: String) -> Self {
+        Self {
+            spec,
+            failure: Some(why),
+            refused: false,
+            gpu_ms: Map::new(),
+            gpu_ms_spread: Map::new(),
+            gpu_ms_interval: Map::new(),
+            interval_level: None,
+            timing_stop: None,
+            timing_source: None,
+            frames: 0,
+            wall_ms: None,
+            reference_ms: None,
+            error: None,
+            stats: None,
+            efficiency: None,
+            images: Images::default(),
+            speedup_vs_naive: None,
+            speedup_interval: None,
+            pareto: false,
+            rank: None,
+            run: 0,
+            reused_from: None,
+            exact_claim: false,
+            notes: Vec::new(),
+            perturbed_depth_ulps: 0,
+            vs_baseline: None,
+            skipped_passes: Vec::new(),
+            warmup_frames: 0,
+            frame_without_lights: false,
+            disturbed_frames: 0,
+            cost_ms: None,
+            sequence_summary: None,
+        }
+    }
+}
+
+/// Where and how results were made.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct Provenance {
+    pub tool: String,
+    pub date: String,
+    pub git_revision: String,
+    /// The working tree had uncommitted changes.
+    pub git_dirty: bool,
+    pub adapter: AdapterSummary,
+    pub hdr_format: String,
+    pub timing_source: String,
+    pub command: Vec<String>,
+    /// `K/N` when the run was one shard of a study.
+    pub shard: Option<String>,
+    /// SHA-256 of each variant file's text, by variant name.
+    pub variant_files: BTreeMap<String, VariantFile>,
+    /// Built-in scene generators and their defaults, by name.
+    pub scenes: BTreeMap<String, ParamsRecord>,
+    /// How many frames each cell rendered: an exact count, or by budget.
+    #[serde(default)]
+    pub frames: String,
+    /// What the run spent and where (absent in results written before it was recorded).
+    #[serde(default)]
+    pub cost: Option<RunCost>,
+    /// LP_NUM_THREADS: the threads a software GPU split each pass among (absent when unset,
+    /// one per core, and in results written before it was recorded).
+    #[serde(default)]
+    pub software_gpu_threads: Option<String>,
+    /// The shader folder composed from and its content's hash.
+    #[serde(default)]
+    pub shaders: crate::compose::ShaderTree,
+    /// Every environment variable that can change a figure, as it was
+    /// (`environment::recorded`).
+    #[serde(default)]
+    pub environment: Vec<String>,
+    /// `CLUSTERLAB_PERTURB_DEPTH_ULPS`: every depth marking read was moved by this many
+    /// units in the last place (0: a stock run).
+    #[serde(default)]
+    pub perturbed_depth_ulps: u32,
+}
+
+/// What a run spent: wall-clock seconds over its cells, split as each cell's cost is, and
+/// what compiling pipelines once per run did.
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+pub struct RunCost {
+    pub wall_s: f64,
+    /// Each cell's cost, summed.
+    pub cells_ms: CellCost,
+    pub pipelines: PipelineStats,
+    pub warmup_frames: u32,
+    pub timed_frames: u32,
+    /// Distinct reference frames, and the f64 shadings they were made from (variants that
+    /// differ only in post effects, or whose rasterisations agree bit for bit, share one).
+    #[serde(default)]
+    pub reference_frames: usize,
+    #[serde(default)]
+    pub reference_shadings: usize,
+    /// Cells taken unchanged from an earlier run (`--reuse`); their costs are not counted.
+    #[serde(default)]
+    pub reused_cells: usize,
+}
+
+impl RunCost {
+    /// One line for the terminal.
+    pub fn line(&self) -> String {
+        let c = &self.cells_ms;
+        let s = |ms: f64| format!("{:.0} s", ms / 1e3);
+        let reused = match self.reused_cells {
+            0 => String::new(),
+            n => format!(" ({n} cells reused from an earlier run)"),
+        };
+        format!(
+            "{:.0} s over the cells{reused}: frames {} ({:.0}% of the run; {} timed, {} untimed), counters {}, reference {} ({} frames from {} shadings), images {}, set-up {}; {} pipelines compiled, {} reused ({:.1} s compiling)",
+            self.wall_s,
+            s(c.frames),
+            100.0 * c.frames / (self.wall_s * 1e3).max(1e-9),
+            self.timed_frames,
+            self.warmup_frames,
+            s(c.counters),
+            s(c.reference),
+            self.reference_frames,
+            self.reference_shadings,
+            s(c.images),
+            s(c.setup),
+            self.pipelines.created,
+            self.pipelines.reused,
+            self.pipelines.creation_ms / 1e3
+        )
+    }
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct VariantFile {
+    pub path: PathBuf,
+    pub sha256: String,
+}
+
+/// The contents of results.json.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct Results {
+    /// One per run that contributed cells (several after `merge`).
+    pub provenance: Vec<Provenance>,
+    pub cells: Vec<CellRecord>,
+    /// The cells this run took unchanged from an earlier one (`--reuse`), by id.
+    #[serde(skip)]
+    pub reused: Vec<String>,
+}
+
+impl Results {
+    /// Cells that failed, leaving out those the adapter refused.
+    pub fn failed(&self) -> usize {
+        self.cells.iter().filter(|c| !c.ok() && !c.refused).count()
+    }
+
+    pub fn refused(&self) -> usize {
+        self.cells.iter().filter(|c| c.refused).count()
+    }
+
+    /// "N cells, F failed" and, where the adapter refused some, "R refused by the adapter".
+    pub fn tally(&self) -> String {
+        let refused = match self.refused() {
+            0 => String::new(),
+            n => format!(", {n} refused by the adapter"),
+        };
+        format!(
+            "{} cells, {} failed{refused}",
+            self.cells.len(),
+            self.failed()
+        )
+    }
+
+    /// Read `results.json` (a file, or a folder holding one), and check every figure in it
+    /// (`merge` and `--baseline` compute with them).
+    pub fn load(path: &Path) -> Result<Self, String> {
+        let file = if path.is_dir() {
+            path.join("results.json")
+        } else {
+            path.to_path_buf()
+        };
+        let text = crate::files::read_text(&file, crate::files::read::RESULTS).map_err(|e| {
+            if e.missing {
+                format!(
+                    "{}: no such results file (give a matrix output folder or its results.json)",
+                    path.display()
+                )
+            } else {
+                e.to_string()
+            }
+        })?;
+        let results: Results = serde_json::from_str(&text).map_err(|e| {
+            format!(
+                "{}:{}:{}: not a clusterlab results file: {e}",
+                file.display(),
+                e.line(),
+                e.column()
+            )
+        })?;
+        results
+            .check()
+            .map_err(|e| format!("{}: {e}", file.display()))?;
+        Ok(results)
+    }
+}
+
+/// The variant with what was swept, apart from the light count (a column of its own).
+pub fn label(c: &CellRecord) -> String {
+    let extra: Vec<String> = c
+        .spec
+        .sweep
+        .iter()
+        .filter(|(k, _)| *k != "lights")
+        .map(|(k, v)| format!("{k}={v}"))
+        .collect();
+    if extra.is_empty() {
+        c.spec.variant.clone()
+    } else {
+        format!("{}[{}]", c.spec.variant, extra.join(","))
+    }
+}
+
+/// Cells grouped by scene and parameters (in order of first appearance), each group
+/// fastest first, failed cells last.
+pub fn grouped(results: &Results) -> Vec<(String, Vec<&CellRecord>)> {
+    let mut groups: Vec<(String, Vec<&CellRecord>)> = Vec::new();
+    for c in &results.cells {
+        let g = c.spec.group();
+        match groups.iter_mut().find(|(k, _)| *k == g) {
+            Some((_, v)) => v.push(c),
+            None => groups.push((g, vec![c])),
+        }
+    }
+    for (_, cells) in &mut groups {
+        cells.sort_by(|a, b| {
+            let key = |c: &CellRecord| c.total_ms().unwrap_or(f64::INFINITY);
+            key(a).total_cmp(&key(b))
+        });
+    }
+    groups
+}
+
+fn is_zero(n: &u32) -> bool {
+    *n == 0
+}
