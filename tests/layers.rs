@@ -100,6 +100,39 @@ impl Crate {
         found
     }
 
+    /// Calls of methods defined away from their type: a file that defines type `T` and
+    /// calls `.m(` (or `Self::m(`, `T::m(`) where another file's `impl T` block defines `m`
+    /// depends on that file: (caller, the file with the block, what is called).
+    fn method_calls(&self) -> Vec<(ModPath, ModPath, String)> {
+        let mut found = Vec::new();
+        for (file, code) in &self.files {
+            for (ty, methods) in impl_blocks(code) {
+                let defining: Vec<&ModPath> = self
+                    .files
+                    .iter()
+                    .filter(|(_, c)| defines_type(c, &ty))
+                    .map(|(m, _)| m)
+                    .collect();
+                let [home] = defining[..] else { continue };
+                if home == file {
+                    continue;
+                }
+                let caller = &self.files[home];
+                for m in methods {
+                    let calls = [
+                        format!(".{m}("),
+                        format!("Self::{m}("),
+                        format!("{ty}::{m}("),
+                    ];
+                    if calls.iter().any(|c| caller.contains(c.as_str())) {
+                        found.push((home.clone(), file.clone(), format!("{ty}::{m}")));
+                    }
+                }
+            }
+        }
+        found
+    }
+
     fn children(&self, module: &ModPath) -> Vec<String> {
         self.files
             .keys()
@@ -253,7 +286,9 @@ fn path_starts(code: &str, children: &[String]) -> Vec<(usize, ModPath)> {
             begin -= 1;
         }
         let word = &code[begin..end];
-        let first = begin < 2 || &code[begin - 2..begin] != "::";
+        // Not a later part of a path, nor a visibility (`pub(in crate::render)`).
+        let first =
+            (begin < 2 || &code[begin - 2..begin] != "::") && !code[..begin].ends_with("(in ");
         if first
             && !word.is_empty()
             && (matches!(word, "crate" | "super" | "self") || children.iter().any(|c| c == word))
@@ -307,6 +342,65 @@ fn inline_modules(code: &str) -> Vec<(String, usize, usize)> {
         }
     }
     found
+}
+
+/// The inherent `impl` blocks of `code` (not `impl Trait for T`): each type's name with
+/// the methods the block defines.
+fn impl_blocks(code: &str) -> Vec<(String, Vec<String>)> {
+    let mut found = Vec::new();
+    for (at, _) in code.match_indices("\nimpl") {
+        let head_end = code[at..].find('{').map_or(code.len(), |i| at + i);
+        let head = &code[at + "\nimpl".len()..head_end];
+        if head.contains(" for ") {
+            continue;
+        }
+        // `impl<'g> Renderer<'g>`: the name after any generic parameters.
+        let head = head.trim_start();
+        let head = match head.strip_prefix('<') {
+            Some(rest) => &rest[rest.find('>').map_or(0, |i| i + 1)..],
+            None => head,
+        };
+        let name: String = head
+            .trim_start()
+            .chars()
+            .take_while(|c| c.is_ascii_alphanumeric() || *c == '_')
+            .collect();
+        if name.is_empty() {
+            continue;
+        }
+        let body_end = code[head_end..]
+            .find("\n}")
+            .map_or(code.len(), |i| head_end + i);
+        let methods = code[head_end..body_end]
+            .lines()
+            .filter_map(|l| {
+                let l = l.strip_prefix("    ")?;
+                let l = l.split("fn ").nth(1).filter(|_| {
+                    let before = l.split("fn ").next().unwrap_or("");
+                    before.trim().is_empty()
+                        || before.trim().starts_with("pub")
+                        || before.trim() == "const"
+                })?;
+                Some(
+                    l.chars()
+                        .take_while(|c| c.is_ascii_alphanumeric() || *c == '_')
+                        .collect::<String>(),
+                )
+            })
+            .collect();
+        found.push((name, methods));
+    }
+    found
+}
+
+/// Whether `code` declares type `name` (`struct name`, `enum name`).
+fn defines_type(code: &str, name: &str) -> bool {
+    ["struct ", "enum "].iter().any(|kind| {
+        code.match_indices(&format!("{kind}{name}")).any(|(i, _)| {
+            let after = code[i + kind.len() + name.len()..].chars().next();
+            !after.is_some_and(|c| c.is_ascii_alphanumeric() || c == '_')
+        })
+    })
 }
 
 /// Whether `name` occurs as a word in `code` outside the statement that holds `start`, and
@@ -448,7 +542,7 @@ fn no_import_climbs_a_layer() {
         ["crate::matrix::run"]
     );
     assert_eq!(
-        planted(&files("use crate::{common::X, matrix::{run}};"), "files"),
+        planted(&files("use crate::{files::read, matrix::{run}};"), "files"),
         ["crate::matrix::run"],
         "a nested group"
     );
@@ -489,7 +583,7 @@ fn no_import_climbs_a_layer() {
 fn cycles(krate: &Crate) -> Vec<Vec<String>> {
     let modules: Vec<&ModPath> = krate.files.keys().collect();
     let index = |m: &ModPath| modules.iter().position(|n| *n == m).unwrap();
-    let edges: Vec<Vec<(usize, String)>> = modules
+    let mut edges: Vec<Vec<(usize, String)>> = modules
         .iter()
         .map(|m| {
             krate
@@ -499,6 +593,9 @@ fn cycles(krate: &Crate) -> Vec<Vec<String>> {
                 .collect()
         })
         .collect();
+    for (from, to, written) in krate.method_calls() {
+        edges[index(&from)].push((index(&to), written));
+    }
     // Two files are on one cycle when each reaches the other.
     let reach: Vec<Vec<bool>> = (0..modules.len())
         .map(|from| {
@@ -567,6 +664,21 @@ fn no_import_cycle() {
         ),
     ]);
     assert_eq!(cycles(&planted).len(), 1, "siblings through a re-export");
+    let planted = Crate::of(&[
+        (
+            "render/mod.rs",
+            "mod built; pub struct Renderer; impl Renderer { fn run(&self) { self.build() } }",
+        ),
+        (
+            "render/built.rs",
+            "use super::Renderer;\nimpl Renderer {\n    pub(super) fn build(&self) {}\n}\n",
+        ),
+    ]);
+    assert_eq!(
+        cycles(&planted).len(),
+        1,
+        "a method defined away from its type, called home"
+    );
     let fine = Crate::of(&[
         (
             "matrix/mod.rs",

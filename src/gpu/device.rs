@@ -408,17 +408,6 @@ impl Gpu {
             None => Ok(()),
         }
     }
-
-    /// After a failure: keep the device when `check_health` passes, else put a new one in
-    /// its place. Returns what was wrong with the old one (None when it was kept), or why no
-    /// new one could be opened.
-    pub fn renew_if_unusable(&mut self) -> Result<Option<GpuError>, GpuError> {
-        let Err(broken) = self.check_health() else {
-            return Ok(None);
-        };
-        *self = self.reopen()?;
-        Ok(Some(broken))
-    }
 }
 
 /// The adapter's limits, with the largest buffer lowered to `CLUSTERLAB_MAX_BUFFER_SIZE`

@@ -9,6 +9,7 @@ mod device;
 pub mod disk_cache;
 mod error;
 pub mod expect;
+mod health;
 mod pipeline_store;
 mod readback;
 mod timing;

@@ -2,7 +2,7 @@
 //! provenance and cost, and the results file that holds them.
 
 use std::collections::BTreeMap;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use serde::{Deserialize, Serialize};
 use serde_json::{Map, Value};
@@ -350,38 +350,6 @@ impl Results {
             self.cells.len(),
             self.failed()
         )
-    }
-
-    /// Read `results.json` (a file, or a folder holding one), and check every figure in it
-    /// (`merge` and `--baseline` compute with them).
-    pub fn load(path: &Path) -> Result<Self, String> {
-        let file = if path.is_dir() {
-            path.join("results.json")
-        } else {
-            path.to_path_buf()
-        };
-        let text = crate::files::read_text(&file, crate::files::read::RESULTS).map_err(|e| {
-            if e.missing {
-                format!(
-                    "{}: no such results file (give a matrix output folder or its results.json)",
-                    path.display()
-                )
-            } else {
-                e.to_string()
-            }
-        })?;
-        let results: Results = serde_json::from_str(&text).map_err(|e| {
-            format!(
-                "{}:{}:{}: not a clusterlab results file: {e}",
-                file.display(),
-                e.line(),
-                e.column()
-            )
-        })?;
-        results
-            .check()
-            .map_err(|e| format!("{}: {e}", file.display()))?;
-        Ok(results)
     }
 }
 

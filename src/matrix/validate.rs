@@ -11,6 +11,38 @@ use super::{CellRecord, Results};
 const MAX_MS: f64 = 1e9;
 
 impl Results {
+    /// Read `results.json` (a file, or a folder holding one), and check every figure in it
+    /// (`merge` and `--baseline` compute with them).
+    pub fn load(path: &Path) -> Result<Self, String> {
+        let file = if path.is_dir() {
+            path.join("results.json")
+        } else {
+            path.to_path_buf()
+        };
+        let text = crate::files::read_text(&file, crate::files::read::RESULTS).map_err(|e| {
+            if e.missing {
+                format!(
+                    "{}: no such results file (give a matrix output folder or its results.json)",
+                    path.display()
+                )
+            } else {
+                e.to_string()
+            }
+        })?;
+        let results: Results = serde_json::from_str(&text).map_err(|e| {
+            format!(
+                "{}:{}:{}: not a clusterlab results file: {e}",
+                file.display(),
+                e.line(),
+                e.column()
+            )
+        })?;
+        results
+            .check()
+            .map_err(|e| format!("{}: {e}", file.display()))?;
+        Ok(results)
+    }
+
     /// Check the figures of every cell, and that the file says which run made it.
     pub fn check(&self) -> Result<(), String> {
         if self.provenance.is_empty() {

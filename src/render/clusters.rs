@@ -4,14 +4,69 @@
 use bytemuck::{Pod, Zeroable};
 use wgpu::util::DeviceExt;
 
+use crate::compose::ComposedPass;
 use crate::cpu::clusters::ClusterLists;
-use crate::cpu::zbin::ZBins;
 use crate::gpu::{Gpu, GpuError, read_buffer};
-use crate::render::culling::ProxyLayout;
+use crate::render::reflect::BufferLayout;
 use crate::render::reflect::BufferSizes;
-use crate::render::stats::AssignmentWork;
 use crate::variant::CullingMethod;
 use crate::variant::{Clusters, Culling, ListUpdate};
+use serde::Serialize;
+
+/// Rasterised binning's buffer layouts as its shader root declares them, read off its naga
+/// module: a proxy's bytes (`light_proxies`' stride, the draw's instance stride too), the
+/// bytes of `ProxyDraw`, and where in it the scatter's dispatch starts (`scatter_x`).
+#[derive(Clone, Copy, Debug)]
+pub struct ProxyLayout {
+    pub proxy_bytes: u64,
+    pub draw_bytes: u64,
+    pub scatter_at: u64,
+}
+
+impl ProxyLayout {
+    /// The layout of light assignment pass `pass`; `None` where it declares no proxies.
+    pub fn of(pass: &ComposedPass) -> Option<Self> {
+        let draw = BufferLayout::of(pass, "proxy_draw")?;
+        Some(Self {
+            proxy_bytes: BufferLayout::of(pass, "light_proxies")?.element_bytes,
+            draw_bytes: draw.element_bytes,
+            scatter_at: draw.offset("scatter_x")?,
+        })
+    }
+}
+
+/// The work of a frame's light assignment, the same on every machine (`clustering/work.wesl`):
+/// what a change to assignment is judged by where its time measures a CPU.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, serde::Deserialize)]
+pub struct AssignmentWork {
+    /// Bounds tests of a light against one cluster, tile or big tile.
+    pub light_tests: u64,
+    /// Bounds tests of a light BVH node against a cluster.
+    pub node_tests: u64,
+    /// Light-list entries stored (z-binning: tile-mask bits set).
+    pub entries_written: u64,
+    /// Lights whose range holds no cluster, dropped before any per-cluster work.
+    pub lights_rejected: u64,
+}
+
+impl AssignmentWork {
+    /// Light and node tests per light of a frame of `lights` lights.
+    pub fn tests_per_light(&self, lights: usize) -> f64 {
+        (self.light_tests + self.node_tests) as f64 / lights.max(1) as f64
+    }
+}
+
+impl std::ops::Add for AssignmentWork {
+    type Output = Self;
+    fn add(self, o: Self) -> Self {
+        AssignmentWork {
+            light_tests: self.light_tests + o.light_tests,
+            node_tests: self.node_tests + o.node_tests,
+            entries_written: self.entries_written + o.entries_written,
+            lights_rejected: self.lights_rejected + o.lights_rejected,
+        }
+    }
+}
 
 /// Mirrors `ClusterRange` in `shaders/clustering/clusters.wesl`.
 #[repr(C)]
@@ -578,56 +633,6 @@ impl ClusterBuffers {
                 GpuDepthMask { range, mask: m }
             })
             .collect())
-    }
-
-    /// Z-binning's sorted lights, bins and tile masks as the GPU holds them.
-    pub fn read_zbins(&self, gpu: &Gpu) -> Result<ZBins, GpuError> {
-        crate::render::culling::read_zbins(self, gpu)
-    }
-
-    /// Lights in each cluster's list (z-binning: lights a pixel of each tile and bin walks).
-    pub fn read_counts(&self, gpu: &Gpu) -> Result<Vec<u32>, GpuError> {
-        if !self.method.builds_lists() {
-            return Ok(self.read_zbins(gpu)?.counts());
-        }
-        let n = self.declared_bytes("light_counts", self.clusters as u64);
-        self.read_named(gpu, "light_counts", Some(n))
-    }
-
-    /// The light lists as the GPU holds them (z-binning: each tile and bin's walk, sorted).
-    pub fn read_lists(&self, gpu: &Gpu) -> Result<ClusterLists, GpuError> {
-        if !self.method.builds_lists() {
-            return Ok(self.read_zbins(gpu)?.lists());
-        }
-        let n = self.clusters as u64;
-        let counts = self.read_named(
-            gpu,
-            "light_counts",
-            Some(self.declared_bytes("light_counts", n)),
-        )?;
-        let offsets = self.read_named(
-            gpu,
-            "light_offsets",
-            Some(self.declared_bytes("light_offsets", n)),
-        )?;
-        // Lists lie anywhere in the index buffer (two-level places them as it goes, Patch
-        // moves the ones it changes): up to the end of the last.
-        let end = counts
-            .iter()
-            .zip(&offsets)
-            .map(|(&c, &o)| self.declared_bytes("light_indices", o as u64 + c as u64))
-            .max()
-            .unwrap_or(0);
-        let used = end.min(self.named("light_indices").size());
-        let indices = self.read_named(gpu, "light_indices", Some(used))?;
-        let stats = self.read_stats(gpu)?;
-        Ok(ClusterLists {
-            max_per_cluster: counts.iter().copied().max().unwrap_or(0),
-            counts,
-            offsets,
-            indices,
-            dropped: stats.dropped as u64,
-        })
     }
 
     /// Upload lists built on the CPU; returns false when the index buffer must grow first.

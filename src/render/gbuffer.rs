@@ -1,6 +1,6 @@
 //! G-buffer targets per layout. Mirrors `shaders/packing/gbuffer.wesl`.
 
-use super::resources::{F32_BITS_FORMAT, Target};
+use super::targets::{F32_BITS_FORMAT, Target};
 use crate::gpu::Gpu;
 use crate::variant::{GBufferLayout, ShadingModel, Variant};
 

@@ -49,8 +49,11 @@ fn check_samples(gpu: &Gpu, variant: &Variant) -> Result<(), RenderError> {
         return Ok(());
     }
     let mut targets = vec![
-        ("depth buffer", super::DepthSetup::of(variant).format),
-        ("raster truth", super::F32_BITS_FORMAT),
+        (
+            "depth buffer",
+            super::targets::DepthSetup::of(variant).format,
+        ),
+        ("raster truth", super::targets::F32_BITS_FORMAT),
     ];
     if variant.pipeline.is_deferred() {
         targets.extend(
@@ -64,8 +67,8 @@ fn check_samples(gpu: &Gpu, variant: &Variant) -> Result<(), RenderError> {
         targets.push(("HDR target", gpu.hdr_format));
     }
     if variant.depth_prepass {
-        targets.push(("shading depth", super::resources::SHADING_DEPTH_FORMAT));
-        targets.push(("sample owner", super::resources::SHADING_DEPTH_FORMAT));
+        targets.push(("shading depth", super::targets::SHADING_DEPTH_FORMAT));
+        targets.push(("sample owner", super::targets::SHADING_DEPTH_FORMAT));
     }
     Ok(gpu.check_samples(samples, &targets)?)
 }

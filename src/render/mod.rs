@@ -21,21 +21,25 @@ mod passes;
 mod post;
 mod raster;
 mod readback;
+mod redo;
 mod reflect;
 mod resources;
 mod reuse;
 mod sampling;
 mod screen;
 mod skips;
+mod state;
 mod stats;
+mod targets;
 mod truth;
 
-pub use clusters::{ClusterBuffers, ClusterRange, ClusterStats, GpuDepthMask};
+pub use clusters::{AssignmentWork, ClusterBuffers, ClusterRange, ClusterStats, GpuDepthMask};
 pub use error::RenderError;
 pub use passes::{PassRunner, shader_module};
-pub use resources::{DepthSetup, F32_BITS_FORMAT, LDR_FORMAT, SceneBuffers, ViewUniform};
+pub use resources::{SceneBuffers, ViewUniform};
 pub use reuse::FrameChange;
-pub use stats::{AssignmentWork, FrameStats, PixelCounters};
+pub use stats::{FrameStats, PixelCounters};
+pub use targets::{DepthSetup, F32_BITS_FORMAT, LDR_FORMAT};
 pub use truth::raster_truth;
 
 use std::time::Instant;
@@ -44,12 +48,13 @@ use crate::compose::{self, ComposedPass, Composer, FramePlan, Pass, PassId};
 use crate::gpu::{Gpu, GpuError, TimestampSlot, Timings, read_texture};
 use crate::scene::Scene;
 use crate::variant::{Assignment, Variant};
-use built::{BuiltPass, Pipelines};
+use built::{BuiltPasses, Pipelines};
 use lists::{CpuAssignment, Fit};
 use post::PostChain;
+use redo::{Held, Lists, Redo};
 use resources::FrameResources;
-use reuse::{Held, Lists, Redo};
 use skips::Skips;
+use state::FrameState;
 
 /// What one frame produced.
 #[derive(Clone, Debug)]
@@ -111,46 +116,19 @@ pub fn variant_needs(
     needs::Needs::of(&passes, (targets.0, &targets.1))
 }
 
-/// A variant ready to render a scene: composed passes, pipelines and resources.
+/// A variant ready to render a scene. Its state, by owner: the frame's passes in order
+/// (`plan`), the resources they bind (`res`), their pipelines and bind groups (`passes`),
+/// and what carries from frame to frame (`state`).
 pub struct Renderer<'g> {
     gpu: &'g Gpu,
     variant: Variant,
     plan: FramePlan,
-    width: u32,
-    height: u32,
     res: FrameResources,
-    post: PostChain,
-    /// Every pass of the plan but the post ones (the post chain holds those), once each.
-    timed: Vec<BuiltPass>,
-    /// The shading passes with counters.
-    instrumented: Vec<BuiltPass>,
-    /// Passes only the counters use.
-    support: Vec<BuiltPass>,
-    /// Cluster bounds are valid for the projection, size and a static z-range.
-    bounds_built: bool,
+    passes: BuiltPasses,
+    state: FrameState,
     cpu_assignment: Option<CpuAssignment>,
-    reallocations: u32,
-    skips: Skips,
-    /// Frames rendered (not counting instrumented ones).
-    frames_done: u32,
-    /// A frame without lights was drawn (see `draw_without_lights`).
-    drew_without_lights: bool,
-    /// The last frame drawn left depth, G-buffer, cluster data and light lists that agree
-    /// with what shading reads, for an instrumented frame to count on (see `render`).
-    last_frame_countable: bool,
-    /// Pipelines of the timed frame that this renderer created rather than found made
-    /// earlier in the run (see `cold`).
-    fresh_pipelines: u32,
-    /// Features set by the scene rather than the variant (spots, textures).
-    frame_features: Vec<(&'static str, bool)>,
     /// The clustered stand-in naive forward counts on, once made (see `prepare_counting`).
     naive_stand_in: Option<Box<Renderer<'g>>>,
-    /// What the next frame redoes (`advance` decides it for a sequence's next frame).
-    redo: Redo,
-    /// What the GPU holds of the last frame, for `advance` to compare with.
-    held: Held,
-    /// Patch frames that ran out of room in the index buffer and were rebuilt instead.
-    patch_rebuilds: u32,
 }
 
 /// How a frame reports the spot cone it left out of its light loops.
@@ -231,7 +209,7 @@ impl<'g> Renderer<'g> {
         let proxies = composed
             .iter()
             .find(|(p, _, _)| p.id == PassId::Clustering(compose::ClusterPass::LightAssign))
-            .and_then(|(_, c, _)| culling::ProxyLayout::of(c));
+            .and_then(|(_, c, _)| clusters::ProxyLayout::of(c));
         let sizes = reflect::BufferSizes::of(
             composed
                 .iter()
@@ -256,58 +234,72 @@ impl<'g> Renderer<'g> {
         let post = gpu.scoped("creating the post chain", || {
             PostChain::new(gpu, variant, &post_passes, &res)
         })??;
-        let mut renderer = Renderer {
-            gpu,
-            variant: variant.clone(),
-            plan,
-            width,
-            height,
-            res,
-            post,
-            timed: Vec::new(),
-            instrumented: Vec::new(),
-            support: Vec::new(),
-            bounds_built: false,
-            cpu_assignment: None,
-            reallocations: 0,
-            skips,
-            frames_done: 0,
-            drew_without_lights: false,
-            last_frame_countable: false,
-            fresh_pipelines: 0,
-            frame_features: frame.clone(),
-            naive_stand_in: None,
-            redo: Redo::ALL,
-            held: Held::of(scene),
-            patch_rebuilds: 0,
-        };
+        let mut res = res;
         if variant.pipeline.is_clustered()
             && variant.clusters().update == crate::variant::ListUpdate::StaticDynamic
         {
-            renderer.res.moving_set.set(gpu, &scene.moving_lights);
+            res.moving_set.set(gpu, &scene.moving_lights);
         }
+        let mut passes = BuiltPasses {
+            timed: Vec::new(),
+            instrumented: Vec::new(),
+            support: Vec::new(),
+            post,
+        };
+        let to = built::For {
+            gpu,
+            variant,
+            res: &res,
+            alpha_mask: frame.contains(&("alpha_mask", true)),
+        };
+        let mut fresh_pipelines = 0;
         gpu.scoped("creating pipelines", || -> Result<(), RenderError> {
             for (pass, timed, _) in &composed {
-                if let Some(b) = renderer.build(*pass, timed, false)? {
-                    renderer.timed.push(b);
+                if let Some(b) = passes.build(&to, *pass, timed, false)? {
+                    passes.timed.push(b);
                 }
             }
             // What the timed frames draw with is known now; the rest only counts.
-            renderer.fresh_pipelines = gpu.pipeline_stats().created - created_before;
+            fresh_pipelines = gpu.pipeline_stats().created - created_before;
             for (pass, _, instrumented) in &composed {
                 if let Some(i) = instrumented
-                    && let Some(b) = renderer.build(*pass, i, true)?
+                    && let Some(b) = passes.build(&to, *pass, i, true)?
                 {
-                    renderer.instrumented.push(b);
+                    passes.instrumented.push(b);
                 }
             }
             for (pass, c) in &support {
-                if let Some(b) = renderer.build(*pass, c, false)? {
-                    renderer.support.push(b);
+                if let Some(b) = passes.build(&to, *pass, c, false)? {
+                    passes.support.push(b);
                 }
             }
             Ok(())
         })??;
+        let state = FrameState {
+            width,
+            height,
+            bounds_built: false,
+            frames_done: 0,
+            drew_without_lights: false,
+            last_frame_countable: false,
+            fresh_pipelines,
+            reallocations: 0,
+            patch_rebuilds: 0,
+            skips,
+            redo: Redo::ALL,
+            held: Held::of(scene),
+            frame_features: frame,
+        };
+        let mut renderer = Renderer {
+            gpu,
+            variant: variant.clone(),
+            plan,
+            res,
+            passes,
+            state,
+            cpu_assignment: None,
+            naive_stand_in: None,
+        };
         if variant.pipeline.is_clustered() && variant.clusters().assignment == Assignment::Cpu {
             renderer.cpu_assignment = Some(CpuAssignment::new(variant, scene));
         }
@@ -317,17 +309,25 @@ impl<'g> Renderer<'g> {
     /// What the clustering passes dispatch over.
     fn extent(&self) -> clustering::Extent {
         clustering::Extent {
-            width: self.width,
-            height: self.height,
+            width: self.state.width,
+            height: self.state.height,
             lights: self.res.scene.light_count,
             moving: self.res.moving_set.lights.len() as u32,
-            refit: self.redo.lists == Lists::Refit,
+            refit: self.state.redo.lists == Lists::Refit,
         }
+    }
+
+    /// The list strategy of a clustered variant (None without clusters).
+    fn update(&self) -> Option<crate::variant::ListUpdate> {
+        self.variant
+            .pipeline
+            .is_clustered()
+            .then(|| self.variant.clusters().update)
     }
 
     /// Patch frames so far that found no room in the index buffer and rebuilt every list.
     pub fn patch_rebuilds(&self) -> u32 {
-        self.patch_rebuilds
+        self.state.patch_rebuilds
     }
 
     /// Whether the next frame is the first to draw with pipelines created for this
@@ -335,7 +335,9 @@ impl<'g> Renderer<'g> {
     /// so that frame's time includes compiling. Pipelines found made earlier in the run are
     /// taken as warm (the cell that made them drew with them).
     pub fn cold(&self) -> bool {
-        self.fresh_pipelines > 0 && self.frames_done == 0 && !self.drew_without_lights
+        self.state.fresh_pipelines > 0
+            && self.state.frames_done == 0
+            && !self.state.drew_without_lights
     }
 
     /// Draw a frame of the scene without its lights, not read back; returns the summed time
@@ -347,12 +349,12 @@ impl<'g> Renderer<'g> {
         let lights = self.res.scene.light_count;
         self.set_light_count(0);
         // Every pass a sequence's frames may run: a patch of no light, too.
-        self.redo = Redo::EVERY;
+        self.state.redo = Redo::EVERY;
         let run = self.run_frame(false);
-        self.redo = Redo::ALL;
+        self.state.redo = Redo::ALL;
         self.set_light_count(lights);
-        self.drew_without_lights = true;
-        self.last_frame_countable = false;
+        self.state.drew_without_lights = true;
+        self.state.last_frame_countable = false;
         Ok(run?.timings)
     }
 
@@ -393,27 +395,30 @@ impl<'g> Renderer<'g> {
             cpu_ms: cpu_assign_ms,
             mut skipped,
         } = self.run_fitted(false)?;
-        self.frames_done += 1;
+        self.state.frames_done += 1;
         // A frame drawn again without `advance` draws as this one did, with no history.
         if let Some(s) = &mut self.res.sampling {
-            s.set_frame(self.gpu, self.held.time, false);
+            s.set_frame(self.gpu, self.state.held.time, false);
         }
         // With a z-range from the previous frame, the first frame's lists were built on the
         // starting range, which its depth-range pass then replaced with this picture's: the
         // lists agree with the range shading reads from the second frame on.
         let late_range = self.variant.range_from_previous_frame();
-        self.last_frame_countable = !late_range || self.frames_done >= 2;
+        self.state.last_frame_countable = !late_range || self.state.frames_done >= 2;
         // A frame rendered again without `advance` redoes everything.
-        self.redo = Redo::ALL;
-        if self.post.blur_skipped(self.gpu)? {
+        self.state.redo = Redo::ALL;
+        if self.passes.post.blur_skipped(self.gpu)? {
             skipped.push(PassId::Post(compose::PostPass::BloomBlur).name().into());
         }
         let wall_ms = start.elapsed().as_secs_f64() * 1e3;
-        let hdr = readback::read_hdr(self.gpu, &self.post.output(&self.res.targets.hdr).texture)?;
+        let hdr = targets::read_hdr(
+            self.gpu,
+            &self.passes.post.output(&self.res.targets.hdr).texture,
+        )?;
         let ldr = read_texture(self.gpu, &self.res.targets.ldr.texture, 4)?;
         Ok(FrameOutput {
-            width: self.width,
-            height: self.height,
+            width: self.state.width,
+            height: self.state.height,
             hdr,
             ldr: bytemuck::cast_slice(&ldr).to_vec(),
             timings,
@@ -429,7 +434,7 @@ impl<'g> Renderer<'g> {
     pub fn reseed(&mut self, seed: u32) {
         if let Some(s) = &mut self.res.sampling {
             s.reseed(seed);
-            s.set_frame(self.gpu, self.held.time, false);
+            s.set_frame(self.gpu, self.state.held.time, false);
         }
     }
 
@@ -445,11 +450,11 @@ impl<'g> Renderer<'g> {
             let Some(c) = &self.res.clusters else {
                 return Ok(frame);
             };
-            let built = !self.skips_pass(ASSIGN, instrumented);
+            let built = !self.state.skips_pass(ASSIGN, instrumented, &self.variant);
             match lists::fit(self.gpu, c)? {
-                Fit::GrowTo(_) if self.redo.lists == Lists::Patch && !instrumented => {
-                    self.redo.lists = Lists::Build;
-                    self.patch_rebuilds += 1;
+                Fit::GrowTo(_) if self.state.redo.lists == Lists::Patch && !instrumented => {
+                    self.state.redo.lists = Lists::Build;
+                    self.state.patch_rebuilds += 1;
                     continue;
                 }
                 Fit::GrowTo(capacity) => {
@@ -471,13 +476,13 @@ impl<'g> Renderer<'g> {
             }
             let moving = PassId::Clustering(compose::ClusterPass::MovingAssign);
             if let Some(m) = &self.res.moving
-                && !self.skips_pass(moving, instrumented)
+                && !self.state.skips_pass(moving, instrumented, &self.variant)
                 && let Fit::GrowTo(capacity) = lists::fit(self.gpu, m)?
             {
                 let m = self.res.moving.as_mut().expect("moving lists");
                 m.grow_indices(self.gpu, capacity);
-                self.reallocations += 1;
-                self.remake_groups()?;
+                self.state.reallocations += 1;
+                self.passes.remake_groups(self.gpu, &self.res)?;
                 continue;
             }
             return Ok(frame);
@@ -491,8 +496,8 @@ impl<'g> Renderer<'g> {
     fn grow_lists(&mut self, capacity: u32) -> Result<(), RenderError> {
         let c = self.res.clusters.as_mut().expect("clustered");
         c.grow_indices(self.gpu, capacity);
-        self.reallocations += 1;
-        self.remake_groups()
+        self.state.reallocations += 1;
+        self.passes.remake_groups(self.gpu, &self.res)
     }
 
     /// Build the light lists on the CPU and upload them (variants with `assignment: Cpu`);
@@ -519,12 +524,13 @@ impl<'g> Renderer<'g> {
         // Counters start at zero in every run of a frame that adds to them (a re-run must
         // not add up twice); the cluster stats stay as the last assignment left them when
         // this frame assigns nothing.
-        let assigns = !self.skips_pass(ASSIGN, instrumented);
+        let assigns = !self.state.skips_pass(ASSIGN, instrumented, &self.variant);
         let moving = PassId::Clustering(compose::ClusterPass::MovingAssign);
-        let assigns_moving = !self.skips_pass(moving, instrumented);
-        let marks = !self.skips_pass(
+        let assigns_moving = !self.state.skips_pass(moving, instrumented, &self.variant);
+        let marks = !self.state.skips_pass(
             PassId::Clustering(compose::ClusterPass::MarkActive),
             instrumented,
+            &self.variant,
         );
         gpu.scoped("clearing counters", || {
             let mut e = gpu.device.create_command_encoder(&Default::default());
@@ -560,14 +566,16 @@ impl<'g> Renderer<'g> {
         // CPU assignment is the light_assign pass of its variants.
         let cpu_ms = if assigns { self.assign_on_cpu()? } else { None };
         let mut skipped: Vec<String> = self.plan.never.iter().map(|p| p.name().into()).collect();
-        if self.skips.no_spots {
+        if self.state.skips.no_spots {
             skipped.push(SPOT_CONE.into());
         }
         if self.cpu_assignment.is_some() && cpu_ms.is_none() {
             skipped.push(ASSIGN.name().into());
         }
         for p in &self.plan.passes {
-            if self.skips_pass(p.id, instrumented) && !skipped.iter().any(|s| s == p.name()) {
+            if self.state.skips_pass(p.id, instrumented, &self.variant)
+                && !skipped.iter().any(|s| s == p.name())
+            {
                 skipped.push(p.name().into());
             }
         }
@@ -575,7 +583,7 @@ impl<'g> Renderer<'g> {
         let timings = gpu.scoped("rendering a frame", || -> Result<Timings, GpuError> {
             let mut runner = PassRunner::new(gpu, passes.len() as u32 + 2);
             for pass in passes {
-                if self.skips_pass(pass.id, instrumented) {
+                if self.state.skips_pass(pass.id, instrumented, &self.variant) {
                     continue;
                 }
                 runner.pass(pass.name(), |encoder, slot| {
@@ -584,7 +592,7 @@ impl<'g> Renderer<'g> {
             }
             runner.finish()
         })??;
-        self.bounds_built = true;
+        self.state.bounds_built = true;
         Ok(FrameRun {
             timings,
             cpu_ms,
@@ -601,14 +609,9 @@ impl<'g> Renderer<'g> {
         instrumented: bool,
     ) {
         if let PassId::Post(p) = id {
-            return self.post.encode(p, encoder, slot);
+            return self.passes.post.encode(p, encoder, slot);
         }
-        let list = if instrumented && id.is_shading() {
-            &self.instrumented
-        } else {
-            &self.timed
-        };
-        let Some(built) = list.iter().find(|b| b.pass.id == id) else {
+        let Some(built) = self.passes.find(id, instrumented) else {
             return;
         };
         let (groups, res) = (&built.groups, &self.res);

@@ -8,7 +8,8 @@
 use super::error::RenderError;
 use super::passes::{ComputePipelines, set_compute_groups};
 use super::reflect::PassLayout;
-use super::resources::{FrameResources, Target};
+use super::resources::FrameResources;
+use super::targets::Target;
 use crate::compose::{ComposedPass, PostPass};
 use crate::gpu::{Gpu, TimestampSlot};
 use crate::variant::{BloomKernel, Variant};

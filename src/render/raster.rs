@@ -3,7 +3,8 @@
 
 use super::gbuffer;
 use super::passes::{begin_render, clear_attachment, color_target, render_pipeline};
-use super::resources::{DepthSetup, SceneBuffers, Targets};
+use super::resources::SceneBuffers;
+use super::targets::{DepthSetup, Targets};
 use crate::compose::{ComposedPass, RasterPass};
 use crate::gpu::{Gpu, GpuError, TimestampSlot};
 use crate::variant::Variant;
@@ -52,7 +53,7 @@ pub fn pipelines(
     };
     Ok(match pass {
         RasterPass::DepthPrepass if variant.msaa.on() => {
-            let target = color_target(super::resources::SHADING_DEPTH_FORMAT);
+            let target = color_target(super::targets::SHADING_DEPTH_FORMAT);
             let depth = d.state(d.compare(), true);
             vec![build(
                 Some("fs_shading_depth"),
@@ -112,7 +113,7 @@ pub fn pipelines(
         // fragment's still lights, once, as f32 bits.
         RasterPass::StillShading => {
             let depth = d.state(wgpu::CompareFunction::Equal, false);
-            let target = color_target(super::resources::F32_BITS_FORMAT);
+            let target = color_target(super::targets::F32_BITS_FORMAT);
             vec![build(Some("fs_still"), &[target], depth)?]
         }
         RasterPass::Forward => {

@@ -4,10 +4,11 @@
 
 use super::error::RenderError;
 use super::reflect::PassLayout;
+use super::targets::read_hdr;
 use super::{ClusterRange, GpuDepthMask, Renderer, screen};
 use crate::compose::{self, Composer, PassId};
 use crate::cpu::clusters::ClusterLists;
-use crate::gpu::{Gpu, GpuError, read_texture};
+use crate::gpu::read_texture;
 use crate::variant::CullingMethod;
 
 impl Renderer<'_> {
@@ -29,9 +30,9 @@ impl Renderer<'_> {
                 "variant has no debug pass for view {view:?}"
             )));
         };
-        let composed = composer.compose_with(&v, &pass, &self.frame_features)?;
+        let composed = composer.compose_with(&v, &pass, &self.state.frame_features)?;
         // It draws over the output: a sequence's next frame draws its own.
-        self.held.disturbed.set(true);
+        self.state.held.disturbed.set(true);
         gpu.scoped("drawing a debug view", || -> Result<(), RenderError> {
             let layout = PassLayout::of(gpu, &composed)?;
             let pipelines = screen::pipelines(
@@ -124,18 +125,4 @@ impl Renderer<'_> {
             None => Ok(None),
         }
     }
-}
-
-/// Read an HDR target (rgba32float or rgba16float) as f32.
-pub(super) fn read_hdr(gpu: &Gpu, texture: &wgpu::Texture) -> Result<Vec<[f32; 4]>, GpuError> {
-    Ok(match texture.format() {
-        wgpu::TextureFormat::Rgba16Float => {
-            let bytes = read_texture(gpu, texture, 8)?;
-            bytemuck::cast_slice::<u8, [u16; 4]>(&bytes)
-                .iter()
-                .map(|p| p.map(|h| half::f16::from_bits(h).to_f32()))
-                .collect()
-        }
-        _ => bytemuck::cast_slice(&read_texture(gpu, texture, 16)?).to_vec(),
-    })
 }

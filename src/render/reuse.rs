@@ -2,62 +2,13 @@
 //! GPU holds (the camera, which lights), uploaded; and what the next frame redoes, from
 //! `Variant::reuse_unchanged` and `clusters.update`.
 
-use std::cell::Cell;
-
 use serde::Serialize;
 
 use super::error::RenderError;
+use super::redo::{Lists, Redo};
 use super::{Renderer, ViewUniform};
-use crate::compose::{ClusterPass, PassId, RasterPass, ScreenPass};
-use crate::scene::{Camera, Light, Scene, Vertex};
+use crate::scene::{Light, Scene};
 use crate::variant::ListUpdate;
-
-/// What a frame redoes of the one before it.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(super) struct Redo {
-    /// The depth pre-pass, G-buffer, blended depths, depth range, marking and boxes.
-    pub surfaces: bool,
-    pub lists: Lists,
-    /// StaticDynamic: the still lights' lists and the still image.
-    pub still: bool,
-    /// Any pass at all: false when the frame is the previous one.
-    pub frame: bool,
-}
-
-/// What a frame does to its light lists.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(super) enum Lists {
-    /// Keeps them: nothing they depend on changed.
-    Keep,
-    /// Builds every list (StaticDynamic: both sets).
-    Build,
-    /// StaticDynamic: only the moving lights' lists.
-    Moving,
-    /// Patch: moves the moved lights in them.
-    Patch,
-    /// Refit: refits the light BVH over its last order and walks it again.
-    Refit,
-    /// Builds them and runs every other list pass too, over nothing (`draw_without_lights`,
-    /// which compiles every pass a sequence may run).
-    Every,
-}
-
-impl Redo {
-    /// Everything: a first frame, or a frame rendered again unchanged (its lists built as
-    /// every frame of a matrix cell builds them).
-    pub(super) const ALL: Redo = Redo {
-        surfaces: true,
-        lists: Lists::Build,
-        still: true,
-        frame: true,
-    };
-
-    /// Every pass a frame may run (a patch too, of no light).
-    pub(super) const EVERY: Redo = Redo {
-        lists: Lists::Every,
-        ..Redo::ALL
-    };
-}
 
 /// What changed between two frames of a sequence.
 #[derive(Clone, Debug, Default, PartialEq, Serialize)]
@@ -68,70 +19,17 @@ pub struct FrameChange {
     pub moved_lights: Vec<u32>,
 }
 
-/// What the GPU holds of the last frame: what `advance` compares the next one with.
-pub(super) struct Held {
-    lights: Vec<Light>,
-    camera: Camera,
-    prev_camera: Camera,
-    vertices: Vec<Vertex>,
-    indices: Vec<u32>,
-    blended: Vec<u32>,
-    /// The frame's time, seconds (sampled loops seed their random numbers with it).
-    pub(super) time: f64,
-    /// Frames in a row whose view was the one before theirs.
-    still_frames: u32,
-    /// The images or marks are not the last frame's: an instrumented frame shaded over
-    /// the images and re-marked the clusters, or a debug view was drawn into the output.
-    pub(super) disturbed: Cell<bool>,
-}
-
-impl Held {
-    pub(super) fn of(scene: &Scene) -> Self {
-        Self {
-            lights: scene.lights.clone(),
-            camera: scene.camera,
-            prev_camera: scene.prev_camera,
-            vertices: scene.vertices.clone(),
-            indices: scene.indices.clone(),
-            blended: scene.blended.clone(),
-            time: scene.params.time,
-            still_frames: 0,
-            disturbed: Cell::new(false),
-        }
-    }
-
-    /// Why `scene` cannot follow the held frame, if it cannot: a sequence's frames share
-    /// their size, geometry and number of lights.
-    fn mismatch(&self, scene: &Scene, size: (u32, u32)) -> Option<String> {
-        let p = &scene.params;
-        if (p.width, p.height) != size {
-            return Some(format!(
-                "its size is {}x{}, the sequence's {}x{}",
-                p.width, p.height, size.0, size.1
-            ));
-        }
-        if scene.lights.len() != self.lights.len() {
-            return Some(format!(
-                "it has {} lights, the sequence {}",
-                scene.lights.len(),
-                self.lights.len()
-            ));
-        }
-        let same = bytemuck::cast_slice::<Vertex, u8>(&scene.vertices)
-            == bytemuck::cast_slice::<Vertex, u8>(&self.vertices)
-            && scene.indices == self.indices
-            && scene.blended == self.blended;
-        (!same).then(|| "its geometry differs (the geometry of a sequence never moves)".into())
-    }
-}
-
 impl Renderer<'_> {
     /// Make the next frame `scene`: the same geometry, size and number of lights as the
     /// frame before, at a later time. Uploads the lights that changed and the camera if it
     /// moved, and decides what the next `render` redoes (with `reuse_unchanged`, only what
     /// the change reaches; `clusters.update` says how the lists follow the lights).
     pub fn advance(&mut self, scene: &Scene) -> Result<FrameChange, RenderError> {
-        if let Some(why) = self.held.mismatch(scene, (self.width, self.height)) {
+        if let Some(why) = self
+            .state
+            .held
+            .mismatch(scene, (self.state.width, self.state.height))
+        {
             return Err(RenderError::Scene(format!(
                 "scene `{}` at time {} s cannot follow the sequence's last frame: {why}",
                 scene.name, scene.params.time
@@ -142,12 +40,13 @@ impl Renderer<'_> {
             .map_err(|e| RenderError::Scene(e.to_string()))?;
         let moved: Vec<u32> = (0..scene.lights.len())
             .filter(|&i| {
-                bytemuck::bytes_of(&scene.lights[i]) != bytemuck::bytes_of(&self.held.lights[i])
+                bytemuck::bytes_of(&scene.lights[i])
+                    != bytemuck::bytes_of(&self.state.held.lights[i])
             })
             .map(|i| i as u32)
             .collect();
-        let camera_moved =
-            scene.camera != self.held.camera || scene.prev_camera != self.held.prev_camera;
+        let camera_moved = scene.camera != self.state.held.camera
+            || scene.prev_camera != self.state.held.prev_camera;
         // What the renderer was made for must hold: the passes its plan runs and the
         // shaders' features (a still first camera leaves motion blur out; spots, the cone).
         let plan = crate::compose::plan(
@@ -155,7 +54,9 @@ impl Renderer<'_> {
             scene.camera == scene.prev_camera,
             scene.has_blend(),
         );
-        if plan != self.plan || (self.skips.no_spots && scene.lights.iter().any(|l| l.is_spot())) {
+        if plan != self.plan
+            || (self.state.skips.no_spots && scene.lights.iter().any(|l| l.is_spot()))
+        {
             return Err(RenderError::Scene(format!(
                 "scene `{}` at time {} s cannot follow the sequence's last frame: it needs passes or shader features the first frame did not (a camera that starts to move under motion blur, or a light that becomes a spot)",
                 scene.name, scene.params.time
@@ -163,7 +64,8 @@ impl Renderer<'_> {
         }
         self.upload_lights(scene, &moved);
         let (near, far) = (scene.camera.near, scene.camera.far);
-        if camera_moved && (near, far) != (self.held.camera.near, self.held.camera.far) {
+        if camera_moved && (near, far) != (self.state.held.camera.near, self.state.held.camera.far)
+        {
             // The static slicing runs from near to far: the boxes are built again.
             if let Some(c) = &self.res.clusters {
                 let range = super::ClusterRange::new(near as f32, far as f32);
@@ -171,7 +73,7 @@ impl Renderer<'_> {
                     .queue
                     .write_buffer(&c.range, 0, bytemuck::bytes_of(&range));
             }
-            self.bounds_built = false;
+            self.state.bounds_built = false;
         }
         if camera_moved || !moved.is_empty() {
             // Lists built on the CPU start from the lights in view space; naive forward's
@@ -193,19 +95,19 @@ impl Renderer<'_> {
                     .write_buffer(buffer, 0, bytemuck::cast_slice(&order));
             }
         }
-        let h = &mut self.held;
+        let h = &mut self.state.held;
         h.time = scene.params.time;
         if let Some(s) = &mut self.res.sampling {
             // The next frame follows this renderer's last one: its reservoirs are history.
-            s.set_frame(self.gpu, scene.params.time, self.frames_done > 0);
+            s.set_frame(self.gpu, scene.params.time, self.state.frames_done > 0);
         }
         h.lights.clone_from(&scene.lights);
         (h.camera, h.prev_camera) = (scene.camera, scene.prev_camera);
         h.still_frames = if camera_moved { 0 } else { h.still_frames + 1 };
         // A sequence decides what each frame redoes; a still scene's rule is for frames
         // rendered again unchanged.
-        self.skips.static_scene = false;
-        self.redo = self.plan_redo(camera_moved, &moved);
+        self.state.skips.static_scene = false;
+        self.state.redo = self.plan_redo(camera_moved, &moved);
         Ok(FrameChange {
             camera_moved,
             moved_lights: moved,
@@ -234,8 +136,8 @@ impl Renderer<'_> {
     /// What the next frame redoes after a change of the camera (`camera_moved`) and of the
     /// lights `moved`; sets the moving set the list passes read.
     fn plan_redo(&mut self, camera_moved: bool, moved: &[u32]) -> Redo {
-        let disturbed = self.held.disturbed.replace(false);
-        if self.frames_done == 0 {
+        let disturbed = self.state.held.disturbed.replace(false);
+        if self.state.frames_done == 0 {
             if let Some(ListUpdate::StaticDynamic) = self.update() {
                 self.join_moving(moved);
             }
@@ -244,7 +146,7 @@ impl Renderer<'_> {
         // The boxes and view-space lights hold while the view does; with a depth range from
         // the previous frame, the range settles a frame after the view stops.
         let frames_needed = 1 + u32::from(self.variant.range_from_previous_frame());
-        let view_holds = !camera_moved && self.held.still_frames >= frames_needed;
+        let view_holds = !camera_moved && self.state.held.still_frames >= frames_needed;
         let reuse = self.variant.reuse_unchanged;
         // Stochastic culling draws every light's range again each frame.
         let redrawn = self.variant.shading.lights.redraws_ranges();
@@ -291,43 +193,5 @@ impl Renderer<'_> {
         set.sort_unstable();
         set.dedup();
         self.res.moving_set.set(self.gpu, &set);
-    }
-
-    /// The list strategy of a clustered variant (None without clusters).
-    pub(super) fn update(&self) -> Option<ListUpdate> {
-        self.variant
-            .pipeline
-            .is_clustered()
-            .then(|| self.variant.clusters().update)
-    }
-
-    /// Whether the frame's plan of what to redo leaves pass `id` out (never for an
-    /// instrumented frame, whose own rules are `skips_pass`'s).
-    pub(super) fn reuses(&self, id: PassId) -> bool {
-        let r = self.redo;
-        if !r.frame {
-            return true;
-        }
-        match id {
-            PassId::Raster(
-                RasterPass::DepthPrepass | RasterPass::GBuffer | RasterPass::TransparentDepths,
-            )
-            | PassId::Clustering(
-                ClusterPass::DepthRange | ClusterPass::MarkActive | ClusterPass::ClusterBounds,
-            ) => !r.surfaces,
-            PassId::Clustering(ClusterPass::LightAssign) => {
-                !matches!(r.lists, Lists::Build | Lists::Refit | Lists::Every)
-            }
-            PassId::Clustering(ClusterPass::MovingAssign) => {
-                !matches!(r.lists, Lists::Build | Lists::Moving | Lists::Every)
-            }
-            PassId::Clustering(ClusterPass::ListPatch) => {
-                !matches!(r.lists, Lists::Patch | Lists::Every)
-            }
-            PassId::Raster(RasterPass::StillShading) | PassId::Screen(ScreenPass::StillResolve) => {
-                !r.still
-            }
-            _ => false,
-        }
     }
 }

@@ -4,7 +4,8 @@
 
 use super::passes::{begin_render, clear_attachment, color_target, render_pipeline};
 use super::reflect::Slot;
-use super::resources::{FrameResources, LDR_FORMAT};
+use super::resources::FrameResources;
+use super::targets::LDR_FORMAT;
 use crate::compose::{ComposedPass, ScreenPass};
 use crate::gpu::{Gpu, GpuError, TimestampSlot};
 
@@ -39,7 +40,7 @@ pub fn pipelines(
             vec![build("vs_main", "fs_main", color_target(gpu.hdr_format))?]
         }
         ScreenPass::StillResolve => {
-            let target = color_target(super::resources::F32_BITS_FORMAT);
+            let target = color_target(super::targets::F32_BITS_FORMAT);
             vec![build("vs_main", "fs_still", target)?]
         }
         // The ambient term over every pixel, then each light added in its rectangle.

@@ -3,8 +3,9 @@
 
 use serde::Serialize;
 
+use super::clusters::AssignmentWork;
 use super::error::RenderError;
-use super::resources::Target;
+use super::targets::Target;
 use super::{Pipelines, Renderer, clustering, gbuffer};
 use crate::compose::Composer;
 use crate::compose::{ClusterPass, PassId};
@@ -77,39 +78,6 @@ pub struct FrameStats {
     pub assignment_work: Option<AssignmentWork>,
 }
 
-/// The work of a frame's light assignment, the same on every machine (`clustering/work.wesl`):
-/// what a change to assignment is judged by where its time measures a CPU.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, serde::Deserialize)]
-pub struct AssignmentWork {
-    /// Bounds tests of a light against one cluster, tile or big tile.
-    pub light_tests: u64,
-    /// Bounds tests of a light BVH node against a cluster.
-    pub node_tests: u64,
-    /// Light-list entries stored (z-binning: tile-mask bits set).
-    pub entries_written: u64,
-    /// Lights whose range holds no cluster, dropped before any per-cluster work.
-    pub lights_rejected: u64,
-}
-
-impl AssignmentWork {
-    /// Light and node tests per light of a frame of `lights` lights.
-    pub fn tests_per_light(&self, lights: usize) -> f64 {
-        (self.light_tests + self.node_tests) as f64 / lights.max(1) as f64
-    }
-}
-
-impl std::ops::Add for AssignmentWork {
-    type Output = Self;
-    fn add(self, o: Self) -> Self {
-        AssignmentWork {
-            light_tests: self.light_tests + o.light_tests,
-            node_tests: self.node_tests + o.node_tests,
-            entries_written: self.entries_written + o.entries_written,
-            lights_rejected: self.lights_rejected + o.lights_rejected,
-        }
-    }
-}
-
 impl FrameStats {
     /// Useful evaluations over those performed (1 when none was performed).
     pub fn useful_fraction(&self) -> Option<f64> {
@@ -174,13 +142,13 @@ impl<'g> Renderer<'g> {
         self.run_fitted(true)?;
         // It shaded over the images and re-marks the clusters: a sequence's next frame
         // redoes them.
-        self.held.disturbed.set(true);
+        self.state.held.disturbed.set(true);
         Ok(self.read_pixel_counters()?)
     }
 
     fn read_pixel_counters(&self) -> Result<PixelCounters, GpuError> {
         // A counter no pass declares (a loop that looks up no cluster) counted nothing.
-        let pixels = self.width as usize * self.height as usize;
+        let pixels = self.state.width as usize * self.state.height as usize;
         let read = |b: &wgpu::Buffer| -> Result<Vec<u32>, GpuError> {
             if b.size() == 0 {
                 return Ok(vec![0; pixels]);
@@ -248,9 +216,9 @@ impl<'g> Renderer<'g> {
             } else {
                 0
             },
-            post_bytes_per_pixel: self.post.bytes_per_pixel(),
+            post_bytes_per_pixel: self.passes.post.bytes_per_pixel(),
             frame_bytes_per_pixel: self.frame_bytes_per_pixel(),
-            list_reallocations: self.reallocations,
+            list_reallocations: self.state.reallocations,
             ..Default::default()
         };
         if let Some(c) = &self.res.clusters {
@@ -279,7 +247,7 @@ impl<'g> Renderer<'g> {
             let outside = |&(_, &v): &(usize, &u32)| v > c.clusters;
             stats.clusters_out_of_grid = used.iter().enumerate().filter(outside).count() as u64;
             stats.first_out_of_grid = used.iter().enumerate().find(outside).map(|(i, &v)| {
-                let w = self.width as usize;
+                let w = self.state.width as usize;
                 [(i % w) as u32, (i / w) as u32, v - 1]
             });
             // Pixels record their cluster index + 1 (0: background).
@@ -341,7 +309,7 @@ impl<'g> Renderer<'g> {
             .chain(t.gbuffer.iter().map(|(_, t)| t))
             .map(size)
             .sum::<u32>()
-            + self.post.bytes_per_pixel()
+            + self.passes.post.bytes_per_pixel()
             + self
                 .res
                 .sampling
@@ -355,9 +323,10 @@ impl<'g> Renderer<'g> {
         let c = self.res.clusters.as_ref().expect("clustered");
         let mark = PassId::Clustering(ClusterPass::MarkActive);
         let Some(built) = self
+            .passes
             .support
             .iter()
-            .chain(&self.timed)
+            .chain(&self.passes.timed)
             .find(|b| b.pass.id == mark)
         else {
             return Ok(0);

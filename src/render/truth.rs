@@ -13,7 +13,8 @@ use super::passes::{
     ComputePipelines, clear_attachment, color_target, render_pipeline, set_compute_groups,
 };
 use super::reflect::{BufferSizes, PassLayout, Slot};
-use super::resources::{DepthSetup, SHADING_DEPTH_FORMAT, SceneBuffers, multisampled_target};
+use super::resources::SceneBuffers;
+use super::targets::{DepthSetup, SHADING_DEPTH_FORMAT, multisampled_target};
 use crate::common::Vertex;
 use crate::compose::Composer;
 use crate::cpu::truth::{BlendedFragment, MAX_BLENDED_FRAGMENTS, RasterTruth};
@@ -22,7 +23,7 @@ use crate::scene::Scene;
 use crate::variant::Variant;
 use wgpu::util::DeviceExt;
 
-use super::resources::F32_BITS_FORMAT as TRUTH_FORMAT;
+use super::targets::F32_BITS_FORMAT as TRUTH_FORMAT;
 
 /// Rasterise `scene` with `variant`'s depth set-up and sample count, and read back position,
 /// normal, albedo of every sample.

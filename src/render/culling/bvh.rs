@@ -6,7 +6,7 @@
 //! workgroups beyond the blocks (which return at once), a level is its nodes.
 
 use super::one_level::scan_blocks;
-use super::{Clear, Over, Plan, Step, check_sorted, long_lists, sort_lights, sorted_lights};
+use super::steps::{Clear, Over, Plan, Step, check_sorted, long_lists, sort_lights, sorted_lights};
 use crate::cpu::bvh::level_sizes;
 use crate::cpu::sort::sorted_size;
 use crate::gpu::{Gpu, GpuError};

@@ -8,21 +8,23 @@ mod bvh;
 mod one_level;
 mod patch;
 mod rasterised;
+mod steps;
 mod two_level;
 mod zbinning;
 
-pub use rasterised::{BinningPipelines, ProxyLayout};
-pub(super) use zbinning::read as read_zbins;
+pub use rasterised::BinningPipelines;
 
-use super::built::Pipelines;
-use super::clusters::{ClusterBuffers, DISPATCH_ARGS_BYTES, ProxyDrawing, Sizing};
+use steps::{Clear, Over, Plan, Step};
+
+use super::clusters::{ClusterBuffers, ProxyDrawing, Sizing};
 use super::error::RenderError;
 use super::passes::{ComputePipelines, set_compute_groups};
-use crate::compose::{ComposedPass, LIGHTS_PER_ROW};
-use crate::cpu::sort::{SORT_BLOCK, merge_schedule, sorted_size};
+use crate::compose::ComposedPass;
 use crate::gpu::{Gpu, GpuError, TimestampSlot};
 use crate::render::reflect::BufferSizes;
 
+use crate::cpu::clusters::ClusterLists;
+use crate::cpu::zbin::ZBins;
 use crate::variant::CullingMethod;
 
 impl CullingMethod {
@@ -56,22 +58,23 @@ impl CullingMethod {
         }
     }
 
-    /// The pipelines of light assignment's pass: its entry points' (`compute`), and with
-    /// rasterised binning its draws' too (laid out as `drawing` says).
-    pub(in crate::render) fn assignment_pipelines(
+    /// The pipelines of light assignment's draws, with rasterised binning (laid out as
+    /// `drawing` says); None for the methods that only dispatch.
+    pub(in crate::render) fn draw_pipelines(
         self,
         gpu: &Gpu,
         pass: &ComposedPass,
         layout: &wgpu::PipelineLayout,
-        compute: ComputePipelines,
         drawing: Option<&ProxyDrawing>,
-    ) -> Result<Pipelines, RenderError> {
+    ) -> Result<Option<BinningPipelines>, RenderError> {
         match self {
-            CullingMethod::Rasterised => rasterised::pipelines(gpu, pass, layout, compute, drawing),
+            CullingMethod::Rasterised => {
+                rasterised::pipelines(gpu, pass, layout, drawing).map(Some)
+            }
             CullingMethod::OneLevel
             | CullingMethod::TwoLevel { .. }
             | CullingMethod::ZBinning
-            | CullingMethod::Bvh => Ok(Pipelines::Compute(compute)),
+            | CullingMethod::Bvh => Ok(None),
         }
     }
 
@@ -88,6 +91,60 @@ impl CullingMethod {
     }
 }
 
+/// Reading the lists back: z-binning keeps none (a pixel walks its bin), so its counts
+/// and lists are made from its bins and tile masks.
+impl ClusterBuffers {
+    /// Z-binning's sorted lights, bins and tile masks as the GPU holds them.
+    pub fn read_zbins(&self, gpu: &Gpu) -> Result<ZBins, GpuError> {
+        zbinning::read(self, gpu)
+    }
+
+    /// Lights in each cluster's list (z-binning: lights a pixel of each tile and bin walks).
+    pub fn read_counts(&self, gpu: &Gpu) -> Result<Vec<u32>, GpuError> {
+        if !self.method.builds_lists() {
+            return Ok(self.read_zbins(gpu)?.counts());
+        }
+        let n = self.declared_bytes("light_counts", self.clusters as u64);
+        self.read_named(gpu, "light_counts", Some(n))
+    }
+
+    /// The light lists as the GPU holds them (z-binning: each tile and bin's walk, sorted).
+    pub fn read_lists(&self, gpu: &Gpu) -> Result<ClusterLists, GpuError> {
+        if !self.method.builds_lists() {
+            return Ok(self.read_zbins(gpu)?.lists());
+        }
+        let n = self.clusters as u64;
+        let counts = self.read_named(
+            gpu,
+            "light_counts",
+            Some(self.declared_bytes("light_counts", n)),
+        )?;
+        let offsets = self.read_named(
+            gpu,
+            "light_offsets",
+            Some(self.declared_bytes("light_offsets", n)),
+        )?;
+        // Lists lie anywhere in the index buffer (two-level places them as it goes, Patch
+        // moves the ones it changes): up to the end of the last.
+        let end = counts
+            .iter()
+            .zip(&offsets)
+            .map(|(&c, &o)| self.declared_bytes("light_indices", o as u64 + c as u64))
+            .max()
+            .unwrap_or(0);
+        let used = end.min(self.named("light_indices").size());
+        let indices = self.read_named(gpu, "light_indices", Some(used))?;
+        let stats = self.read_stats(gpu)?;
+        Ok(ClusterLists {
+            max_per_cluster: counts.iter().copied().max().unwrap_or(0),
+            counts,
+            offsets,
+            indices,
+            dropped: stats.dropped as u64,
+        })
+    }
+}
+
 /// What one light-list pass of a frame does.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ListWork {
@@ -99,111 +156,6 @@ pub enum ListWork {
     Moving { moving: u32 },
     /// Patch: the lists moved along with `moved` lights.
     Patch { moved: u32 },
-}
-
-/// What light assignment runs: buffers (or parts of them) cleared first, then its steps.
-struct Plan<'a> {
-    clears: Vec<Clear<'a>>,
-    steps: Vec<Step<'a>>,
-}
-
-/// A buffer cleared from byte `at`, `bytes` of it or to its end.
-struct Clear<'a>(&'a wgpu::Buffer, u64, Option<u64>);
-
-impl<'a> Clear<'a> {
-    fn whole(buffer: &'a wgpu::Buffer) -> Self {
-        Clear(buffer, 0, None)
-    }
-
-    /// The long lists' workgroup and job counts (the header's x and fourth word).
-    fn long_lists(c: &'a ClusterBuffers) -> [Self; 2] {
-        [
-            Clear(c.named("sort_jobs"), 0, Some(4)),
-            Clear(c.named("sort_jobs"), 12, Some(4)),
-        ]
-    }
-}
-
-/// One step of light assignment. Dispatches run in a compute pass; a copy or the draw ends
-/// it, and the next dispatch begins another.
-enum Step<'a> {
-    /// Entry point `entry` over `Over`.
-    Dispatch(&'static str, Over),
-    /// Entry point `entry`, its workgroup count read from a buffer.
-    Indirect(&'static str, &'a wgpu::Buffer),
-    /// `bytes` (or all) of a buffer from byte `at`, to the start of another.
-    Copy(&'a wgpu::Buffer, u64, &'a wgpu::Buffer, Option<u64>),
-    /// Rasterised binning's draw of the light proxies.
-    DrawProxies,
-}
-
-/// What a dispatch covers.
-enum Over {
-    /// One invocation per item (x, y), in workgroups of the entry's own size.
-    Threads(u32, u32),
-    /// Exactly this many workgroups.
-    Groups(u32, u32, u32),
-}
-
-/// One workgroup per light, in rows of LIGHTS_PER_ROW.
-fn per_light(lights: u32) -> Over {
-    Over::Groups(
-        lights.clamp(1, LIGHTS_PER_ROW),
-        lights.div_ceil(LIGHTS_PER_ROW).max(1),
-        1,
-    )
-}
-
-/// The long lists at the end of one-level and rasterised assignment (sorted) and two-level
-/// (written): as many workgroups as the passes before queued, in a compute pass of their own.
-fn long_lists<'a>(c: &'a ClusterBuffers, entry: &'static str) -> [Step<'a>; 2] {
-    [
-        Step::Copy(
-            c.named("sort_jobs"),
-            0,
-            &c.sort_dispatch,
-            Some(DISPATCH_ARGS_BYTES),
-        ),
-        Step::Indirect(entry, &c.sort_dispatch),
-    ]
-}
-
-/// The lights sorted by key (`clustering/sort.wesl`, shared by the BVH and z-binning):
-/// each block sorted in a workgroup's memory, then each merge step, which carries its
-/// place in the schedule as workgroups beyond the blocks.
-fn sort_lights(lights: u32) -> Vec<Step<'static>> {
-    let n = sorted_size(lights);
-    let blocks = n / SORT_BLOCK;
-    let mut steps = vec![Step::Dispatch("sort_blocks", Over::Groups(blocks, 1, 1))];
-    for (s, (_, j)) in merge_schedule(n).into_iter().enumerate() {
-        let entry = if j == 0 { "merge_blocks" } else { "merge_step" };
-        steps.push(Step::Dispatch(entry, Over::Groups(blocks + s as u32, 1, 1)));
-    }
-    steps
-}
-
-/// The sort's order: a key and a light an entry.
-fn sorted_lights(lights: u32) -> (&'static str, u64) {
-    ("sorted_lights", sorted_size(lights) as u64)
-}
-
-/// Refuse a frame whose sorted order does not fit one buffer.
-fn check_sorted(
-    gpu: &Gpu,
-    method: &str,
-    lights: usize,
-    sizes: &BufferSizes,
-) -> Result<(), GpuError> {
-    let (name, count) = sorted_lights(lights as u32);
-    let bytes = sizes.bytes(name, count).unwrap_or(0);
-    let max = gpu.max_storage_bytes();
-    if bytes > max {
-        return Err(GpuError::TooLarge(format!(
-            "{method}'s sorted order of {lights} lights takes {bytes} bytes, more than the {max} bytes adapter `{}` allows in one buffer; use fewer lights",
-            gpu.adapter.name
-        )));
-    }
-    Ok(())
 }
 
 /// Encode one light-list pass (`work`): its clears, then its steps. The first compute pass

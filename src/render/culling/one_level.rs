@@ -2,7 +2,7 @@
 //! clusters it touches, a two-level prefix sum turns counts into offsets, a second walk
 //! fills the lists, each short list sorted by its cluster and each long one by a workgroup.
 
-use super::{Clear, Over, Plan, Step, long_lists, per_light};
+use super::steps::{Clear, Over, Plan, Step, long_lists, per_light};
 use crate::compose::SCAN_BLOCK;
 use crate::render::clusters::ClusterBuffers;
 

@@ -3,7 +3,7 @@
 //! itself where it entered, then each changed list copied to new room without the lights
 //! that left, the entering lights written after it, and those lists sorted.
 
-use super::{Clear, Over, Plan, Step, long_lists, per_light};
+use super::steps::{Clear, Over, Plan, Step, long_lists, per_light};
 use crate::render::clusters::ClusterBuffers;
 
 /// The plan for `moved` lights that moved since the lists were made.

@@ -5,51 +5,25 @@
 //! out of order marked (indirect dispatches), then lists finished and the marked ones sorted.
 
 use super::one_level::scan_blocks;
-use super::{Clear, Over, Plan, Step, long_lists};
+use super::steps::{Clear, Over, Plan, Step, long_lists};
 use crate::compose::ComposedPass;
 use crate::gpu::{Gpu, GpuError};
-use crate::render::built::Pipelines;
 use crate::render::clusters::{
-    BIN_TARGET_FORMAT, ClusterBuffers, DISPATCH_ARGS_BYTES, ProxyDrawing, Sizing,
+    BIN_TARGET_FORMAT, ClusterBuffers, DISPATCH_ARGS_BYTES, ProxyDrawing, ProxyLayout, Sizing,
 };
 use crate::render::error::RenderError;
-use crate::render::passes::{ComputePipelines, begin_render, color_target, render_pipeline};
-use crate::render::reflect::BufferLayout;
+use crate::render::passes::{begin_render, color_target, render_pipeline};
 
-/// Rasterised binning's buffer layouts as its shader root declares them, read off its naga
-/// module: a proxy's bytes (`light_proxies`' stride, the draw's instance stride too), the
-/// bytes of `ProxyDraw`, and where in it the scatter's dispatch starts (`scatter_x`).
-#[derive(Clone, Copy, Debug)]
-pub struct ProxyLayout {
-    pub proxy_bytes: u64,
-    pub draw_bytes: u64,
-    pub scatter_at: u64,
-}
-
-impl ProxyLayout {
-    /// The layout of light assignment pass `pass`; `None` where it declares no proxies.
-    pub fn of(pass: &ComposedPass) -> Option<Self> {
-        let draw = BufferLayout::of(pass, "proxy_draw")?;
-        Some(Self {
-            proxy_bytes: BufferLayout::of(pass, "light_proxies")?.element_bytes,
-            draw_bytes: draw.element_bytes,
-            scatter_at: draw.offset("scatter_x")?,
-        })
-    }
-}
-
-/// Light assignment's pipelines: its entry points' and the draw's, laid out as `drawing`
-/// (made with the cluster buffers) says.
+/// The pipelines of light assignment's draw, laid out as `drawing` (made with the cluster
+/// buffers) says.
 pub(super) fn pipelines(
     gpu: &Gpu,
     pass: &ComposedPass,
     layout: &wgpu::PipelineLayout,
-    compute: ComputePipelines,
     drawing: Option<&ProxyDrawing>,
-) -> Result<Pipelines, RenderError> {
+) -> Result<BinningPipelines, RenderError> {
     let proxies = drawing.ok_or_else(|| no_proxy_layout(pass))?.layout;
-    let draw = BinningPipelines::new(gpu, pass, layout, proxies)?;
-    Ok(Pipelines::Binning(compute, draw))
+    Ok(BinningPipelines::new(gpu, pass, layout, proxies)?)
 }
 
 /// Rasterised binning's root without the proxy buffers its draw and copies need.

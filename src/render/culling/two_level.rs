@@ -2,7 +2,7 @@
 //! bit in each big tile whose tiles it reaches, then each cluster walks its big tile's
 //! survivors once and writes its list; lists too long to hold are written by a second walk.
 
-use super::{Clear, Over, Plan, Step, long_lists, per_light};
+use super::steps::{Clear, Over, Plan, Step, long_lists, per_light};
 use crate::render::clusters::{ClusterBuffers, Sizing};
 
 pub(super) fn plan(c: &ClusterBuffers, lights: u32, big_tile: u32) -> Plan<'_> {

@@ -3,7 +3,7 @@
 //! that reach its slice, each tile a bit per light that reaches its side planes. No lists:
 //! a pixel walks its bin's range.
 
-use super::{Clear, Over, Plan, Step, check_sorted, per_light, sort_lights, sorted_lights};
+use super::steps::{Clear, Over, Plan, Step, check_sorted, per_light, sort_lights, sorted_lights};
 use crate::cpu::zbin::ZBins;
 use crate::gpu::{Gpu, GpuError};
 use crate::render::clusters::{ClusterBuffers, Sizing};
