@@ -3,8 +3,10 @@
 //! buffers they clear and their dispatches; workgroup counts from each entry point's
 //! workgroup size in the pass's naga module.
 
-use super::clusters::ClusterBuffers;
+use super::bindings::Binding;
+use super::clusters::{ClusterBuffers, ClusterStats, WORD_BYTES};
 use super::culling::{self, BinningPipelines, ListWork};
+use super::frame::{Over, Work};
 use super::passes::{ComputePipelines, set_compute_groups};
 use crate::compose::ClusterPass;
 use crate::gpu::TimestampSlot;
@@ -21,11 +23,13 @@ pub struct Extent {
     pub refit: bool,
 }
 
-/// Encode one clustering pass: clear what it accumulates into, then its dispatches. `c` is
+/// Encode one clustering pass as its frame step says (`work`): clear what it accumulates
+/// into, then its dispatches, or the culling method's plan for the lists. `c` is
 /// the lists the pass builds: the clusters' own, or StaticDynamic's moving lists.
 #[allow(clippy::too_many_arguments)]
 pub fn encode(
     pass: ClusterPass,
+    work: &Work,
     p: &ComputePipelines,
     binning: Option<&BinningPipelines>,
     groups: &[Option<wgpu::BindGroup>],
@@ -35,8 +39,8 @@ pub fn encode(
     extent: &Extent,
 ) {
     let pixels = [extent.width, extent.height, 1];
-    let dispatches: Vec<(&str, [u32; 3])> = match pass {
-        ClusterPass::LightAssign | ClusterPass::MovingAssign | ClusterPass::ListPatch => {
+    let dispatches = match work {
+        Work::Lists(_) => {
             let work = match pass {
                 ClusterPass::MovingAssign => ListWork::Moving {
                     moving: extent.moving,
@@ -51,34 +55,32 @@ pub fn encode(
             };
             return culling::encode(work, p, binning, groups, encoder, slot, c);
         }
-        ClusterPass::MarkActive => {
-            encoder.clear_buffer(&c.active, 0, None);
-            for name in ["sample_depths", "depth_masks", "big_tile_depths"] {
-                if let Some(buffer) = c.buffer(name) {
-                    encoder.clear_buffer(buffer, 0, None);
-                }
-            }
-            let mut marks = vec![("mark_active", p.groups_for("mark_active", pixels))];
-            if c.culling.marks_depth_cells() {
-                marks.push(("mark_cells", p.groups_for("mark_cells", pixels)));
-            }
-            marks
-        }
-        ClusterPass::DepthRange => vec![
-            ("reduce", p.groups_for("reduce", pixels)),
-            ("finalize", [1, 1, 1]),
-        ],
-        ClusterPass::ClusterBounds => vec![(
-            "build_bounds",
-            p.groups_for("build_bounds", [c.clusters, 1, 1]),
-        )],
+        Work::Dispatches(d) => d,
+        _ => return,
     };
+    if pass == ClusterPass::MarkActive {
+        encoder.clear_buffer(&c.active, 0, None);
+        for name in [
+            Binding::SampleDepths,
+            Binding::DepthMasks,
+            Binding::BigTileDepths,
+        ] {
+            if let Some(buffer) = c.buffer(name) {
+                encoder.clear_buffer(buffer, 0, None);
+            }
+        }
+    }
     let mut cp = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
         label: Some(<&str>::from(pass)),
         timestamp_writes: TimestampSlot::compute(slot),
     });
     set_compute_groups(&mut cp, groups);
-    for (entry, [x, y, z]) in dispatches {
+    for &(entry, over) in dispatches {
+        let [x, y, z] = match over {
+            Over::Pixels => p.groups_for(entry, pixels),
+            Over::Clusters => p.groups_for(entry, [c.clusters, 1, 1]),
+            Over::OneGroup => [1, 1, 1],
+        };
         cp.set_pipeline(p.get(entry));
         cp.dispatch_workgroups(x, y, z);
     }
@@ -94,8 +96,8 @@ pub fn encode_visible_count(
     extent: &Extent,
 ) {
     encoder.clear_buffer(&c.active, 0, None);
-    // The `active_clusters` counter: the third u32 of the stats.
-    encoder.clear_buffer(&c.stats, 8, Some(4));
+    let at = std::mem::offset_of!(ClusterStats, active_clusters) as u64;
+    encoder.clear_buffer(&c.stats, at, Some(WORD_BYTES));
     let mut cp = encoder.begin_compute_pass(&Default::default());
     set_compute_groups(&mut cp, groups);
     cp.set_pipeline(p.get("mark_visible"));

@@ -7,6 +7,7 @@ use wgpu::util::DeviceExt;
 use crate::compose::ComposedPass;
 use crate::cpu::clusters::ClusterLists;
 use crate::gpu::{Gpu, GpuError, read_buffer};
+use crate::render::bindings::Binding;
 use crate::render::reflect::BufferLayout;
 use crate::render::reflect::BufferSizes;
 use crate::variant::CullingMethod;
@@ -26,9 +27,9 @@ pub struct ProxyLayout {
 impl ProxyLayout {
     /// The layout of light assignment pass `pass`; `None` where it declares no proxies.
     pub fn of(pass: &ComposedPass) -> Option<Self> {
-        let draw = BufferLayout::of(pass, "proxy_draw")?;
+        let draw = BufferLayout::of(pass, Binding::ProxyDraw)?;
         Some(Self {
-            proxy_bytes: BufferLayout::of(pass, "light_proxies")?.element_bytes,
+            proxy_bytes: BufferLayout::of(pass, Binding::LightProxies)?.element_bytes,
             draw_bytes: draw.element_bytes,
             scatter_at: draw.offset("scatter_x")?,
         })
@@ -121,7 +122,26 @@ impl ClusterStats {
 }
 
 /// Bytes of an indirect dispatch's arguments (x, y, z).
-pub const DISPATCH_ARGS_BYTES: u64 = 12;
+pub const DISPATCH_ARGS_BYTES: u64 = std::mem::size_of::<wgpu::util::DispatchIndirectArgs>() as u64;
+
+/// Bytes of an indirect draw's arguments (vertices, instances, first vertex, first
+/// instance).
+pub const DRAW_ARGS_BYTES: u64 = std::mem::size_of::<wgpu::util::DrawIndirectArgs>() as u64;
+
+/// The header of `sort_jobs` (`SortJobs` in `clustering/build_bindings.wesl`): the long
+/// lists' indirect dispatch (x, y, z workgroups) and their number. Its offsets are the
+/// WGSL's (`tests/constants.rs`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct SortJobsHeader {
+    pub groups_x: u32,
+    pub groups_y: u32,
+    pub groups_z: u32,
+    pub count: u32,
+}
+
+/// Bytes of one word of a header.
+pub const WORD_BYTES: u64 = std::mem::size_of::<u32>() as u64;
 
 pub struct ClusterBuffers {
     pub clusters: u32,
@@ -133,7 +153,7 @@ pub struct ClusterBuffers {
     pub light_ranges: wgpu::Buffer,
     /// The rest the frame's passes bind, by the names their WGSL declares, only those this
     /// variant uses (`named_sizes`): the lists', 2.5D culling's masks, the method's own.
-    named: Vec<(&'static str, wgpu::Buffer)>,
+    named: Vec<(Binding, wgpu::Buffer)>,
     /// The indirect dispatch of the long-list sort, copied from `sort_jobs`' header (a
     /// buffer cannot be bound for storage and read as indirect arguments in one dispatch).
     pub sort_dispatch: wgpu::Buffer,
@@ -186,8 +206,8 @@ pub struct Sizing {
 fn make_declared(
     gpu: &Gpu,
     sizes: &BufferSizes,
-    counts: Vec<(&'static str, u64)>,
-) -> Vec<(&'static str, wgpu::Buffer)> {
+    counts: Vec<(Binding, u64)>,
+) -> Vec<(Binding, wgpu::Buffer)> {
     counts
         .into_iter()
         .map(|(name, count)| make_named(gpu, name, sizes.bytes(name, count).unwrap_or(0)))
@@ -245,7 +265,11 @@ impl ProxyDrawing {
             instances: copy_of("proxy instances", proxy_bytes, wgpu::BufferUsages::VERTEX),
             // The indirect draw's arguments: vertices, instances, first vertex, first
             // instance.
-            draw_args: copy_of("proxy draw arguments", 16, wgpu::BufferUsages::INDIRECT),
+            draw_args: copy_of(
+                "proxy draw arguments",
+                DRAW_ARGS_BYTES,
+                wgpu::BufferUsages::INDIRECT,
+            ),
             scatter_dispatch: copy_of(
                 "pair scatter dispatch",
                 DISPATCH_ARGS_BYTES,
@@ -264,30 +288,30 @@ fn named_sizes(
     culling: Culling,
     update: ListUpdate,
     s: &Sizing,
-) -> Vec<(&'static str, u64)> {
+) -> Vec<(Binding, u64)> {
     let n = (s.grid.0 * s.grid.1 * s.grid.2) as u64;
     let mut sizes = Vec::new();
     if method.builds_lists() {
         let blocks = n.div_ceil(crate::compose::SCAN_BLOCK as u64);
         sizes.extend([
-            ("cluster_bounds", n),
-            ("light_counts", n),
-            ("light_offsets", n),
-            ("block_sums", blocks),
-            ("light_indices", s.entries as u64),
-            ("fill_cursors", n),
+            (Binding::ClusterBounds, n),
+            (Binding::LightCounts, n),
+            (Binding::LightOffsets, n),
+            (Binding::BlockSums, blocks),
+            (Binding::LightIndices, s.entries as u64),
+            (Binding::FillCursors, n),
             // The minimum (inverted) and maximum of each.
-            ("sample_depths", n * 2),
+            (Binding::SampleDepths, n * 2),
             // A job per cluster at most (`SortJobs`).
-            ("sort_jobs", n),
+            (Binding::SortJobs, n),
         ]);
     }
     if culling.marks_depth_cells() {
-        sizes.push(("depth_masks", n));
+        sizes.push((Binding::DepthMasks, n));
     }
     if update == ListUpdate::Patch {
         // Per cluster, what the patch did to its list (`passes/patch_lists.wesl`).
-        sizes.push(("patch_clusters", n));
+        sizes.push((Binding::PatchClusters, n));
     }
     sizes.extend(method.own_buffers(s));
     sizes
@@ -295,13 +319,13 @@ fn named_sizes(
 
 /// The buffers of one-level lists (StaticDynamic's moving lists), by name: counts,
 /// offsets, the prefix sum's blocks, indices, fill cursors, long-list jobs.
-const LIST_BUFFERS: [&str; 6] = [
-    "light_counts",
-    "light_offsets",
-    "block_sums",
-    "light_indices",
-    "fill_cursors",
-    "sort_jobs",
+const LIST_BUFFERS: [Binding; 6] = [
+    Binding::LightCounts,
+    Binding::LightOffsets,
+    Binding::BlockSums,
+    Binding::LightIndices,
+    Binding::FillCursors,
+    Binding::SortJobs,
 ];
 
 fn storage(gpu: &Gpu, label: &str, size: u64) -> wgpu::Buffer {
@@ -317,11 +341,12 @@ fn storage(gpu: &Gpu, label: &str, size: u64) -> wgpu::Buffer {
 
 /// A named buffer, made: the long lists' dispatch header (x, y, z, jobs) made (0, 1, 1, 0),
 /// since frames reset only x and jobs (light assignment's plan clears them, `culling/`).
-fn make_named(gpu: &Gpu, name: &'static str, bytes: u64) -> (&'static str, wgpu::Buffer) {
-    let buffer = storage(gpu, name, bytes);
-    if name == "sort_jobs" {
+fn make_named(gpu: &Gpu, name: Binding, bytes: u64) -> (Binding, wgpu::Buffer) {
+    let buffer = storage(gpu, name.name(), bytes);
+    if name == Binding::SortJobs {
+        let y = std::mem::offset_of!(SortJobsHeader, groups_y) as u64;
         gpu.queue
-            .write_buffer(&buffer, 4, bytemuck::cast_slice(&[1u32, 1u32]));
+            .write_buffer(&buffer, y, bytemuck::cast_slice(&[1u32, 1u32]));
     }
     (name, buffer)
 }
@@ -361,12 +386,13 @@ impl ClusterBuffers {
             named_sizes(method, c.culling, c.update, &sizing),
         );
         // Bound by every method's passes; one no pass declares is left empty.
-        let every =
-            |name: &str, count: u64| storage(gpu, name, sizes.bytes(name, count).unwrap_or(0));
+        let every = |name: Binding, count: u64| {
+            storage(gpu, name.name(), sizes.bytes(name, count).unwrap_or(0))
+        };
         let drawing = proxies.map(|layout| {
             let proxy_bytes = named
                 .iter()
-                .find(|(name, _)| *name == "light_proxies")
+                .find(|(name, _)| *name == Binding::LightProxies)
                 .map_or(layout.proxy_bytes, |(_, b)| b.size());
             ProxyDrawing::new(gpu, layout, proxy_bytes, grid)
         });
@@ -381,14 +407,14 @@ impl ClusterBuffers {
                         | wgpu::BufferUsages::COPY_DST
                         | wgpu::BufferUsages::COPY_SRC,
                 }),
-            active: every("cluster_active", n),
+            active: every(Binding::ClusterActive, n),
             stats: storage(
                 gpu,
                 "cluster_stats",
                 std::mem::size_of::<ClusterStats>() as u64,
             ),
-            light_view: every("light_view", lights.max(1) as u64),
-            light_ranges: every("light_ranges", lights.max(1) as u64),
+            light_view: every(Binding::LightView, lights.max(1) as u64),
+            light_ranges: every(Binding::LightRanges, lights.max(1) as u64),
             named,
             sort_dispatch: gpu.device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("long-list sort dispatch"),
@@ -507,26 +533,31 @@ impl ClusterBuffers {
     /// The buffer a cluster pass binds by `name`, the name `build_bindings.wesl` (and,
     /// read-only, `lookup.wesl`) declares it by: the slot numbers are written only there.
     /// `None` for a buffer this variant does not make.
-    pub fn buffer(&self, name: &str) -> Option<&wgpu::Buffer> {
+    pub fn buffer(&self, name: Binding) -> Option<&wgpu::Buffer> {
         Some(match name {
-            "cluster_range" => &self.range,
-            "cluster_active" => &self.active,
-            "cluster_stats" => &self.stats,
-            "light_view" => &self.light_view,
-            "light_ranges" => &self.light_ranges,
+            Binding::ClusterRange => &self.range,
+            Binding::ClusterActive => &self.active,
+            Binding::ClusterStats => &self.stats,
+            Binding::LightView => &self.light_view,
+            Binding::LightRanges => &self.light_ranges,
             _ => return self.named.iter().find(|(n, _)| *n == name).map(|(_, b)| b),
         })
     }
 
     /// The buffer named `name`, which this variant's method makes (a light-assignment plan
     /// asks only for its own method's buffers).
-    pub fn named(&self, name: &str) -> &wgpu::Buffer {
-        self.buffer(name)
-            .unwrap_or_else(|| panic!("{:?} makes no cluster buffer `{name}`", self.method))
+    pub fn named(&self, name: Binding) -> &wgpu::Buffer {
+        self.buffer(name).unwrap_or_else(|| {
+            panic!(
+                "{:?} makes no cluster buffer `{}`",
+                self.method,
+                name.name()
+            )
+        })
     }
 
     /// The buffer bound as `name`, as 32-bit words.
-    pub fn read_words(&self, gpu: &Gpu, name: &str) -> Result<Vec<u32>, GpuError> {
+    pub fn read_words(&self, gpu: &Gpu, name: Binding) -> Result<Vec<u32>, GpuError> {
         self.read_named(gpu, name, None)
     }
 
@@ -534,13 +565,14 @@ impl ClusterBuffers {
     pub(super) fn read_named(
         &self,
         gpu: &Gpu,
-        name: &str,
+        name: Binding,
         bytes: Option<u64>,
     ) -> Result<Vec<u32>, GpuError> {
         let buffer = self.buffer(name).ok_or_else(|| {
             GpuError::Captured(format!(
-                "{:?} makes no cluster buffer `{name}`",
-                self.method
+                "{:?} makes no cluster buffer `{}`",
+                self.method,
+                name.name()
             ))
         })?;
         let bytes = bytes.unwrap_or(buffer.size());
@@ -558,7 +590,12 @@ impl ClusterBuffers {
     }
 
     pub fn read_range(&self, gpu: &Gpu) -> Result<ClusterRange, GpuError> {
-        let bytes = read_buffer(gpu, &self.range, 0, 16)?;
+        let bytes = read_buffer(
+            gpu,
+            &self.range,
+            0,
+            std::mem::size_of::<ClusterRange>() as u64,
+        )?;
         Ok(bytemuck::pod_read_unaligned(&bytes))
     }
 
@@ -587,14 +624,14 @@ impl ClusterBuffers {
 
     /// The bytes of `count` elements of buffer `name` as the frame's passes declare it (0
     /// for one no pass declares).
-    pub fn declared_bytes(&self, name: &str, count: u64) -> u64 {
+    pub fn declared_bytes(&self, name: Binding, count: u64) -> u64 {
         self.sizes.bytes(name, count).unwrap_or(0)
     }
 
     /// Each cluster's view-space box as the GPU holds it: [min, max], xyz and a fourth word.
     pub fn read_bounds(&self, gpu: &Gpu) -> Result<Vec<[[f32; 4]; 2]>, GpuError> {
-        let n = self.declared_bytes("cluster_bounds", self.clusters as u64);
-        let words = self.read_named(gpu, "cluster_bounds", Some(n))?;
+        let n = self.declared_bytes(Binding::ClusterBounds, self.clusters as u64);
+        let words = self.read_named(gpu, Binding::ClusterBounds, Some(n))?;
         Ok(words
             .chunks_exact(8)
             .map(|w| bytemuck::pod_read_unaligned(bytemuck::cast_slice(w)))
@@ -609,14 +646,14 @@ impl ClusterBuffers {
         }
         let depths = self.read_named(
             gpu,
-            "sample_depths",
-            Some(self.declared_bytes("sample_depths", n * 2)),
+            Binding::SampleDepths,
+            Some(self.declared_bytes(Binding::SampleDepths, n * 2)),
         )?;
         let masks = if self.culling.marks_depth_cells() {
             self.read_named(
                 gpu,
-                "depth_masks",
-                Some(self.declared_bytes("depth_masks", n)),
+                Binding::DepthMasks,
+                Some(self.declared_bytes(Binding::DepthMasks, n)),
             )?
         } else {
             vec![0u32; n as usize]
@@ -641,18 +678,18 @@ impl ClusterBuffers {
             return false;
         }
         gpu.queue.write_buffer(
-            self.named("light_counts"),
+            self.named(Binding::LightCounts),
             0,
             bytemuck::cast_slice(&lists.counts),
         );
         gpu.queue.write_buffer(
-            self.named("light_offsets"),
+            self.named(Binding::LightOffsets),
             0,
             bytemuck::cast_slice(&lists.offsets),
         );
         if !lists.indices.is_empty() {
             gpu.queue.write_buffer(
-                self.named("light_indices"),
+                self.named(Binding::LightIndices),
                 0,
                 bytemuck::cast_slice(&lists.indices),
             );

@@ -8,11 +8,13 @@
 //! image fills a slot is `FrameResources::scene_binding`. What a frame must fit is
 //! `limits`, what it leaves to read back `readback`.
 
+mod bindings;
 mod built;
 mod clustering;
 mod clusters;
 mod culling;
 mod error;
+pub mod frame;
 mod gbuffer;
 mod limits;
 mod lists;
@@ -33,6 +35,7 @@ mod stats;
 mod targets;
 mod truth;
 
+pub use bindings::Binding;
 pub use clusters::{AssignmentWork, ClusterBuffers, ClusterRange, ClusterStats, GpuDepthMask};
 pub use error::RenderError;
 pub use passes::{PassRunner, shader_module};
@@ -44,11 +47,12 @@ pub use truth::raster_truth;
 
 use std::time::Instant;
 
-use crate::compose::{self, ComposedPass, Composer, FramePlan, Pass, PassId};
+use crate::compose::{self, ComposedPass, Composer, Pass, PassId};
 use crate::gpu::{Gpu, GpuError, TimestampSlot, Timings, read_texture};
 use crate::scene::Scene;
 use crate::variant::{Assignment, Variant};
 use built::{BuiltPasses, Pipelines};
+use frame::{Frame, Step};
 use lists::{CpuAssignment, Fit};
 use post::PostChain;
 use redo::{Held, Lists, Redo};
@@ -117,12 +121,12 @@ pub fn variant_needs(
 }
 
 /// A variant ready to render a scene. Its state, by owner: the frame's passes in order
-/// (`plan`), the resources they bind (`res`), their pipelines and bind groups (`passes`),
+/// (`frame`), the resources they bind (`res`), their pipelines and bind groups (`passes`),
 /// and what carries from frame to frame (`state`).
 pub struct Renderer<'g> {
     gpu: &'g Gpu,
     variant: Variant,
-    plan: FramePlan,
+    frame: Frame,
     res: FrameResources,
     passes: BuiltPasses,
     state: FrameState,
@@ -178,7 +182,7 @@ impl<'g> Renderer<'g> {
         let plan = compose::plan(variant, still_camera, scene.has_blend());
         let skips = Skips::new(variant, scene);
         let scene_features = compose::SceneFeatures::of(scene, !skips.no_spots);
-        let frame = compose::frame_features(scene_features, None);
+        let features = compose::frame_features(scene_features, None);
         let mut instrumented_frame =
             compose::frame_features(scene_features, Some(count_every_light));
         instrumented_frame.push(("early_depth", gpu.early_depth));
@@ -192,12 +196,16 @@ impl<'g> Renderer<'g> {
             } else {
                 None
             };
-            composed.push((*p, composer.compose_with(variant, p, &frame)?, instrumented));
+            composed.push((
+                *p,
+                composer.compose_with(variant, p, &features)?,
+                instrumented,
+            ));
         }
         let support = plan
             .support
             .iter()
-            .map(|p| Ok((*p, composer.compose_with(variant, p, &frame)?)))
+            .map(|p| Ok((*p, composer.compose_with(variant, p, &features)?)))
             .collect::<Result<Vec<_>, RenderError>>()?;
         let every_pass = composed
             .iter()
@@ -206,6 +214,12 @@ impl<'g> Renderer<'g> {
         let targets = targets_of(variant, gpu.hdr_format);
         needs::Needs::of(every_pass, (targets.0, &targets.1))?
             .check(&gpu.limits, gpu.request.limits.name())?;
+        let modules: Vec<(Pass, &ComposedPass)> = composed
+            .iter()
+            .map(|(p, c, _)| (*p, c))
+            .chain(support.iter().map(|(p, c)| (*p, c)))
+            .collect();
+        let frame = Frame::of(variant, &plan, &modules)?;
         let proxies = composed
             .iter()
             .find(|(p, _, _)| p.id == PassId::Clustering(compose::ClusterPass::LightAssign))
@@ -215,7 +229,7 @@ impl<'g> Renderer<'g> {
                 .iter()
                 .flat_map(|(_, c, i)| std::iter::once(c).chain(i))
                 .chain(support.iter().map(|(_, c)| c)),
-        );
+        )?;
         if variant.pipeline.is_clustered() {
             let c = variant.clusters();
             c.method().check(gpu, c.grid, scene.lights.len(), &sizes)?;
@@ -250,7 +264,7 @@ impl<'g> Renderer<'g> {
             gpu,
             variant,
             res: &res,
-            alpha_mask: frame.contains(&("alpha_mask", true)),
+            alpha_mask: features.contains(&("alpha_mask", true)),
         };
         let mut fresh_pipelines = 0;
         gpu.scoped("creating pipelines", || -> Result<(), RenderError> {
@@ -288,12 +302,12 @@ impl<'g> Renderer<'g> {
             skips,
             redo: Redo::ALL,
             held: Held::of(scene),
-            frame_features: frame,
+            frame_features: features,
         };
         let mut renderer = Renderer {
             gpu,
             variant: variant.clone(),
-            plan,
+            frame,
             res,
             passes,
             state,
@@ -361,11 +375,11 @@ impl<'g> Renderer<'g> {
     /// The names of the passes that shade with the lights (`PassId::is_shading`), as the
     /// frame's timings name them.
     pub fn shading_pass_names(&self) -> Vec<&'static str> {
-        self.plan
-            .passes
+        self.frame
+            .steps
             .iter()
-            .filter(|p| p.id.is_shading())
-            .map(|p| p.name())
+            .filter(|s| s.pass.id.is_shading())
+            .map(|s| s.pass.name())
             .collect()
     }
 
@@ -541,7 +555,7 @@ impl<'g> Renderer<'g> {
                     // The marks of the frame before stay, and so does their count.
                     let at = std::mem::offset_of!(ClusterStats, active_clusters) as u64;
                     e.clear_buffer(&c.stats, 0, Some(at));
-                    e.clear_buffer(&c.stats, at + 4, None);
+                    e.clear_buffer(&c.stats, at + clusters::WORD_BYTES, None);
                 }
             }
             if let Some(m) = self.res.moving.as_ref().filter(|_| assigns_moving) {
@@ -565,29 +579,35 @@ impl<'g> Renderer<'g> {
         })?;
         // CPU assignment is the light_assign pass of its variants.
         let cpu_ms = if assigns { self.assign_on_cpu()? } else { None };
-        let mut skipped: Vec<String> = self.plan.never.iter().map(|p| p.name().into()).collect();
+        let mut skipped: Vec<String> = self.frame.never.iter().map(|p| p.name().into()).collect();
         if self.state.skips.no_spots {
             skipped.push(SPOT_CONE.into());
         }
         if self.cpu_assignment.is_some() && cpu_ms.is_none() {
             skipped.push(ASSIGN.name().into());
         }
-        for p in &self.plan.passes {
-            if self.state.skips_pass(p.id, instrumented, &self.variant)
-                && !skipped.iter().any(|s| s == p.name())
+        for s in &self.frame.steps {
+            let name = s.pass.name();
+            if self
+                .state
+                .skips_pass(s.pass.id, instrumented, &self.variant)
+                && !skipped.iter().any(|k| k == name)
             {
-                skipped.push(p.name().into());
+                skipped.push(name.into());
             }
         }
-        let passes = &self.plan.passes;
+        let steps = &self.frame.steps;
         let timings = gpu.scoped("rendering a frame", || -> Result<Timings, GpuError> {
-            let mut runner = PassRunner::new(gpu, passes.len() as u32 + 2);
-            for pass in passes {
-                if self.state.skips_pass(pass.id, instrumented, &self.variant) {
+            let mut runner = PassRunner::new(gpu, steps.len() as u32 + 2);
+            for step in steps {
+                if self
+                    .state
+                    .skips_pass(step.pass.id, instrumented, &self.variant)
+                {
                     continue;
                 }
-                runner.pass(pass.name(), |encoder, slot| {
-                    self.encode(pass.id, encoder, slot, instrumented)
+                runner.pass(step.pass.name(), |encoder, slot| {
+                    self.encode(step, encoder, slot, instrumented)
                 })?;
             }
             runner.finish()
@@ -600,14 +620,15 @@ impl<'g> Renderer<'g> {
         })
     }
 
-    /// Encode pass `id` with the pipelines of its family.
+    /// Encode `step` with the pipelines of its family.
     fn encode(
         &self,
-        id: PassId,
+        step: &Step,
         encoder: &mut wgpu::CommandEncoder,
         slot: Option<TimestampSlot<'_>>,
         instrumented: bool,
     ) {
+        let id = step.pass.id;
         if let PassId::Post(p) = id {
             return self.passes.post.encode(p, encoder, slot);
         }
@@ -637,13 +658,20 @@ impl<'g> Renderer<'g> {
                     _ => res.clusters.as_ref(),
                 };
                 if let Some(c) = lists {
-                    clustering::encode(p, pl, None, groups, encoder, slot, c, &self.extent());
+                    let extent = self.extent();
+                    let binning = None;
+                    clustering::encode(
+                        p, &step.work, pl, binning, groups, encoder, slot, c, &extent,
+                    );
                 }
             }
             (PassId::Clustering(p), Pipelines::Binning(pl, binning)) => {
                 if let Some(c) = &res.clusters {
                     let extent = self.extent();
-                    clustering::encode(p, pl, Some(binning), groups, encoder, slot, c, &extent);
+                    let binning = Some(binning);
+                    clustering::encode(
+                        p, &step.work, pl, binning, groups, encoder, slot, c, &extent,
+                    );
                 }
             }
             _ => {}

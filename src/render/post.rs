@@ -5,6 +5,7 @@
 //! another. The colour ping-pongs between two rgba32float storage images, and bloom keeps
 //! its bright and blurred parts in two more; only the images a variant's steps use exist.
 
+use super::clusters::{DISPATCH_ARGS_BYTES, WORD_BYTES};
 use super::error::RenderError;
 use super::passes::{ComputePipelines, set_compute_groups};
 use super::reflect::PassLayout;
@@ -156,7 +157,7 @@ impl PostChain {
         let blur_dispatch = any_bloom.then(|| {
             gpu.device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("bloom blur dispatch"),
-                size: 12,
+                size: DISPATCH_ARGS_BYTES,
                 usage: wgpu::BufferUsages::STORAGE
                     | wgpu::BufferUsages::INDIRECT
                     | wgpu::BufferUsages::COPY_DST
@@ -225,11 +226,12 @@ impl PostChain {
     }
 
     /// Whether the last frame's bloom blur ran no workgroup (no pixel passed the
-    /// threshold). Reads back 4 bytes.
+    /// threshold). Reads back its workgroup count along x.
     pub fn blur_skipped(&self, gpu: &Gpu) -> Result<bool, crate::gpu::GpuError> {
         match &self.blur_dispatch {
             Some(b) if self.indirect_blur => {
-                let x = crate::gpu::read_buffer(gpu, b, 0, 4)?;
+                let at = std::mem::offset_of!(wgpu::util::DispatchIndirectArgs, x) as u64;
+                let x = crate::gpu::read_buffer(gpu, b, at, WORD_BYTES)?;
                 Ok(bytemuck::cast_slice::<u8, u32>(&x)[0] == 0)
             }
             _ => Ok(false),

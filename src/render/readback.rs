@@ -2,6 +2,7 @@
 //! views: the shaded image, the light lists, boxes, masks and bins, the depth range, and a
 //! debug view drawn from the frame's own depth and lists.
 
+use super::bindings::Binding;
 use super::error::RenderError;
 use super::reflect::PassLayout;
 use super::targets::read_hdr;
@@ -104,9 +105,9 @@ impl Renderer<'_> {
         }
     }
 
-    /// A cluster buffer after the last frame, by the name its WGSL binds it as, in 32-bit
-    /// words (None for pipelines without clusters).
-    pub fn cluster_buffer(&self, name: &str) -> Result<Option<Vec<u32>>, RenderError> {
+    /// A cluster buffer after the last frame, in 32-bit words (None for pipelines without
+    /// clusters).
+    pub fn cluster_buffer(&self, name: Binding) -> Result<Option<Vec<u32>>, RenderError> {
         match &self.res.clusters {
             Some(c) => Ok(Some(c.read_words(self.gpu, name)?)),
             None => Ok(None),

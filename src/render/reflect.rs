@@ -6,6 +6,7 @@ use std::collections::BTreeMap;
 
 use naga::{AddressSpace, ImageClass, ImageDimension, ScalarKind, ShaderStage, TypeInner};
 
+use super::bindings::Binding;
 use super::error::RenderError;
 use crate::compose::ComposedPass;
 use crate::gpu::{Gpu, LayoutObjects};
@@ -139,19 +140,19 @@ fn storage_format(f: naga::StorageFormat) -> Option<wgpu::TextureFormat> {
     })
 }
 
-/// One binding of a pass: where it sits, and the name its module declares it by.
-pub struct Slot<'a> {
+/// One binding of a pass: where it sits, and what its module declares it as.
+pub struct Slot {
     pub group: u32,
     pub binding: u32,
-    pub name: &'a str,
+    pub name: Binding,
 }
 
 /// The bind group layouts of a pass and the pipeline layout made of them; a group the pass
 /// does not use is a gap. Made once per device for each distinct WGSL.
 pub struct PassLayout {
     entries: GroupEntries,
-    /// Each binding's declared name (`ComposedPass::slot_names`).
-    names: BTreeMap<(u32, u32), String>,
+    /// What each binding is, by its declared name (`ComposedPass::slot_names`).
+    names: BTreeMap<(u32, u32), Binding>,
     groups: Vec<Option<wgpu::BindGroupLayout>>,
     pub pipeline: wgpu::PipelineLayout,
 }
@@ -160,6 +161,7 @@ impl PassLayout {
     /// The layout of `pass`, from its module.
     pub fn of(gpu: &Gpu, pass: &ComposedPass) -> Result<Self, RenderError> {
         let entries = layout_entries(pass)?;
+        let names = declared(pass)?;
         let count = entries.keys().next_back().map_or(0, |g| g + 1);
         let objects = gpu.pass_layout(&pass.wgsl, || {
             let groups: Vec<Option<wgpu::BindGroupLayout>> = (0..count)
@@ -186,7 +188,7 @@ impl PassLayout {
         })?;
         Ok(Self {
             entries,
-            names: pass.slot_names.clone(),
+            names,
             groups: objects.groups,
             pipeline: objects.pipeline,
         })
@@ -211,10 +213,7 @@ impl PassLayout {
                 let bound = slots
                     .iter()
                     .map(|slot| {
-                        let name = self
-                            .names
-                            .get(&(g as u32, slot.binding))
-                            .map_or("", String::as_str);
+                        let name = self.names[&(g as u32, slot.binding)];
                         let at = Slot {
                             group: g as u32,
                             binding: slot.binding,
@@ -222,8 +221,9 @@ impl PassLayout {
                         };
                         let resource = resource(&at).ok_or_else(|| {
                             RenderError::Reflection(format!(
-                                "pass `{pass}` binds @group({g}) @binding({}) `{name}`, which no resource fills",
-                                slot.binding
+                                "pass `{pass}` binds @group({g}) @binding({}) `{}`, which no resource fills",
+                                slot.binding,
+                                name.name()
                             ))
                         })?;
                         Ok(wgpu::BindGroupEntry {
@@ -242,6 +242,15 @@ impl PassLayout {
     }
 }
 
+/// What each binding of `pass` is, by (group, binding): an error for a declared name that
+/// is no `Binding`.
+pub fn declared(pass: &ComposedPass) -> Result<BTreeMap<(u32, u32), Binding>, RenderError> {
+    pass.slot_names
+        .iter()
+        .map(|(&at, name)| Ok((at, Binding::declared(&pass.name, name)?)))
+        .collect()
+}
+
 /// How a buffer binding of a pass lays out its bytes, read off the module's types: the
 /// size of one element (an array's stride, or the whole type), and each struct member's
 /// byte offset by its declared name.
@@ -253,9 +262,9 @@ pub struct BufferLayout {
 
 impl BufferLayout {
     /// The layout of the binding `pass` declares as `name`, if it has one.
-    pub fn of(pass: &ComposedPass, name: &str) -> Option<Self> {
+    pub fn of(pass: &ComposedPass, name: Binding) -> Option<Self> {
         let module = &pass.module;
-        let (&(group, binding), _) = pass.slot_names.iter().find(|(_, n)| *n == name)?;
+        let (&(group, binding), _) = pass.slot_names.iter().find(|(_, n)| *n == name.name())?;
         let (_, var) = module.global_variables.iter().find(|(_, v)| {
             v.binding
                 .as_ref()
@@ -294,11 +303,11 @@ impl BufferLayout {
 /// stride; any other type: its size). Buffers are sized from these, so no element size is
 /// written in Rust.
 #[derive(Clone, Debug, Default)]
-pub struct BufferSizes(BTreeMap<String, (u64, u64)>);
+pub struct BufferSizes(BTreeMap<Binding, (u64, u64)>);
 
 impl BufferSizes {
     /// The storage buffers `passes` declare (one name, one type, in every pass).
-    pub fn of<'a>(passes: impl IntoIterator<Item = &'a ComposedPass>) -> Self {
+    pub fn of<'a>(passes: impl IntoIterator<Item = &'a ComposedPass>) -> Result<Self, RenderError> {
         let mut sizes = BTreeMap::new();
         for pass in passes {
             let module = &pass.module;
@@ -310,6 +319,7 @@ impl BufferSizes {
                 let Some(name) = pass.slot_names.get(&(slot.group, slot.binding)) else {
                     continue;
                 };
+                let name = Binding::declared(&pass.name, name)?;
                 let runtime = |ty: naga::Handle<naga::Type>| match module.types[ty].inner {
                     TypeInner::Array {
                         size: naga::ArraySize::Dynamic,
@@ -331,22 +341,22 @@ impl BufferSizes {
                         None => (module.types[var.ty].inner.size(module.to_ctx()) as u64, 0),
                     },
                 };
-                sizes.insert(name.clone(), size);
+                sizes.insert(name, size);
             }
         }
-        Self(sizes)
+        Ok(Self(sizes))
     }
 
     /// The bytes of buffer `name` holding `count` elements of its array, if a pass
     /// declares it.
-    pub fn bytes(&self, name: &str, count: u64) -> Option<u64> {
-        self.0.get(name).map(|&(fixed, each)| fixed + each * count)
+    pub fn bytes(&self, name: Binding, count: u64) -> Option<u64> {
+        self.0.get(&name).map(|&(fixed, each)| fixed + each * count)
     }
 
     /// The bytes of buffer `name` holding `count` elements, at least one: the least a
     /// binding of a runtime-sized array takes. 0 where no pass declares it (nothing binds
     /// it).
-    pub fn bindable(&self, name: &str, count: u64) -> u64 {
+    pub fn bindable(&self, name: Binding, count: u64) -> u64 {
         self.bytes(name, count.max(1)).unwrap_or(0)
     }
 }

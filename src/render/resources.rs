@@ -1,6 +1,7 @@
 //! GPU-side scene data: the view uniform, vertex, index and light buffers, render targets,
 //! counters, and which of them fills each bind group slot of the scene passes.
 
+use crate::render::bindings::Binding;
 use bytemuck::{Pod, Zeroable};
 use glam::DMat4;
 use wgpu::util::DeviceExt;
@@ -137,14 +138,14 @@ impl SceneBuffers {
 
     /// What fills the frame's binding declared as `name`, if it is one of its: the view, the
     /// lights, the base colour textures and their sampler (`common/material.wesl`).
-    pub fn frame_binding(&self, name: &str) -> Option<wgpu::BindingResource<'_>> {
+    pub fn frame_binding(&self, name: Binding) -> Option<wgpu::BindingResource<'_>> {
         match name {
-            "view" => Some(self.view.as_entire_binding()),
-            "lights" => Some(self.lights.as_entire_binding()),
-            "base_color_textures" => Some(wgpu::BindingResource::TextureView(
+            Binding::View => Some(self.view.as_entire_binding()),
+            Binding::Lights => Some(self.lights.as_entire_binding()),
+            Binding::BaseColorTextures => Some(wgpu::BindingResource::TextureView(
                 &self.base_color.as_ref()?.0,
             )),
-            "base_color_sampler" => {
+            Binding::BaseColorSampler => {
                 Some(wgpu::BindingResource::Sampler(&self.base_color.as_ref()?.1))
             }
             _ => None,
@@ -245,9 +246,9 @@ impl Counters {
         multisampled: bool,
         sampled: bool,
     ) -> Self {
-        let buffer = |name| {
+        let buffer = |name: Binding| {
             gpu.device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some(name),
+                label: Some(name.name()),
                 size: sizes.bindable(name, pixels),
                 usage: wgpu::BufferUsages::STORAGE
                     | wgpu::BufferUsages::COPY_SRC
@@ -256,11 +257,11 @@ impl Counters {
             })
         };
         Self {
-            evals: buffer("pixel_evals"),
-            useful: buffer("pixel_useful"),
-            clusters: buffer("pixel_clusters"),
-            shadings: multisampled.then(|| buffer("pixel_shadings")),
-            candidates: sampled.then(|| buffer("pixel_candidates")),
+            evals: buffer(Binding::PixelEvals),
+            useful: buffer(Binding::PixelUseful),
+            clusters: buffer(Binding::PixelClusters),
+            shadings: multisampled.then(|| buffer(Binding::PixelShadings)),
+            candidates: sampled.then(|| buffer(Binding::PixelCandidates)),
         }
     }
 
@@ -289,17 +290,17 @@ impl MovingSet {
     /// Room for `lights` lights, holding none, at the sizes `clustering/moving.wesl`
     /// declares.
     fn new(gpu: &Gpu, sizes: &BufferSizes, lights: usize) -> Self {
-        let buffer = |name, count: usize| {
+        let buffer = |name: Binding, count: usize| {
             gpu.device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some(name),
+                label: Some(name.name()),
                 size: sizes.bindable(name, count as u64),
                 usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
                 mapped_at_creation: false,
             })
         };
         Self {
-            ids: buffer("moving_lights", lights),
-            mask: buffer("moving_mask", lights.div_ceil(32)),
+            ids: buffer(Binding::MovingLights, lights),
+            mask: buffer(Binding::MovingMask, lights.div_ceil(32)),
             lights: Vec::new(),
         }
     }
@@ -386,7 +387,7 @@ impl FrameResources {
             let lights = scene.lights.len() as u32;
             // A first guess, within what one binding holds; a frame whose lists overflow
             // grows the buffer and runs again (or says the lists cannot fit).
-            let entry = sizes.bindable("light_indices", 1).max(1);
+            let entry = sizes.bindable(Binding::LightIndices, 1).max(1);
             let bindable =
                 (gpu.limits.max_storage_buffer_binding_size / entry).min(u32::MAX as u64);
             let capacity = (count as u64 * lights.clamp(1, 32) as u64)
@@ -415,7 +416,7 @@ impl FrameResources {
                 gpu.device.create_buffer(&wgpu::BufferDescriptor {
                     label: Some("transparent_depths"),
                     // Two words a pixel: its nearest and farthest pane.
-                    size: sizes.bindable("transparent_depths", 2 * w as u64 * h as u64),
+                    size: sizes.bindable(Binding::TransparentDepths, 2 * w as u64 * h as u64),
                     usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
                     mapped_at_creation: false,
                 })
@@ -457,41 +458,43 @@ impl FrameResources {
         if let Some(s) = self.sampling.as_ref().and_then(|s| s.binding(name)) {
             return Some(s);
         }
-        match name {
-            "moving_lights" => return Some(self.moving_set.ids.as_entire_binding()),
-            "moving_mask" => return Some(self.moving_set.mask.as_entire_binding()),
-            "still_image" => return self.targets.still.as_ref().map(texture),
-            _ => {}
-        }
-        // The moving lists as shading reads them.
-        if let Some(list) = name.strip_prefix("moving_") {
-            let buffer = format!("light_{list}");
+        // The moving lists as shading reads them: the moving lists' own buffers.
+        let moving_list = match name {
+            Binding::MovingLights => return Some(self.moving_set.ids.as_entire_binding()),
+            Binding::MovingMask => return Some(self.moving_set.mask.as_entire_binding()),
+            Binding::StillImage => return self.targets.still.as_ref().map(texture),
+            Binding::MovingCounts => Some(Binding::LightCounts),
+            Binding::MovingOffsets => Some(Binding::LightOffsets),
+            Binding::MovingIndices => Some(Binding::LightIndices),
+            _ => None,
+        };
+        if let Some(list) = moving_list {
             return self
                 .moving
                 .as_ref()
-                .and_then(|m| m.buffer(&buffer))
+                .and_then(|m| m.buffer(list))
                 .map(|b| b.as_entire_binding());
         }
         if let Some(buffer) = self.clusters.as_ref().and_then(|c| c.buffer(name)) {
             return Some(buffer.as_entire_binding());
         }
         match name {
-            "depth_texture" => Some(texture(&self.targets.depth)),
-            "shading_depth" => self.targets.shading_depth.as_ref().map(texture),
-            "sample_owner" => self.targets.sample_owner.as_ref().map(texture),
-            "transparent_depths" => self
+            Binding::DepthTexture => Some(texture(&self.targets.depth)),
+            Binding::ShadingDepth => self.targets.shading_depth.as_ref().map(texture),
+            Binding::SampleOwner => self.targets.sample_owner.as_ref().map(texture),
+            Binding::TransparentDepths => self
                 .transparent_depths
                 .as_ref()
                 .map(|b| b.as_entire_binding()),
-            "pixel_evals" => Some(self.counters.evals.as_entire_binding()),
-            "pixel_useful" => Some(self.counters.useful.as_entire_binding()),
-            "pixel_clusters" => Some(self.counters.clusters.as_entire_binding()),
-            "pixel_shadings" => self
+            Binding::PixelEvals => Some(self.counters.evals.as_entire_binding()),
+            Binding::PixelUseful => Some(self.counters.useful.as_entire_binding()),
+            Binding::PixelClusters => Some(self.counters.clusters.as_entire_binding()),
+            Binding::PixelShadings => self
                 .counters
                 .shadings
                 .as_ref()
                 .map(|b| b.as_entire_binding()),
-            "pixel_candidates" => self
+            Binding::PixelCandidates => self
                 .counters
                 .candidates
                 .as_ref()
@@ -500,7 +503,7 @@ impl FrameResources {
                 .targets
                 .gbuffer
                 .iter()
-                .find(|(n, _)| *n == name)
+                .find(|(n, _)| *n == name.name())
                 .map(|(_, t)| texture(t)),
         }
     }

@@ -54,7 +54,7 @@ impl Renderer<'_> {
             scene.camera == scene.prev_camera,
             scene.has_blend(),
         );
-        if plan != self.plan
+        if !self.frame.runs(&plan)
             || (self.state.skips.no_spots && scene.lights.iter().any(|l| l.is_spot()))
         {
             return Err(RenderError::Scene(format!(

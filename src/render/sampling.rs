@@ -3,6 +3,7 @@
 
 use super::reflect::BufferSizes;
 use crate::gpu::Gpu;
+use crate::render::bindings::Binding;
 use crate::variant::Sampling;
 
 /// The uniform `sample_frame`.
@@ -52,7 +53,7 @@ impl SampleBuffers {
             mapped_at_creation: false,
         });
         // Both hold `StoredReservoir`s; an instrumented pass declares only the previous.
-        let reservoir_bytes = sizes.bindable("previous_reservoirs", pixels);
+        let reservoir_bytes = sizes.bindable(Binding::PreviousReservoirs, pixels);
         let reservoir = |label| {
             gpu.device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some(label),
@@ -67,7 +68,7 @@ impl SampleBuffers {
             .reuses_frames()
             .then(|| [reservoir("reservoirs"), reservoir("previous reservoirs")]);
         let kept_per_pixel = match &reservoirs {
-            Some(_) => 2 * sizes.bindable("previous_reservoirs", 1) as u32,
+            Some(_) => 2 * sizes.bindable(Binding::PreviousReservoirs, 1) as u32,
             None => 0,
         };
         let mut out = Self {
@@ -112,11 +113,13 @@ impl SampleBuffers {
     }
 
     /// What fills the binding declared as `name`, if it is one of these.
-    pub fn binding(&self, name: &str) -> Option<wgpu::BindingResource<'_>> {
+    pub fn binding(&self, name: Binding) -> Option<wgpu::BindingResource<'_>> {
         match name {
-            "sample_frame" => Some(self.frame.as_entire_binding()),
-            "reservoirs" => self.reservoirs.as_ref().map(|r| r[0].as_entire_binding()),
-            "previous_reservoirs" => self.reservoirs.as_ref().map(|r| r[1].as_entire_binding()),
+            Binding::SampleFrame => Some(self.frame.as_entire_binding()),
+            Binding::Reservoirs => self.reservoirs.as_ref().map(|r| r[0].as_entire_binding()),
+            Binding::PreviousReservoirs => {
+                self.reservoirs.as_ref().map(|r| r[1].as_entire_binding())
+            }
             _ => None,
         }
     }

@@ -2,6 +2,7 @@
 //! (deferred resolve, the forward passes' sample resolve, scissor-rectangle lights, the
 //! debug views, tonemapping). Their pipelines, bindings, attachments and draws.
 
+use super::bindings::Binding;
 use super::passes::{begin_render, clear_attachment, color_target, render_pipeline};
 use super::reflect::Slot;
 use super::resources::FrameResources;
@@ -77,9 +78,9 @@ pub fn binding<'a>(
     shaded: &'a wgpu::TextureView,
 ) -> Option<wgpu::BindingResource<'a>> {
     match (pass, slot.name) {
-        (ScreenPass::Tonemap, "hdr") => Some(wgpu::BindingResource::TextureView(shaded)),
+        (ScreenPass::Tonemap, Binding::Hdr) => Some(wgpu::BindingResource::TextureView(shaded)),
         (ScreenPass::Tonemap, _) => None,
-        (ScreenPass::SampleResolve, "hdr_samples") => resources
+        (ScreenPass::SampleResolve, Binding::HdrSamples) => resources
             .targets
             .hdr_samples
             .as_ref()

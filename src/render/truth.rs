@@ -19,6 +19,7 @@ use crate::common::Vertex;
 use crate::compose::Composer;
 use crate::cpu::truth::{BlendedFragment, MAX_BLENDED_FRAGMENTS, RasterTruth};
 use crate::gpu::{Gpu, read_buffer, read_texture};
+use crate::render::bindings::Binding;
 use crate::scene::Scene;
 use crate::variant::Variant;
 use wgpu::util::DeviceExt;
@@ -85,10 +86,10 @@ pub fn raster_truth(
             let (shading_depth, sample_owner) =
                 (kept("truth shading depth"), kept("truth sample owner"));
             let frame = |slot: &Slot| match slot.name {
-                "shading_depth" => shading_depth
+                Binding::ShadingDepth => shading_depth
                     .as_ref()
                     .map(wgpu::BindingResource::TextureView),
-                "sample_owner" => sample_owner
+                Binding::SampleOwner => sample_owner
                     .as_ref()
                     .map(wgpu::BindingResource::TextureView),
                 name => buffers.frame_binding(name),
@@ -310,10 +311,10 @@ fn record_blended(
     let storage =
         wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC;
     // Each buffer at the size `truth_blended.wesl` declares it.
-    let sizes = BufferSizes::of([draw.pass]);
-    let buffer = |name: &str, count: u64| {
+    let sizes = BufferSizes::of([draw.pass])?;
+    let buffer = |name: Binding, count: u64| {
         gpu.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some(name),
+            label: Some(name.name()),
             size: sizes.bindable(name, count),
             usage: storage,
             mapped_at_creation: false,
@@ -326,8 +327,8 @@ fn record_blended(
             contents: bytemuck::cast_slice(&vertices),
             usage: wgpu::BufferUsages::VERTEX,
         });
-    let counts = buffer("fragment_counts", pixels);
-    let offsets = buffer("fragment_offsets", pixels);
+    let counts = buffer(Binding::FragmentCounts, pixels);
+    let offsets = buffer(Binding::FragmentOffsets, pixels);
     let vertex = [Some(SceneBuffers::vertex_layout())];
     let pipeline = |fs: &str| {
         render_pipeline(
@@ -347,10 +348,10 @@ fn record_blended(
     let groups = |fragments: &wgpu::Buffer| {
         draw.layout
             .bind_groups(gpu, "truth blended", |slot: &Slot| match slot.name {
-                "fragment_counts" => Some(counts.as_entire_binding()),
-                "fragment_offsets" => Some(offsets.as_entire_binding()),
-                "fragments" => Some(fragments.as_entire_binding()),
-                "depth_texture" => Some(wgpu::BindingResource::TextureView(draw.depth_view)),
+                Binding::FragmentCounts => Some(counts.as_entire_binding()),
+                Binding::FragmentOffsets => Some(offsets.as_entire_binding()),
+                Binding::Fragments => Some(fragments.as_entire_binding()),
+                Binding::DepthTexture => Some(wgpu::BindingResource::TextureView(draw.depth_view)),
                 name => draw.buffers.frame_binding(name),
             })
     };
@@ -381,7 +382,7 @@ fn record_blended(
         gpu.queue.submit([encoder.finish()]);
     };
     // Room for one fragment a pixel to count with; the writing draw gets what it needs.
-    let first = buffer("fragments", pixels);
+    let first = buffer(Binding::Fragments, pixels);
     run(&pipeline("fs_count")?, &groups(&first)?);
     let per_pixel: Vec<u32> =
         bytemuck::cast_slice(&read_buffer(gpu, &counts, 0, counts.size())?).to_vec();
@@ -402,7 +403,7 @@ fn record_blended(
         total += n;
     }
     starts.push(total);
-    let size = sizes.bytes("fragments", total as u64).unwrap_or(0);
+    let size = sizes.bytes(Binding::Fragments, total as u64).unwrap_or(0);
     if size > gpu.max_storage_bytes() {
         return Err(RenderError::Scene(format!(
             "scene `{}` has {total} blended fragments in front of its opaque surfaces: {size} bytes to record, more than adapter `{}` binds in one buffer ({})",
@@ -414,7 +415,7 @@ fn record_blended(
     let fragments = if total as u64 <= pixels {
         first
     } else {
-        buffer("fragments", total as u64)
+        buffer(Binding::Fragments, total as u64)
     };
     gpu.queue.write_buffer(
         &offsets,
@@ -450,7 +451,7 @@ fn read_samples(
     )?;
     let (w, h) = (texture.width(), texture.height());
     let samples = w as u64 * h as u64 * texture.sample_count() as u64;
-    let size = BufferSizes::of([&pass]).bindable("truth_samples", samples);
+    let size = BufferSizes::of([&pass])?.bindable(Binding::TruthSamples, samples);
     let buffer = gpu.scoped(
         "reading the truth's samples",
         || -> Result<_, RenderError> {
@@ -463,8 +464,8 @@ fn read_samples(
             let view = texture.create_view(&Default::default());
             let layout = PassLayout::of(gpu, &pass)?;
             let groups = layout.bind_groups(gpu, "truth samples", |slot| match slot.name {
-                "truth_target" => Some(wgpu::BindingResource::TextureView(&view)),
-                "truth_samples" => Some(buffer.as_entire_binding()),
+                Binding::TruthTarget => Some(wgpu::BindingResource::TextureView(&view)),
+                Binding::TruthSamples => Some(buffer.as_entire_binding()),
                 _ => None,
             })?;
             let pipelines = ComputePipelines::new(gpu, &pass, &layout.pipeline, &["copy_samples"])?;

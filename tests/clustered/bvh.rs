@@ -2,6 +2,7 @@
 
 use super::*;
 use clusterlab::cpu::bvh;
+use clusterlab::render::Binding;
 
 /// On every culling scene, and one of 3000 lights (a sort of 4096 entries: 4 blocks and
 /// merges at every distance from 2048 down), the GPU's sorted order and every node equal the twin's, built
@@ -24,21 +25,21 @@ fn the_gpu_builds_the_twins_tree_and_lists_what_one_level_lists() {
             let what = format!("{:?} {:?} on {label}", v.pipeline, v.clusters().grid);
             let mut r = Renderer::new(&gpu, &composer, &v, &scene).unwrap();
             r.render().unwrap();
-            let words = |name: &str| r.cluster_buffer(name).unwrap().expect("clustered");
+            let words = |name: Binding| r.cluster_buffer(name).unwrap().expect("clustered");
             let lights = scene.lights.len();
-            let ranges: Vec<bvh::Range> = words("light_ranges")
+            let ranges: Vec<bvh::Range> = words(Binding::LightRanges)
                 .chunks_exact(4)
                 .take(lights)
                 .map(|r| [r[0], r[1], r[2], r[3]])
                 .collect();
             let order = bvh::order(&ranges, v.clusters().grid);
-            let got_order: Vec<[u32; 2]> = words("sorted_lights")
+            let got_order: Vec<[u32; 2]> = words(Binding::SortedLights)
                 .chunks_exact(2)
                 .map(|e| [e[0], e[1]])
                 .collect();
             assert!(got_order == order, "{what}: the sorted order differs");
             let nodes = bvh::nodes(&order, &ranges);
-            let got_nodes: Vec<bvh::Range> = words("bvh_nodes")
+            let got_nodes: Vec<bvh::Range> = words(Binding::BvhNodes)
                 .chunks_exact(4)
                 .map(|n| [n[0], n[1], n[2], n[3]])
                 .collect();

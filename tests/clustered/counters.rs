@@ -43,7 +43,10 @@ struct Counted {
 
 /// The clusters whose flag in `cluster_active` is set.
 fn flagged(r: &Renderer) -> BTreeSet<u32> {
-    let flags = r.cluster_buffer("cluster_active").unwrap().unwrap();
+    let flags = r
+        .cluster_buffer(clusterlab::render::Binding::ClusterActive)
+        .unwrap()
+        .unwrap();
     (0..flags.len() as u32)
         .filter(|&k| flags[k as usize] != 0)
         .collect()

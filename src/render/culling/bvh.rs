@@ -10,6 +10,7 @@ use super::steps::{Clear, Over, Plan, Step, check_sorted, long_lists, sort_light
 use crate::cpu::bvh::level_sizes;
 use crate::cpu::sort::sorted_size;
 use crate::gpu::{Gpu, GpuError};
+use crate::render::bindings::Binding;
 use crate::render::clusters::ClusterBuffers;
 use crate::render::reflect::BufferSizes;
 
@@ -21,7 +22,7 @@ const MAX_LIGHTS: u32 = 1 << 20;
 /// previous frame's order (Moreau et al. 2019: each node's range recomputed from its
 /// children, whatever the order; the walks stay exact).
 pub(super) fn plan(c: &ClusterBuffers, lights: u32, refit: bool) -> Plan<'_> {
-    let mut clears = vec![Clear::whole(c.named("light_counts"))];
+    let mut clears = vec![Clear::whole(c.named(Binding::LightCounts))];
     clears.extend(Clear::long_lists(c));
     let mut steps = vec![Step::Dispatch("transform_lights", Over::Threads(lights, 1))];
     if !refit {
@@ -42,10 +43,10 @@ pub(super) fn plan(c: &ClusterBuffers, lights: u32, refit: bool) -> Plan<'_> {
 }
 
 /// The sorted order (a key and a light each) and every level's nodes (a range each).
-pub(super) fn own_buffers(lights: u32) -> Vec<(&'static str, u64)> {
+pub(super) fn own_buffers(lights: u32) -> Vec<(Binding, u64)> {
     let n = sorted_size(lights);
     let nodes: u64 = level_sizes(n).iter().map(|&s| s as u64).sum();
-    vec![sorted_lights(lights), ("bvh_nodes", nodes)]
+    vec![sorted_lights(lights), (Binding::BvhNodes, nodes)]
 }
 
 /// Refuse a frame of more lights than the tree's lowest level can be built for, or whose

@@ -14,6 +14,7 @@ mod zbinning;
 
 pub use rasterised::BinningPipelines;
 
+use crate::render::bindings::Binding;
 use steps::{Clear, Over, Plan, Step};
 
 use super::clusters::{ClusterBuffers, ProxyDrawing, Sizing};
@@ -48,7 +49,7 @@ impl CullingMethod {
 
     /// The buffers only this method binds (its own root's and its own module's), by the
     /// names they are declared by, with the elements each holds.
-    pub fn own_buffers(self, s: &Sizing) -> Vec<(&'static str, u64)> {
+    pub fn own_buffers(self, s: &Sizing) -> Vec<(Binding, u64)> {
         match self {
             CullingMethod::OneLevel => Vec::new(),
             CullingMethod::TwoLevel { big_tile } => two_level::own_buffers(s, big_tile),
@@ -104,8 +105,8 @@ impl ClusterBuffers {
         if !self.method.builds_lists() {
             return Ok(self.read_zbins(gpu)?.counts());
         }
-        let n = self.declared_bytes("light_counts", self.clusters as u64);
-        self.read_named(gpu, "light_counts", Some(n))
+        let n = self.declared_bytes(Binding::LightCounts, self.clusters as u64);
+        self.read_named(gpu, Binding::LightCounts, Some(n))
     }
 
     /// The light lists as the GPU holds them (z-binning: each tile and bin's walk, sorted).
@@ -116,24 +117,24 @@ impl ClusterBuffers {
         let n = self.clusters as u64;
         let counts = self.read_named(
             gpu,
-            "light_counts",
-            Some(self.declared_bytes("light_counts", n)),
+            Binding::LightCounts,
+            Some(self.declared_bytes(Binding::LightCounts, n)),
         )?;
         let offsets = self.read_named(
             gpu,
-            "light_offsets",
-            Some(self.declared_bytes("light_offsets", n)),
+            Binding::LightOffsets,
+            Some(self.declared_bytes(Binding::LightOffsets, n)),
         )?;
         // Lists lie anywhere in the index buffer (two-level places them as it goes, Patch
         // moves the ones it changes): up to the end of the last.
         let end = counts
             .iter()
             .zip(&offsets)
-            .map(|(&c, &o)| self.declared_bytes("light_indices", o as u64 + c as u64))
+            .map(|(&c, &o)| self.declared_bytes(Binding::LightIndices, o as u64 + c as u64))
             .max()
             .unwrap_or(0);
-        let used = end.min(self.named("light_indices").size());
-        let indices = self.read_named(gpu, "light_indices", Some(used))?;
+        let used = end.min(self.named(Binding::LightIndices).size());
+        let indices = self.read_named(gpu, Binding::LightIndices, Some(used))?;
         let stats = self.read_stats(gpu)?;
         Ok(ClusterLists {
             max_per_cluster: counts.iter().copied().max().unwrap_or(0),

@@ -4,12 +4,13 @@
 
 use super::steps::{Clear, Over, Plan, Step, long_lists, per_light};
 use crate::compose::SCAN_BLOCK;
+use crate::render::bindings::Binding;
 use crate::render::clusters::ClusterBuffers;
 
 pub(super) fn plan(c: &ClusterBuffers, lights: u32) -> Plan<'_> {
     let mut clears = vec![
-        Clear::whole(c.named("light_counts")),
-        Clear::whole(c.named("fill_cursors")),
+        Clear::whole(c.named(Binding::LightCounts)),
+        Clear::whole(c.named(Binding::FillCursors)),
     ];
     clears.extend(Clear::long_lists(c));
     let mut steps = vec![

@@ -4,13 +4,14 @@
 //! that left, the entering lights written after it, and those lists sorted.
 
 use super::steps::{Clear, Over, Plan, Step, long_lists, per_light};
+use crate::render::bindings::Binding;
 use crate::render::clusters::ClusterBuffers;
 
 /// The plan for `moved` lights that moved since the lists were made.
 pub(super) fn plan(c: &ClusterBuffers, moved: u32) -> Plan<'_> {
     let mut clears = vec![
-        Clear::whole(c.named("patch_clusters")),
-        Clear::whole(c.named("fill_cursors")),
+        Clear::whole(c.named(Binding::PatchClusters)),
+        Clear::whole(c.named(Binding::FillCursors)),
     ];
     clears.extend(Clear::long_lists(c));
     let mut steps = vec![

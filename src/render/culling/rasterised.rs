@@ -8,8 +8,10 @@ use super::one_level::scan_blocks;
 use super::steps::{Clear, Over, Plan, Step, long_lists};
 use crate::compose::ComposedPass;
 use crate::gpu::{Gpu, GpuError};
+use crate::render::bindings::Binding;
 use crate::render::clusters::{
-    BIN_TARGET_FORMAT, ClusterBuffers, DISPATCH_ARGS_BYTES, ProxyDrawing, ProxyLayout, Sizing,
+    BIN_TARGET_FORMAT, ClusterBuffers, DISPATCH_ARGS_BYTES, DRAW_ARGS_BYTES, ProxyDrawing,
+    ProxyLayout, Sizing,
 };
 use crate::render::error::RenderError;
 use crate::render::passes::{begin_render, color_target, render_pipeline};
@@ -74,10 +76,10 @@ impl BinningPipelines {
 
 pub(super) fn plan(c: &ClusterBuffers, lights: u32) -> Plan<'_> {
     let d = drawing(c);
-    let proxy_draw = c.named("proxy_draw");
+    let proxy_draw = c.named(Binding::ProxyDraw);
     let mut clears = vec![
-        Clear::whole(c.named("light_counts")),
-        Clear::whole(c.named("fill_cursors")),
+        Clear::whole(c.named(Binding::LightCounts)),
+        Clear::whole(c.named(Binding::FillCursors)),
         Clear::whole(proxy_draw),
     ];
     clears.extend(Clear::long_lists(c));
@@ -88,8 +90,8 @@ pub(super) fn plan(c: &ClusterBuffers, lights: u32) -> Plan<'_> {
         Step::Dispatch("split_lights", Over::Threads(lights, 1)),
         // The draw's indirect arguments and instances (a buffer bound for storage in a pass
         // cannot also be its vertex or indirect buffer).
-        Step::Copy(proxy_draw, 0, &d.draw_args, Some(16)),
-        Step::Copy(c.named("light_proxies"), 0, &d.instances, None),
+        Step::Copy(proxy_draw, 0, &d.draw_args, Some(DRAW_ARGS_BYTES)),
+        Step::Copy(c.named(Binding::LightProxies), 0, &d.instances, None),
         Step::DrawProxies,
         Step::Dispatch("scan_local", scan_blocks(c)),
         Step::Dispatch("scan_blocks", Over::Groups(1, 1, 1)),
@@ -112,7 +114,7 @@ pub(super) fn plan(c: &ClusterBuffers, lights: u32) -> Plan<'_> {
 /// binds (a frame with more is refused after it runs: `ClusterStats::proxies_unheld`);
 /// the draw's arguments; each light's proxy count, then place; and the pairs the draw
 /// records, cluster, light and place arrays of an entry per list entry.
-pub(super) fn own_buffers(s: &Sizing) -> Vec<(&'static str, u64)> {
+pub(super) fn own_buffers(s: &Sizing) -> Vec<(Binding, u64)> {
     let Some(layout) = s.proxies else {
         return Vec::new();
     };
@@ -120,14 +122,14 @@ pub(super) fn own_buffers(s: &Sizing) -> Vec<(&'static str, u64)> {
     let pairs = s.entries as u64;
     vec![
         (
-            "light_proxies",
+            Binding::LightProxies,
             worst.min(s.max_storage / layout.proxy_bytes),
         ),
-        ("proxy_draw", 0),
-        ("proxy_places", s.lights as u64),
-        ("pair_clusters", pairs),
-        ("pair_lights", pairs),
-        ("pair_places", pairs),
+        (Binding::ProxyDraw, 0),
+        (Binding::ProxyPlaces, s.lights as u64),
+        (Binding::PairClusters, pairs),
+        (Binding::PairLights, pairs),
+        (Binding::PairPlaces, pairs),
     ]
 }
 

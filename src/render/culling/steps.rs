@@ -4,7 +4,8 @@
 use crate::compose::LIGHTS_PER_ROW;
 use crate::cpu::sort::{SORT_BLOCK, merge_schedule, sorted_size};
 use crate::gpu::{Gpu, GpuError};
-use crate::render::clusters::{ClusterBuffers, DISPATCH_ARGS_BYTES};
+use crate::render::bindings::Binding;
+use crate::render::clusters::{ClusterBuffers, DISPATCH_ARGS_BYTES, SortJobsHeader, WORD_BYTES};
 use crate::render::reflect::BufferSizes;
 
 /// What light assignment runs: buffers (or parts of them) cleared first, then its steps.
@@ -23,9 +24,11 @@ impl<'a> Clear<'a> {
 
     /// The long lists' workgroup and job counts (the header's x and fourth word).
     pub(super) fn long_lists(c: &'a ClusterBuffers) -> [Self; 2] {
+        let x = std::mem::offset_of!(SortJobsHeader, groups_x) as u64;
+        let count = std::mem::offset_of!(SortJobsHeader, count) as u64;
         [
-            Clear(c.named("sort_jobs"), 0, Some(4)),
-            Clear(c.named("sort_jobs"), 12, Some(4)),
+            Clear(c.named(Binding::SortJobs), x, Some(WORD_BYTES)),
+            Clear(c.named(Binding::SortJobs), count, Some(WORD_BYTES)),
         ]
     }
 }
@@ -65,7 +68,7 @@ pub(super) fn per_light(lights: u32) -> Over {
 pub(super) fn long_lists<'a>(c: &'a ClusterBuffers, entry: &'static str) -> [Step<'a>; 2] {
     [
         Step::Copy(
-            c.named("sort_jobs"),
+            c.named(Binding::SortJobs),
             0,
             &c.sort_dispatch,
             Some(DISPATCH_ARGS_BYTES),
@@ -89,8 +92,8 @@ pub(super) fn sort_lights(lights: u32) -> Vec<Step<'static>> {
 }
 
 /// The sort's order: a key and a light an entry.
-pub(super) fn sorted_lights(lights: u32) -> (&'static str, u64) {
-    ("sorted_lights", sorted_size(lights) as u64)
+pub(super) fn sorted_lights(lights: u32) -> (Binding, u64) {
+    (Binding::SortedLights, sorted_size(lights) as u64)
 }
 
 /// Refuse a frame whose sorted order does not fit one buffer.

@@ -3,14 +3,15 @@
 //! survivors once and writes its list; lists too long to hold are written by a second walk.
 
 use super::steps::{Clear, Over, Plan, Step, long_lists, per_light};
+use crate::render::bindings::Binding;
 use crate::render::clusters::{ClusterBuffers, Sizing};
 
 pub(super) fn plan(c: &ClusterBuffers, lights: u32, big_tile: u32) -> Plan<'_> {
     // The fine pass writes only the lists of clusters that take part; the others stay empty.
     let mut clears = vec![
-        Clear::whole(c.named("light_counts")),
-        Clear::whole(c.named("light_offsets")),
-        Clear::whole(c.named("coarse_masks")),
+        Clear::whole(c.named(Binding::LightCounts)),
+        Clear::whole(c.named(Binding::LightOffsets)),
+        Clear::whole(c.named(Binding::CoarseMasks)),
     ];
     clears.extend(Clear::long_lists(c));
     // Every cluster of every big tile (`fine_cluster` in two_level.wesl).
@@ -28,16 +29,16 @@ pub(super) fn plan(c: &ClusterBuffers, lights: u32, big_tile: u32) -> Plan<'_> {
 /// Per big tile of `big` tiles a side, a mask of the lights that survive its coarse test
 /// and its summary (a bit per mask word), then a mask for each slice (`two_level.wesl`);
 /// and with active clusters each big tile's sample depth range.
-pub(super) fn own_buffers(s: &Sizing, big: u32) -> Vec<(&'static str, u64)> {
+pub(super) fn own_buffers(s: &Sizing, big: u32) -> Vec<(Binding, u64)> {
     let (x, y, z) = s.grid;
     let words = (s.lights as u64).div_ceil(32);
     let big_tiles = (x.div_ceil(big) * y.div_ceil(big)) as u64;
     vec![
         (
-            "coarse_masks",
+            Binding::CoarseMasks,
             big_tiles * (words + words.div_ceil(32)) + z as u64 * words,
         ),
         // The minimum (inverted) and maximum of each.
-        ("big_tile_depths", big_tiles * 2),
+        (Binding::BigTileDepths, big_tiles * 2),
     ]
 }

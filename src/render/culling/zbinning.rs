@@ -6,6 +6,7 @@
 use super::steps::{Clear, Over, Plan, Step, check_sorted, per_light, sort_lights, sorted_lights};
 use crate::cpu::zbin::ZBins;
 use crate::gpu::{Gpu, GpuError};
+use crate::render::bindings::Binding;
 use crate::render::clusters::{ClusterBuffers, Sizing};
 use crate::render::reflect::BufferSizes;
 
@@ -19,8 +20,8 @@ pub(super) fn plan(c: &ClusterBuffers, lights: u32) -> Plan<'_> {
     ]);
     Plan {
         clears: vec![
-            Clear::whole(c.named("bin_ranges")),
-            Clear::whole(c.named("tile_masks")),
+            Clear::whole(c.named(Binding::BinRanges)),
+            Clear::whole(c.named(Binding::TileMasks)),
         ],
         steps,
     }
@@ -29,18 +30,18 @@ pub(super) fn plan(c: &ClusterBuffers, lights: u32) -> Plan<'_> {
 /// The lights in depth order (what the shading walks), each bin's range of them (first
 /// and last), and each tile's mask of a bit per light: their names and elements, for
 /// `lights` lights on `grid`.
-fn binned(grid: (u32, u32, u32), lights: u32) -> [(&'static str, u64); 3] {
+fn binned(grid: (u32, u32, u32), lights: u32) -> [(Binding, u64); 3] {
     let (x, y, z) = grid;
     let words = (lights as u64).div_ceil(32);
     [
-        ("light_order", lights as u64),
-        ("bin_ranges", z as u64 * 2),
-        ("tile_masks", (x * y) as u64 * words),
+        (Binding::LightOrder, lights as u64),
+        (Binding::BinRanges, z as u64 * 2),
+        (Binding::TileMasks, (x * y) as u64 * words),
     ]
 }
 
 /// The sort's order, and the binned lights.
-pub(super) fn own_buffers(s: &Sizing) -> Vec<(&'static str, u64)> {
+pub(super) fn own_buffers(s: &Sizing) -> Vec<(Binding, u64)> {
     let mut buffers = vec![sorted_lights(s.lights)];
     buffers.extend(binned(s.grid, s.lights));
     buffers
