@@ -93,3 +93,113 @@ fn the_constant_check_sees_a_number_written_twice() {
         ["LIGHTS_PER_ROW: render.rs and assign.wesl"]
     );
 }
+
+/// Sizes and offsets of GPU buffers written as numbers in the renderer (`size: 12`, a clear
+/// or read at byte 8 of 4 bytes): each must come from a type (`size_of`, `offset_of!`) or
+/// the shader's declaration instead. Offset 0 (a buffer's start) is not a hand size.
+fn hand_sizes(text: &str) -> Vec<String> {
+    let literal = |s: &str| {
+        let s = s.trim().trim_end_matches([')', ';', ',', '?']);
+        s.parse::<u64>().is_ok_and(|n| n > 0)
+    };
+    let calls = [
+        "clear_buffer(",
+        "read_buffer(",
+        "read_texture(",
+        "write_buffer(",
+        "Clear(",
+        "Step::Copy(",
+    ];
+    let mut found = Vec::new();
+    for line in text.lines() {
+        let code = line.split("//").next().unwrap_or("");
+        let sized = code
+            .trim_start()
+            .strip_prefix("size: ")
+            .is_some_and(literal);
+        let call = calls.iter().any(|c| {
+            code.split_once(c).is_some_and(|(_, args)| {
+                args.split(',')
+                    .skip(1)
+                    .any(|a| literal(a.trim().trim_start_matches("Some(")))
+            })
+        });
+        if sized || call {
+            found.push(line.trim().to_string());
+        }
+    }
+    found
+}
+
+#[test]
+fn no_buffer_size_or_offset_is_written_by_hand() {
+    // The deliberate breaks: the forms that were in the renderer.
+    assert_eq!(
+        hand_sizes("    encoder.clear_buffer(&c.stats, 8, Some(4));").len(),
+        1
+    );
+    assert_eq!(hand_sizes("                size: 12,").len(), 1);
+    assert_eq!(
+        hand_sizes("Clear(c.named(Binding::SortJobs), 12, Some(4)),").len(),
+        1
+    );
+    assert_eq!(hand_sizes("let x = read_buffer(gpu, b, 0, 4)?;").len(), 1);
+    assert_eq!(hand_sizes("read_texture(gpu, texture, 16)?").len(), 1);
+    assert!(hand_sizes("encoder.clear_buffer(&c.active, 0, None);").is_empty());
+    let mut found = Vec::new();
+    for dir in ["src/render", "src/gpu"] {
+        for (file, text) in sources(Path::new(dir), "rs") {
+            found.extend(
+                hand_sizes(&text)
+                    .into_iter()
+                    .map(|l| format!("{file}: {l}")),
+            );
+        }
+    }
+    assert!(found.is_empty(), "sizes written by hand: {found:#?}");
+}
+
+/// The renderer's mirror of `sort_jobs`' header has the WGSL struct's offsets.
+#[test]
+fn the_sort_jobs_header_is_the_shaders() {
+    use clusterlab::render::SortJobsHeader;
+    let v = crate::common::load("forward_plus");
+    let pass = clusterlab::compose::passes(&v.variant)
+        .into_iter()
+        .find(|p| p.name() == "light_assign")
+        .expect("light assignment");
+    let composed = clusterlab::compose::Composer::default()
+        .compose(&v.variant, &pass)
+        .expect("composes");
+    let (_, ty) = composed
+        .module
+        .types
+        .iter()
+        .find(|(_, t)| t.name.as_deref().is_some_and(|n| n.ends_with("SortJobs")))
+        .expect("the SortJobs struct");
+    let naga::TypeInner::Struct { members, .. } = &ty.inner else {
+        panic!("SortJobs is not a struct");
+    };
+    let at = |name: &str| {
+        members
+            .iter()
+            .find(|m| m.name.as_deref() == Some(name))
+            .map(|m| m.offset as usize)
+    };
+    assert_eq!(
+        at("groups_x"),
+        Some(std::mem::offset_of!(SortJobsHeader, groups_x))
+    );
+    assert_eq!(
+        at("groups_y"),
+        Some(std::mem::offset_of!(SortJobsHeader, groups_y))
+    );
+    assert_eq!(
+        at("groups_z"),
+        Some(std::mem::offset_of!(SortJobsHeader, groups_z))
+    );
+    assert_eq!(
+        at("count"),
+        Some(std::mem::offset_of!(SortJobsHeader, count))
+    );
+}

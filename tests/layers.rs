@@ -251,8 +251,8 @@ fn code_of(source: &str) -> String {
             '\'' => {
                 // A character literal ('x', '\n', '{'), or a lifetime ('a), kept.
                 let rest: String = chars.clone().take(3).collect();
-                let length = if rest.starts_with('\\') {
-                    rest[1..].find('\'').map(|i| i + 2)
+                let length = if let Some(escaped) = rest.strip_prefix('\\') {
+                    escaped.find('\'').map(|i| i + 2)
                 } else {
                     rest.chars().nth(1).filter(|&c| c == '\'').map(|_| 2)
                 };

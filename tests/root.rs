@@ -13,6 +13,7 @@ mod device;
 mod environment;
 mod features;
 mod folders;
+mod frame;
 mod fuzz;
 mod ggx;
 mod gltf;

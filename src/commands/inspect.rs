@@ -28,6 +28,11 @@ pub(crate) struct WgslArgs {
     /// Only this pass (see the pass names in the output without it).
     #[arg(long)]
     pub pass: Option<String>,
+    /// Print the frame instead: every pass in order, what it reads, writes and renders
+    /// into, and what it dispatches or draws (on a scene with blended materials, with the
+    /// passes only counting frames run).
+    #[arg(long, conflicts_with = "pass")]
+    pub frame: bool,
 }
 
 /// `scenes`: list them, or write one as glTF.
@@ -160,6 +165,13 @@ fn validated_json(
 pub(crate) fn wgsl(args: &WgslArgs) -> Result<bool, String> {
     let only = args.pass.as_deref();
     let loaded = variant::load(&variant::locate(&args.variant)?).map_err(|e| e.to_string())?;
+    if args.frame {
+        let frame = clusterlab::render::frame_of(&Composer::default(), &loaded.variant)
+            .map_err(|e| e.to_string())?;
+        println!("frame of variant `{}`:", loaded.name);
+        print!("{frame}");
+        return Ok(true);
+    }
     let all = passes(&loaded.variant);
     let selected: Vec<_> = all
         .iter()

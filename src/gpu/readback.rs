@@ -15,12 +15,13 @@ pub fn read_buffer(
 }
 
 /// Read a whole 2D texture as tightly packed rows of `bytes_per_pixel`.
-pub fn read_texture(
-    gpu: &Gpu,
-    texture: &wgpu::Texture,
-    bytes_per_pixel: u32,
-) -> Result<Vec<u8>, GpuError> {
+pub fn read_texture(gpu: &Gpu, texture: &wgpu::Texture) -> Result<Vec<u8>, GpuError> {
     let (width, height) = (texture.width(), texture.height());
+    // Every format read back is uncompressed and colour: one block is one texel.
+    let bytes_per_pixel = texture
+        .format()
+        .block_copy_size(None)
+        .ok_or_else(|| GpuError::Captured(format!("{:?} cannot be read back", texture.format())))?;
     let row = width * bytes_per_pixel;
     let padded =
         row.div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT) * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;

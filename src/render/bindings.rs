@@ -85,7 +85,6 @@ pub enum Binding {
     // The post chain's images and its indirect dispatch.
     HdrIn,
     HdrOut,
-    DepthIn,
     BrightIn,
     BrightOut,
     BlurIn,

@@ -328,10 +328,14 @@ const LIST_BUFFERS: [Binding; 6] = [
     Binding::SortJobs,
 ];
 
+/// The smallest buffer made: a binding of a runtime-sized array needs one element, and no
+/// declared element here is larger (vec4 of 32-bit words).
+const MIN_BUFFER_BYTES: u64 = 16;
+
 fn storage(gpu: &Gpu, label: &str, size: u64) -> wgpu::Buffer {
     gpu.device.create_buffer(&wgpu::BufferDescriptor {
         label: Some(label),
-        size: size.max(16),
+        size: size.max(MIN_BUFFER_BYTES),
         usage: wgpu::BufferUsages::STORAGE
             | wgpu::BufferUsages::COPY_DST
             | wgpu::BufferUsages::COPY_SRC,
@@ -522,7 +526,7 @@ impl ClusterBuffers {
         for (name, count) in named_sizes(self.method, self.culling, self.update, &sizing) {
             if let Some(slot) = self.named.iter_mut().find(|(n, _)| *n == name)
                 && let bytes = self.sizes.bytes(name, count).unwrap_or(0)
-                && slot.1.size() != bytes.max(16)
+                && slot.1.size() != bytes.max(MIN_BUFFER_BYTES)
             {
                 *slot = make_named(gpu, name, bytes);
             }

@@ -26,8 +26,6 @@
 
 use std::fmt;
 
-use naga::AddressSpace;
-
 use super::bindings::Binding;
 use super::error::RenderError;
 use super::reflect;
@@ -123,27 +121,37 @@ impl Step {
     fn of(variant: &Variant, pass: Pass, module: &ComposedPass) -> Result<Step, RenderError> {
         let names = reflect::declared(module)?;
         let (mut reads, mut writes) = (Vec::new(), Vec::new());
-        for (_, var) in module.module.global_variables.iter() {
+        // What the entry points do with each binding (naga's use flags), not what it is
+        // declared as: a shared module declares buffers read_write that a pass only reads.
+        for (handle, var) in module.module.global_variables.iter() {
             let Some(slot) = &var.binding else { continue };
             let name = names[&(slot.group, slot.binding)];
-            let stores = match var.space {
-                AddressSpace::Storage { access } => access.contains(naga::StorageAccess::STORE),
-                AddressSpace::Handle => matches!(
-                    module.module.types[var.ty].inner,
-                    naga::TypeInner::Image {
-                        class: naga::ImageClass::Storage { access, .. },
-                        ..
-                    } if access.contains(naga::StorageAccess::STORE)
-                ),
-                _ => false,
-            };
-            let list = if stores { &mut writes } else { &mut reads };
-            if !list.contains(&name) {
-                list.push(name);
+            let used = (0..module.module.entry_points.len())
+                .fold(naga::valid::GlobalUse::empty(), |u, i| {
+                    u | module.info.get_entry_point(i)[handle]
+                });
+            if used.contains(naga::valid::GlobalUse::WRITE) {
+                writes.push(name);
+            } else if used.contains(naga::valid::GlobalUse::READ) {
+                reads.push(name);
+            }
+        }
+        // The moving lists' pass builds its lists in the moving lists' buffers, which
+        // shading reads as `moving_*` (`BuiltPasses::bind`, `FrameResources::scene_binding`).
+        if pass.id == PassId::Clustering(ClusterPass::MovingAssign) {
+            for b in reads.iter_mut().chain(writes.iter_mut()) {
+                *b = match *b {
+                    Binding::LightCounts => Binding::MovingCounts,
+                    Binding::LightOffsets => Binding::MovingOffsets,
+                    Binding::LightIndices => Binding::MovingIndices,
+                    other => other,
+                };
             }
         }
         reads.sort();
+        reads.dedup();
         writes.sort();
+        writes.dedup();
         Ok(Step {
             pass,
             reads,
@@ -235,7 +243,7 @@ impl fmt::Display for Work {
                     .collect();
                 write!(f, "dispatches {}", each.join(", then "))
             }
-            Work::Lists(method) => write!(f, "builds the light lists: {method:?}'s plan"),
+            Work::Lists(method) => write!(f, "builds the light lists: {}'s plan", method.label()),
             Work::Post => write!(f, "runs its post-chain step"),
         }
     }

@@ -36,7 +36,9 @@ mod targets;
 mod truth;
 
 pub use bindings::Binding;
-pub use clusters::{AssignmentWork, ClusterBuffers, ClusterRange, ClusterStats, GpuDepthMask};
+pub use clusters::{
+    AssignmentWork, ClusterBuffers, ClusterRange, ClusterStats, GpuDepthMask, SortJobsHeader,
+};
 pub use error::RenderError;
 pub use passes::{PassRunner, shader_module};
 pub use resources::{SceneBuffers, ViewUniform};
@@ -52,7 +54,7 @@ use crate::gpu::{Gpu, GpuError, TimestampSlot, Timings, read_texture};
 use crate::scene::Scene;
 use crate::variant::{Assignment, Variant};
 use built::{BuiltPasses, Pipelines};
-use frame::{Frame, Step};
+pub use frame::{Frame, Step};
 use lists::{CpuAssignment, Fit};
 use post::PostChain;
 use redo::{Held, Lists, Redo};
@@ -118,6 +120,31 @@ pub fn variant_needs(
     }
     let targets = targets_of(variant, wgpu::TextureFormat::Rgba32Float);
     needs::Needs::of(&passes, (targets.0, &targets.1))
+}
+
+/// The frame of `variant` on a scene with blended materials and a moving camera (every
+/// pass a frame of it may run), with the passes only instrumented frames run: the plan
+/// `wgsl --frame` prints. Fails on a pass that does not compose, or that binds a name no
+/// resource of a frame has.
+pub fn frame_of(composer: &Composer, variant: &Variant) -> Result<Frame, RenderError> {
+    let plan = compose::plan(variant, false, true);
+    let features = compose::frame_features(
+        compose::SceneFeatures {
+            spots: true,
+            textures: true,
+            masks: false,
+            blend: true,
+        },
+        None,
+    );
+    let composed = plan
+        .passes
+        .iter()
+        .chain(&plan.support)
+        .map(|p| Ok((*p, composer.compose_with(variant, p, &features)?)))
+        .collect::<Result<Vec<_>, RenderError>>()?;
+    let modules: Vec<(Pass, &ComposedPass)> = composed.iter().map(|(p, c)| (*p, c)).collect();
+    Frame::of(variant, &plan, &modules)
 }
 
 /// A variant ready to render a scene. Its state, by owner: the frame's passes in order
@@ -429,7 +456,7 @@ impl<'g> Renderer<'g> {
             self.gpu,
             &self.passes.post.output(&self.res.targets.hdr).texture,
         )?;
-        let ldr = read_texture(self.gpu, &self.res.targets.ldr.texture, 4)?;
+        let ldr = read_texture(self.gpu, &self.res.targets.ldr.texture)?;
         Ok(FrameOutput {
             width: self.state.width,
             height: self.state.height,

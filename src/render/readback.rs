@@ -56,7 +56,7 @@ impl Renderer<'_> {
             gpu.queue.submit([e.finish()]);
             Ok(())
         })??;
-        let ldr = read_texture(gpu, &self.res.targets.ldr.texture, 4)?;
+        let ldr = read_texture(gpu, &self.res.targets.ldr.texture)?;
         Ok(bytemuck::cast_slice(&ldr).to_vec())
     }
 

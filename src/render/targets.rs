@@ -133,12 +133,12 @@ pub struct Targets {
 pub(super) fn read_hdr(gpu: &Gpu, texture: &wgpu::Texture) -> Result<Vec<[f32; 4]>, GpuError> {
     Ok(match texture.format() {
         wgpu::TextureFormat::Rgba16Float => {
-            let bytes = read_texture(gpu, texture, 8)?;
+            let bytes = read_texture(gpu, texture)?;
             bytemuck::cast_slice::<u8, [u16; 4]>(&bytes)
                 .iter()
                 .map(|p| p.map(|h| half::f16::from_bits(h).to_f32()))
                 .collect()
         }
-        _ => bytemuck::cast_slice(&read_texture(gpu, texture, 16)?).to_vec(),
+        _ => bytemuck::cast_slice(&read_texture(gpu, texture)?).to_vec(),
     })
 }

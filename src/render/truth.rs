@@ -242,7 +242,7 @@ pub fn raster_truth(
         let bytes = if variant.msaa.on() {
             read_samples(gpu, composer, t)?
         } else {
-            read_texture(gpu, t, 16)?
+            read_texture(gpu, t)?
         };
         // The targets hold f32 bit patterns: read them back as f32.
         planes.push(bytemuck::cast_slice::<u8, [f32; 4]>(&bytes).to_vec());
