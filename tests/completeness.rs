@@ -408,3 +408,116 @@ fn every_study_file_is_registered_with_its_page() {
     }
     assert!(missing.is_empty(), "{}", missing.join("\n"));
 }
+
+/// A culling method's file stem (`src/render/culling/<method>.rs`,
+/// `tests/clustered/<method>.rs`): an exhaustive match, so a new method is named here
+/// before this test compiles.
+fn culling_stem(m: clusterlab::variant::CullingMethod) -> &'static str {
+    use clusterlab::variant::CullingMethod;
+    match m {
+        CullingMethod::OneLevel => "one_level",
+        CullingMethod::TwoLevel { .. } => "two_level",
+        CullingMethod::ZBinning => "zbinning",
+        CullingMethod::Rasterised => "rasterised",
+        CullingMethod::Bvh => "bvh",
+    }
+}
+
+/// The section of `doc` that opens with `heading`, up to the next bold heading.
+fn how_to<'a>(doc: &'a str, heading: &str) -> &'a str {
+    let start = doc
+        .find(heading)
+        .unwrap_or_else(|| panic!("docs/ARCHITECTURE.md has no how-to {heading}"));
+    let rest = &doc[start + heading.len()..];
+    &rest[..rest.find("\n**").unwrap_or(rest.len())]
+}
+
+/// The files a how-to names: backticked paths with a folder and an extension.
+fn named_files(section: &str) -> Vec<String> {
+    section
+        .split('`')
+        .skip(1)
+        .step_by(2)
+        .filter(|t| t.contains('/') && !t.contains(' '))
+        .filter(|t| {
+            [".rs", ".wesl", ".md", ".ron"]
+                .iter()
+                .any(|x| t.ends_with(x))
+        })
+        .map(String::from)
+        .collect()
+}
+
+/// Each how-to of `docs/ARCHITECTURE.md` ("How to add") names the files its unit touches:
+/// every file it names exists, and one named by the unit (`<method>`, `<loop>`, `<name>`)
+/// exists for every unit there is, and the how-to names at least the files it counts. A
+/// unit added without its file, or a how-to naming a file that moved, fails here. The
+/// deliberate break: a how-to naming a file that is not there.
+#[test]
+fn every_how_to_names_files_that_exist_for_every_unit() {
+    use clusterlab::compose::LightLoop;
+    let doc = std::fs::read_to_string("docs/ARCHITECTURE.md").expect("the architecture");
+    let methods: Vec<String> = Culling::iter()
+        .map(|culling| {
+            let clusters = clusterlab::variant::Clusters {
+                culling,
+                ..Default::default()
+            };
+            culling_stem(clusters.method()).to_string()
+        })
+        .chain(std::iter::once(
+            culling_stem(clusterlab::variant::CullingMethod::TwoLevel { big_tile: 2 }).to_string(),
+        ))
+        .collect();
+    let loops: Vec<String> = LightLoop::ALL
+        .iter()
+        .map(|l| l.file().to_string())
+        .collect();
+    let studies: Vec<String> = clusterlab::study::STUDIES
+        .iter()
+        .map(|e| e.name.to_string())
+        .collect();
+    let kinds: [(&str, &str, &[String], usize); 5] = [
+        ("**A culling method**", "<method>", &methods, 8),
+        ("**A sampler or light loop**", "<loop>", &loops, 5),
+        ("**A normal codec**", "<name>", &[], 6),
+        ("**A study**", "<name>", &studies, 3),
+        ("**A shadow method**", "<method>", &[], 5),
+    ];
+    let missing_in = |files: &[String], units: &[String], placeholder: &str| -> Vec<String> {
+        let mut missing = Vec::new();
+        for file in files {
+            let each: Vec<String> = if file.contains(placeholder) {
+                units.iter().map(|u| file.replace(placeholder, u)).collect()
+            } else if file.contains('<') {
+                Vec::new()
+            } else {
+                vec![file.clone()]
+            };
+            missing.extend(each.into_iter().filter(|f| !Path::new(f).exists()));
+        }
+        missing
+    };
+    assert_eq!(
+        missing_in(
+            &["src/render/culling/<method>.rs".into()],
+            &["no_such".into()],
+            "<method>"
+        ),
+        ["src/render/culling/no_such.rs"]
+    );
+    let mut wrong = Vec::new();
+    for (heading, placeholder, units, at_least) in kinds {
+        let files = named_files(how_to(&doc, heading));
+        if files.len() < at_least {
+            wrong.push(format!(
+                "{heading} names {} files, fewer than {at_least}",
+                files.len()
+            ));
+        }
+        for f in missing_in(&files, units, placeholder) {
+            wrong.push(format!("{heading}: `{f}` does not exist"));
+        }
+    }
+    assert!(wrong.is_empty(), "{wrong:#?}");
+}

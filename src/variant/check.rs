@@ -191,9 +191,7 @@ fn check_clusters(c: &Clusters, v: &Variant, out: &mut Vec<Problem>) {
                 format!("is {n}; it must be in 1..={MAX_BIG_TILES} (tiles per big tile side)"),
             ));
         }
-        if !matches!(c.culling, Culling::Boxes | Culling::DepthMask)
-            || c.assignment == Assignment::Cpu
-        {
+        if !c.culling.takes_big_tiles() || c.assignment == Assignment::Cpu {
             out.push(problem(
                 "clusters.big_tiles",
                 "two-level culling builds per-cluster lists on the GPU: remove `big_tiles`, or use Boxes or DepthMask culling with Gpu assignment",
@@ -202,12 +200,7 @@ fn check_clusters(c: &Clusters, v: &Variant, out: &mut Vec<Problem>) {
     }
     // The CPU builds lists by the box test (with or without depth masks) alone; z-binning
     // says why itself, above.
-    if c.assignment != Assignment::Gpu
-        && !matches!(
-            c.culling,
-            Culling::Boxes | Culling::DepthMask | Culling::ZBinning
-        )
-    {
+    if c.assignment != Assignment::Gpu && !c.culling.takes_cpu_assignment() {
         out.push(problem(
             "clusters.assignment",
             format!(
@@ -251,11 +244,7 @@ fn check_update(c: &Clusters, out: &mut Vec<Problem>) {
         }
         return;
     }
-    let one_level_lists = matches!(
-        c.culling,
-        Culling::Boxes | Culling::DepthMask | Culling::Bvh
-    );
-    if !one_level_lists {
+    if !c.culling.keeps_one_level_lists() {
         out.push(problem(
             "clusters.update",
             format!(

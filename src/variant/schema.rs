@@ -287,6 +287,32 @@ impl Culling {
             Culling::Boxes | Culling::ZBinning | Culling::Rasterised | Culling::Bvh => false,
         }
     }
+
+    /// Whether its lists may be built over big tiles first (two-level culling).
+    pub fn takes_big_tiles(self) -> bool {
+        match self {
+            Culling::Boxes | Culling::DepthMask => true,
+            Culling::ZBinning | Culling::Rasterised | Culling::Bvh => false,
+        }
+    }
+
+    /// Whether the CPU may build its lists (`assignment: Cpu`): the box test, with or
+    /// without depth masks; z-binning refuses it with its own reason.
+    pub fn takes_cpu_assignment(self) -> bool {
+        match self {
+            Culling::Boxes | Culling::DepthMask | Culling::ZBinning => true,
+            Culling::Rasterised | Culling::Bvh => false,
+        }
+    }
+
+    /// Whether its lists equal one-level assignment's, as a list strategy other than
+    /// `Rebuild` needs.
+    pub fn keeps_one_level_lists(self) -> bool {
+        match self {
+            Culling::Boxes | Culling::DepthMask | Culling::Bvh => true,
+            Culling::ZBinning | Culling::Rasterised => false,
+        }
+    }
 }
 
 /// The WESL flags of the methods that have one (shared modules test them); each is set
