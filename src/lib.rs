@@ -30,5 +30,6 @@ pub mod sequence;
 pub mod snapshot;
 pub mod stress;
 pub mod study;
+pub mod table;
 pub mod variant;
 pub mod view;

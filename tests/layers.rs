@@ -22,6 +22,7 @@ const LAYERS: &[&[&str]] = &[
         "measure",
         "names",
         "progress",
+        "table",
     ],
     &["cpu", "variant", "scene", "flip"],
     &["compose", "gpu", "explain"],

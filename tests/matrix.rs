@@ -197,8 +197,11 @@ fn speedups_and_pareto_front_follow_from_the_cells(r: &Results, printed: &str) {
             let row = section
                 .lines()
                 .find(|l| {
-                    l.get(2..)
-                        .is_some_and(|rest| rest.starts_with(&format!("{} ", c.spec.variant)))
+                    // The mark's column, then the variant's name.
+                    l.get(1..).is_some_and(|rest| {
+                        rest.trim_start()
+                            .starts_with(&format!("{} ", c.spec.variant))
+                    })
                 })
                 .unwrap_or_else(|| panic!("no row for {} under {g}", c.spec.variant));
             assert_eq!(row.starts_with('*'), c.pareto, "{row}");

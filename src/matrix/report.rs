@@ -10,6 +10,7 @@ use super::record::{CellRecord, Results, grouped, label};
 use super::{html, plots};
 
 use crate::files::write_file;
+use crate::table::Table;
 
 /// Write results.json, results.csv, the plots and index.html into `dir`.
 pub fn write_report(dir: &Path, results: &Results) -> Result<(), String> {
@@ -26,56 +27,44 @@ pub fn write_report(dir: &Path, results: &Results) -> Result<(), String> {
     write_file(&dir.join("index.html"), page.as_bytes())
 }
 
-/// The terminal table: one row per cell, grouped by scene and parameters, with the result
-/// columns shown in the terminal (`columns::COLUMNS`); `*` marks the time-error Pareto front.
+/// The terminal table: per group of scene and parameters, one row per cell with the result
+/// columns shown in the terminal (`columns::COLUMNS`); `*` marks the time-error Pareto
+/// front. A cell without figures says why in their place; one whose figures stand but mean
+/// nothing says why after them.
 pub fn table(results: &Results) -> String {
-    let mut out = String::new();
     let rows: Vec<Measured> = results.cells.iter().map(CellRecord::measured).collect();
     let cols = columns::table_columns(&rows, |s| s.terminal);
-    let names: Vec<String> = results.cells.iter().map(label).collect();
-    let name_width = names.iter().map(|n| n.len()).max().unwrap_or(0).max(40);
-    let widths: Vec<usize> = cols
-        .iter()
-        .map(|c| {
-            rows.iter()
-                .map(|m| (c.text)(m).chars().count())
-                .chain([c.heading.len()])
-                .max()
-                .unwrap_or(0)
-        })
+    let headings: Vec<&str> = ["", "variant"]
+        .into_iter()
+        .chain(cols.iter().map(|c| c.heading))
         .collect();
+    let mut out = String::new();
     for (group, cells) in grouped(results) {
-        let _ = writeln!(out, "\n{group}");
-        let _ = write!(out, "  {:<name_width$}", "variant");
-        for (c, w) in cols.iter().zip(&widths) {
-            let _ = write!(out, " {:>w$}", c.heading);
-        }
-        let _ = writeln!(out);
+        let mut t = Table::new(&group, &headings).left_aligned(2);
         for c in cells {
-            let mark = if c.pareto { '*' } else { ' ' };
-            let name = label(c);
+            let mark = if c.pareto { "*" } else { "" };
+            let names = vec![mark.to_string(), label(c)];
             let failed = c
                 .failure
                 .as_deref()
                 .map(|why| why.lines().next().unwrap_or(""));
-            if let Some(first) = failed
-                && c.total_ms().is_none()
-            {
-                let verdict = if c.refused { "REFUSED" } else { "FAILED" };
-                let _ = writeln!(out, "  {name:<name_width$} {verdict}: {first}");
-                continue;
-            }
-            // A frame that rendered and means nothing: its figures, then why it failed.
             let m = c.measured();
-            let _ = write!(out, "{mark} {name:<name_width$}");
-            for (col, w) in cols.iter().zip(&widths) {
-                let _ = write!(out, " {:>w$}", (col.text)(&m));
+            let figures = || {
+                names
+                    .iter()
+                    .cloned()
+                    .chain(cols.iter().map(|col| (col.text)(&m)))
+            };
+            match failed {
+                Some(first) if c.total_ms().is_none() => {
+                    let verdict = if c.refused { "REFUSED" } else { "FAILED" };
+                    t.verdict_row(names, format!("{verdict}: {first}"));
+                }
+                Some(first) => t.row_then(figures().collect(), format!("FAILED: {first}")),
+                None => t.row(figures().collect()),
             }
-            if let Some(first) = failed {
-                let _ = write!(out, " FAILED: {first}");
-            }
-            let _ = writeln!(out);
         }
+        let _ = write!(out, "\n{}", t.terminal());
     }
     let _ = writeln!(
         out,

@@ -8,13 +8,13 @@ use serde::Serialize;
 
 use std::sync::Arc;
 
-use super::table::{Table, sig};
 use super::{Reads, StudyError, StudyOptions};
 use crate::compose::Composer;
 use crate::cpu::normals::*;
 use crate::cpu::normals::{decode, encode};
 use crate::gpu::Gpu;
 use crate::plot::Plot;
+use crate::table::{Table, sig};
 use crate::variant::{NORMAL_BITS, NormalCodec};
 
 /// Significant digits the table prints, and at most 4 decimals (1e-4 degrees, 17 times the

@@ -7,11 +7,12 @@ use std::sync::Arc;
 use serde::Serialize;
 use strum::IntoEnumIterator;
 
-use super::{Reads, StudyError, StudyOptions, Table};
+use super::{Reads, StudyError, StudyOptions};
 use crate::compose::Composer;
 use crate::gpu::Gpu;
 use crate::render::Renderer;
 use crate::scene::{Scene, SceneParams};
+use crate::table::Table;
 use crate::variant::{Clusters, Pipeline, SpotTest, Variant, ZSlicing};
 
 /// The spot fractions every scene runs at.
@@ -204,7 +205,7 @@ fn table(rows: &[ConeRow]) -> Table {
         cells.extend([
             r.evaluations.to_string(),
             r.useful_evaluations.to_string(),
-            super::table::percent(r.efficiency),
+            crate::table::percent(r.efficiency),
             r.over_sphere
                 .map_or("-".into(), |x| format!("{:.1}%", 100.0 * x)),
             format!("{:.1}", r.shading_ms),

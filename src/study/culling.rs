@@ -6,12 +6,12 @@ use std::sync::Arc;
 
 use serde::Serialize;
 
-use super::table::{Table, sig};
 use super::{Reads, StudyError, StudyOptions, measure};
 use crate::compose::Composer;
 use crate::gpu::Gpu;
 use crate::plot::Plot;
 use crate::scene::{Scene, SceneParams};
+use crate::table::{Table, sig};
 use crate::variant::{Clusters, Culling, Pipeline, Variant, ZSlicing};
 
 /// Light counts of the study.
@@ -439,7 +439,7 @@ fn table(rows: &[CullingRow]) -> Table {
                 r.grid.clone(),
                 r.evaluations.to_string(),
                 r.useful_evaluations.to_string(),
-                super::table::percent(r.efficiency),
+                crate::table::percent(r.efficiency),
                 r.worst_list.to_string(),
                 sig(r.assignment_ms, 3),
                 sig(r.shading_ms, 3),
@@ -460,7 +460,7 @@ fn table(rows: &[CullingRow]) -> Table {
                 b.fastest.method,
                 sig(b.fastest.frame_ms, 3),
                 b.fewest_evaluations.method,
-                super::table::percent(b.fewest_evaluations.efficiency),
+                crate::table::percent(b.fewest_evaluations.efficiency),
                 b.least_memory.method,
                 b.least_memory.list_bytes,
             ));

@@ -4,7 +4,6 @@
 use glam::DVec3;
 use serde::Serialize;
 
-use super::table::{Table, sig};
 use super::{Reads, StudyError, StudyOptions};
 use crate::compose::Composer;
 use crate::cpu::depth::DepthMapping;
@@ -13,6 +12,7 @@ use crate::plot::Plot;
 use crate::render::Renderer;
 use crate::scene::MeshBuilder;
 use crate::scene::{Camera, Scene, SceneParams};
+use crate::table::{Table, sig};
 use crate::variant::{Depth, DepthFormat, Pipeline, Variant};
 
 pub const NEAR: f64 = 0.05;

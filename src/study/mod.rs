@@ -12,10 +12,10 @@ pub mod sampling;
 pub mod scale;
 mod shared;
 pub mod slicing;
-pub mod table;
 pub mod temporal;
 pub mod transparency;
 
+pub use crate::table::Table;
 pub use shared::{
     DEFAULT_SIZE, Finished, Outcome, Reads, Study, StudyError, StudyOptions, StudyOutput, all_kept,
     json, run_points,
@@ -23,7 +23,6 @@ pub use shared::{
 pub(crate) use shared::{
     Measured, generate, measure, outcome_in_error_field, scene_defaults, shipped,
 };
-pub use table::Table;
 
 use crate::compose::Composer;
 use crate::gpu::{AdapterSummary, Gpu};

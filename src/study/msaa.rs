@@ -9,12 +9,13 @@ use std::sync::Arc;
 
 use serde::Serialize;
 
-use super::{Reads, StudyError, StudyOptions, Table};
+use super::{Reads, StudyError, StudyOptions};
 use crate::compose::Composer;
 use crate::gpu::Gpu;
 use crate::measure::Frames;
 use crate::run::{CellOptions, run_scene};
 use crate::scene::Scene;
+use crate::table::Table;
 use crate::variant::LoadedVariant;
 
 /// Lights in every scene unless `--lights` says otherwise (GPU Pro 4 measured 1024).

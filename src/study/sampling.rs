@@ -11,13 +11,14 @@ use std::sync::Arc;
 
 use serde::Serialize;
 
-use super::{Reads, StudyError, StudyOptions, Table};
+use super::{Reads, StudyError, StudyOptions};
 use crate::compose::Composer;
 use crate::gpu::Gpu;
 use crate::metrics;
 use crate::reference::ReferenceCache;
 use crate::render::Renderer;
 use crate::scene::{Motion, Scene, SceneParams};
+use crate::table::Table;
 use crate::variant::{Lights, LoadedVariant, Sampler};
 
 /// The scene the study runs on.

@@ -9,7 +9,6 @@ use std::sync::Arc;
 
 use serde::Serialize;
 
-use super::table::{Table, sig};
 use super::{Reads, StudyError, StudyOptions};
 use crate::compose::Composer;
 use crate::gpu::Gpu;
@@ -18,6 +17,7 @@ use crate::plot::Plot;
 use crate::reference::ReferenceCache;
 use crate::run::{CellOptions, run_scene_keeping_renderer};
 use crate::scene::{Scene, SceneParams};
+use crate::table::{Table, sig};
 use crate::variant::LoadedVariant;
 
 /// The methods, as shipped variant files, and their labels.

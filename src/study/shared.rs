@@ -3,10 +3,10 @@
 
 use serde::Serialize;
 
-use super::table::Table;
 use crate::compose::Composer;
 use crate::gpu::{AdapterSummary, Gpu, GpuError};
 use crate::render::RenderError;
+use crate::table::Table;
 
 use crate::plot::Plot;
 

@@ -5,12 +5,12 @@ use std::sync::Arc;
 
 use serde::Serialize;
 
-use super::table::{Table, sig};
 use super::{Measured, Reads, StudyError, StudyOptions, measure};
 use crate::compose::Composer;
 use crate::gpu::Gpu;
 use crate::plot::Plot;
 use crate::scene::Scene;
+use crate::table::{Table, sig};
 use crate::variant::{Clusters, Pipeline, Variant, ZSlicing};
 
 /// Grids the study runs: coarse, the default, the default with enough slices for Olsson's
@@ -293,7 +293,7 @@ fn table(rows: &[SlicingRow]) -> Table {
                 r.max_lights_per_occupied.to_string(),
                 r.evaluations.to_string(),
                 r.useful_evaluations.to_string(),
-                super::table::percent(r.efficiency),
+                crate::table::percent(r.efficiency),
                 sig(r.shading_ms, 3),
                 sig(r.gpu_ms, 3),
             ]);

@@ -10,12 +10,13 @@ use std::sync::Arc;
 
 use serde::Serialize;
 
-use super::{Reads, StudyError, StudyOptions, Table};
+use super::{Reads, StudyError, StudyOptions};
 use crate::compose::Composer;
 use crate::gpu::Gpu;
 use crate::reference::ReferenceCache;
 use crate::scene::{Motion, SceneParams};
 use crate::sequence::{SequenceSpec, scene_frames};
+use crate::table::Table;
 use crate::variant::LoadedVariant;
 
 /// The scene the study runs on.

@@ -1,4 +1,5 @@
-//! A study's table as text: aligned for the terminal, and Markdown for the studies' write-up (`docs/studies/`).
+//! A table as text, for the matrix's terminal table and every study's: aligned for the
+//! terminal, and Markdown for the studies' write-up (`docs/studies/`).
 
 use std::collections::BTreeMap;
 
@@ -12,6 +13,10 @@ pub struct Table {
     /// Rows a failed run made, by index, each with the index of its error cell: the
     /// terminal lets the error run on from there rather than widen its column.
     failed: BTreeMap<usize, usize>,
+    /// Text after a row's cells, by row: why a row whose figures stand failed.
+    tails: BTreeMap<usize, String>,
+    /// The leading columns aligned left (names); the rest, numbers, right. At least 1.
+    left: usize,
     /// Lines printed under the table: sources, conventions, caveats.
     pub notes: Vec<String>,
 }
@@ -21,8 +26,15 @@ impl Table {
         Self {
             title: title.to_string(),
             columns: columns.iter().map(|c| c.to_string()).collect(),
+            left: 1,
             ..Default::default()
         }
+    }
+
+    /// The same table with its first `n` columns aligned left.
+    pub fn left_aligned(mut self, n: usize) -> Self {
+        self.left = n.max(1);
+        self
     }
 
     pub fn row(&mut self, cells: Vec<String>) {
@@ -30,13 +42,25 @@ impl Table {
         self.rows.push(cells);
     }
 
+    /// A row whose figures stand, then `tail` after them (why the run failed anyway).
+    pub fn row_then(&mut self, cells: Vec<String>, tail: String) {
+        self.tails.insert(self.rows.len(), tail);
+        self.row(cells);
+    }
+
     /// A row for a run that failed: the cells that name it, then the error, then blanks.
     pub fn failed_row(&mut self, names: Vec<String>, error: &str) {
+        self.verdict_row(names, format!("FAILED: {error}"));
+    }
+
+    /// A row for a run that did not give its figures: the cells that name it, then
+    /// `verdict` (the error, as it is), then blanks.
+    pub fn verdict_row(&mut self, names: Vec<String>, verdict: String) {
         self.failed.insert(self.rows.len(), names.len());
         let blanks = self.columns.len().saturating_sub(names.len() + 1);
         let cells = names
             .into_iter()
-            .chain([format!("FAILED: {error}")])
+            .chain([verdict])
             .chain(std::iter::repeat_n(String::new(), blanks))
             .collect();
         self.row(cells);
@@ -68,7 +92,7 @@ impl Table {
                 .zip(&widths)
                 .enumerate()
                 .map(|(i, (c, &w))| {
-                    if i == 0 {
+                    if i < self.left {
                         format!("{c:<w$}")
                     } else {
                         format!("{c:>w$}")
@@ -93,6 +117,9 @@ impl Table {
                 }
                 None => out += &line(r),
             }
+            if let Some(tail) = self.tails.get(&i) {
+                out += &format!("  {tail}");
+            }
             out.push('\n');
         }
         for n in &self.notes {
@@ -104,11 +131,11 @@ impl Table {
         out
     }
 
-    /// A Markdown table (first column left, the rest right-aligned) and its notes.
+    /// A Markdown table (names left, the rest right-aligned) and its notes.
     pub fn markdown(&self) -> String {
         let mut out = format!("**{}**\n\n| {} |\n|", self.title, self.columns.join(" | "));
         for i in 0..self.columns.len() {
-            out += if i == 0 { " --- |" } else { " ---: |" };
+            out += if i < self.left { " --- |" } else { " ---: |" };
         }
         out.push('\n');
         for r in &self.rows {
