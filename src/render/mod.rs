@@ -1,12 +1,14 @@
 //! Running a variant on the GPU: one frame of a scene, pass by pass, timed; and an
 //! instrumented frame for the exact counters.
 //!
-//! The renderer keeps the resources and the frame loop. What each pass does (entry points,
-//! pipelines, attachments, dispatch) lives with its family: `raster`, `screen`,
+//! Read `frame` first: a variant's frame, pass by pass, with what each reads, writes and
+//! dispatches; the renderer encodes those steps in order. What each pass does (entry
+//! points, pipelines, attachments, dispatch) lives with its family: `raster`, `screen`,
 //! `clustering` (light assignment one unit per method, `culling`), `post`. Bind group
-//! layouts come from each composed pass's naga module (`reflect`, `built`); which buffer or
-//! image fills a slot is `FrameResources::scene_binding`. What a frame must fit is
-//! `limits`, what it leaves to read back `readback`.
+//! layouts come from each composed pass's naga module (`reflect`, `built`); which resource
+//! fills a slot, by its typed name (`bindings`), is `FrameResources::scene_binding`. What a
+//! frame must fit is `limits`, what it leaves to read back `readback`, what carries from
+//! frame to frame `state`.
 
 mod bindings;
 mod built;
@@ -40,6 +42,7 @@ pub use clusters::{
     AssignmentWork, ClusterBuffers, ClusterRange, ClusterStats, GpuDepthMask, SortJobsHeader,
 };
 pub use error::RenderError;
+pub use frame::{Frame, Step};
 pub use passes::{PassRunner, shader_module};
 pub use resources::{SceneBuffers, ViewUniform};
 pub use reuse::FrameChange;
@@ -54,7 +57,6 @@ use crate::gpu::{Gpu, GpuError, TimestampSlot, Timings, read_texture};
 use crate::scene::Scene;
 use crate::variant::{Assignment, Variant};
 use built::{BuiltPasses, Pipelines};
-pub use frame::{Frame, Step};
 use lists::{CpuAssignment, Fit};
 use post::PostChain;
 use redo::{Held, Lists, Redo};
@@ -96,6 +98,15 @@ fn targets_of(
     }
 }
 
+/// The scene features a variant's needs and its printed frame are taken on: spots,
+/// textures and blended materials (the most passes a frame composes).
+const EVERY_FEATURE: compose::SceneFeatures = compose::SceneFeatures {
+    spots: true,
+    textures: true,
+    masks: false,
+    blend: true,
+};
+
 /// What every pass of a variant's frames needs of a device's limits: its timed and
 /// instrumented passes on a scene with blended materials (the most a frame composes), an
 /// rgba32float HDR target.
@@ -103,14 +114,8 @@ pub fn variant_needs(
     composer: &crate::compose::Composer,
     variant: &Variant,
 ) -> Result<needs::Needs, RenderError> {
-    let blend = compose::SceneFeatures {
-        spots: true,
-        textures: true,
-        masks: false,
-        blend: true,
-    };
-    let timed = compose::frame_features(blend, None);
-    let counting = compose::frame_features(blend, Some(false));
+    let timed = compose::frame_features(EVERY_FEATURE, None);
+    let counting = compose::frame_features(EVERY_FEATURE, Some(false));
     let mut passes = Vec::new();
     for p in compose::passes_for(variant, true) {
         passes.push(composer.compose_with(variant, &p, &timed)?);
@@ -128,15 +133,7 @@ pub fn variant_needs(
 /// resource of a frame has.
 pub fn frame_of(composer: &Composer, variant: &Variant) -> Result<Frame, RenderError> {
     let plan = compose::plan(variant, false, true);
-    let features = compose::frame_features(
-        compose::SceneFeatures {
-            spots: true,
-            textures: true,
-            masks: false,
-            blend: true,
-        },
-        None,
-    );
+    let features = compose::frame_features(EVERY_FEATURE, None);
     let composed = plan
         .passes
         .iter()
