@@ -10,6 +10,7 @@ pub mod frame;
 pub mod light_grid;
 pub mod msaa;
 pub mod normals;
+pub mod occlusion;
 pub mod post;
 pub mod shading;
 pub mod sort;

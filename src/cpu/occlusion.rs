@@ -1,0 +1,389 @@
+//! Visibility for shadows, in f64 (the groundwork of exact shadows): a bounding volume
+//! hierarchy over a scene's triangles, and the watertight ray-triangle test of Woop, Benthin
+//! & Wald 2013, which never lets a ray through the crack between two triangles that share
+//! an edge. A segment from a surface point to a light's centre is blocked when it crosses a
+//! triangle strictly between `t_min` and its end.
+//!
+//! The tree is built once per scene by median splits on the longest axis of the triangles'
+//! centroids, `LEAF_TRIANGLES` at most a leaf; a node's box is the union of its triangles'.
+//! Triangles of no area (repeated or collinear corners) are counted and left out: they hide
+//! nothing and would only add NaN to the tests.
+
+use glam::DVec3;
+
+/// Most triangles a leaf holds.
+pub const LEAF_TRIANGLES: usize = 4;
+
+/// A node: its box, and either two children or a run of triangles of `order`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Node {
+    pub min: DVec3,
+    pub max: DVec3,
+    /// Leaf: the first of its triangles in `order`; inner: its first child (the second
+    /// follows it: children are made in pairs).
+    pub first: u32,
+    /// Triangles of a leaf; 0 for an inner node.
+    pub count: u32,
+}
+
+/// A scene's triangles and their tree.
+#[derive(Clone, Debug)]
+pub struct TriangleBvh {
+    pub nodes: Vec<Node>,
+    /// The triangles that hide anything, by corner.
+    pub triangles: Vec<[DVec3; 3]>,
+    /// Triangles in leaf order: leaves hold runs of it.
+    pub order: Vec<u32>,
+    /// Triangles of the scene left out for having no area.
+    pub degenerate: usize,
+}
+
+/// What one query did: nodes whose box it tested, triangles it tested.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Visits {
+    pub nodes: u32,
+    pub triangles: u32,
+}
+
+impl TriangleBvh {
+    /// The tree of the triangles `indices` makes of `positions` (three indices a triangle).
+    pub fn build(positions: &[[f32; 3]], indices: &[u32]) -> Self {
+        let corner = |i: u32| DVec3::from(positions[i as usize].map(f64::from));
+        let mut triangles = Vec::new();
+        let mut degenerate = 0;
+        for t in indices.chunks_exact(3) {
+            let [a, b, c] = [corner(t[0]), corner(t[1]), corner(t[2])];
+            if (b - a).cross(c - a).length_squared() > 0.0 {
+                triangles.push([a, b, c]);
+            } else {
+                degenerate += 1;
+            }
+        }
+        let mut order: Vec<u32> = (0..triangles.len() as u32).collect();
+        let mut nodes = vec![Node {
+            min: DVec3::ZERO,
+            max: DVec3::ZERO,
+            first: 0,
+            count: 0,
+        }];
+        let centroid = |t: u32| {
+            let [a, b, c] = triangles[t as usize];
+            (a + b + c) / 3.0
+        };
+        // (node, first, end) still to make.
+        let mut todo = vec![(0usize, 0usize, order.len())];
+        while let Some((at, first, end)) = todo.pop() {
+            let (min, max) = order[first..end].iter().fold(
+                (DVec3::INFINITY, DVec3::NEG_INFINITY),
+                |(lo, hi), &t| {
+                    let [a, b, c] = triangles[t as usize];
+                    (lo.min(a).min(b).min(c), hi.max(a).max(b).max(c))
+                },
+            );
+            nodes[at].min = min;
+            nodes[at].max = max;
+            if end - first <= LEAF_TRIANGLES {
+                nodes[at].first = first as u32;
+                nodes[at].count = (end - first) as u32;
+                continue;
+            }
+            let (lo, hi) = order[first..end]
+                .iter()
+                .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), &t| {
+                    (lo.min(centroid(t)), hi.max(centroid(t)))
+                });
+            let axis = (hi - lo).max_position();
+            let half = (end - first) / 2;
+            order[first..end].select_nth_unstable_by(half, |&a, &b| {
+                centroid(a)[axis].total_cmp(&centroid(b)[axis])
+            });
+            let child = nodes.len();
+            nodes[at].first = child as u32;
+            nodes.extend([nodes[at]; 2]);
+            todo.push((child, first, first + half));
+            todo.push((child + 1, first + half, end));
+        }
+        if triangles.is_empty() {
+            nodes[0].min = DVec3::ZERO;
+            nodes[0].max = DVec3::ZERO;
+        }
+        Self {
+            nodes,
+            triangles,
+            order,
+            degenerate,
+        }
+    }
+
+    /// Whether a triangle crosses the segment from `from` to `to` at a fraction `t` of it
+    /// with `t_min < t < 1`, and what the walk visited.
+    pub fn blocked(&self, from: DVec3, to: DVec3, t_min: f64) -> (bool, Visits) {
+        let mut visits = Visits::default();
+        if self.triangles.is_empty() {
+            return (false, visits);
+        }
+        let dir = to - from;
+        let inverse = dir.recip();
+        let mut stack = vec![0u32];
+        while let Some(at) = stack.pop() {
+            let node = self.nodes[at as usize];
+            visits.nodes += 1;
+            if !box_meets(node.min, node.max, from, inverse, t_min) {
+                continue;
+            }
+            if node.count == 0 {
+                stack.extend([node.first, node.first + 1]);
+                continue;
+            }
+            for &t in &self.order[node.first as usize..(node.first + node.count) as usize] {
+                visits.triangles += 1;
+                if hit(from, dir, self.triangles[t as usize]).is_some_and(|t| t > t_min && t < 1.0)
+                {
+                    return (true, visits);
+                }
+            }
+        }
+        (false, visits)
+    }
+
+    /// Whether every node's box holds its children's (inner) or its triangles (leaf): the
+    /// tree finds every hit only then.
+    pub fn covers(&self) -> bool {
+        let holds = |outer: &Node, min: DVec3, max: DVec3| {
+            outer.min.cmple(min).all() && outer.max.cmpge(max).all()
+        };
+        self.nodes.iter().all(|n| {
+            if n.count == 0 {
+                let [a, b] = [
+                    self.nodes[n.first as usize],
+                    self.nodes[n.first as usize + 1],
+                ];
+                holds(n, a.min, a.max) && holds(n, b.min, b.max)
+            } else {
+                self.order[n.first as usize..(n.first + n.count) as usize]
+                    .iter()
+                    .all(|&t| {
+                        let [a, b, c] = self.triangles[t as usize];
+                        holds(n, a.min(b).min(c), a.max(b).max(c))
+                    })
+            }
+        })
+    }
+}
+
+/// Whether the segment `from + t dir`, `t_min <= t <= 1`, meets the box (slab test; a
+/// direction of 0 along an axis has an infinite inverse, and a ray on a slab's plane is
+/// kept, never lost).
+fn box_meets(min: DVec3, max: DVec3, from: DVec3, inverse: DVec3, t_min: f64) -> bool {
+    let (mut near, mut far) = (t_min, 1.0f64);
+    for k in 0..3 {
+        let (a, b) = (
+            (min[k] - from[k]) * inverse[k],
+            (max[k] - from[k]) * inverse[k],
+        );
+        // 0 x inf (the ray on a slab's plane) is NaN: that axis constrains nothing.
+        let (lo, hi) = if a.is_nan() || b.is_nan() {
+            (f64::NEG_INFINITY, f64::INFINITY)
+        } else {
+            (a.min(b), a.max(b))
+        };
+        near = near.max(lo);
+        far = far.min(hi);
+    }
+    near <= far
+}
+
+/// Where the ray `origin + t dir` crosses `triangle` (either side), as `t`; None where it
+/// misses. Watertight (Woop, Benthin & Wald 2013): the ray is sheared so that it runs along
+/// +z, each edge is tested by one 2D edge function of the sheared corners, and an edge
+/// shared by two triangles gives both the same function with opposite signs, so a ray
+/// through the edge is inside at least one of them.
+pub fn hit(origin: DVec3, dir: DVec3, triangle: [DVec3; 3]) -> Option<f64> {
+    let kz = dir.abs().max_position();
+    let (mut kx, mut ky) = ((kz + 1) % 3, (kz + 2) % 3);
+    // Keep the winding: swap x and y when the ray runs along -z.
+    if dir[kz] < 0.0 {
+        std::mem::swap(&mut kx, &mut ky);
+    }
+    let (sx, sy, sz) = (dir[kx] / dir[kz], dir[ky] / dir[kz], 1.0 / dir[kz]);
+    let [a, b, c] = triangle.map(|v| v - origin);
+    let shear = |v: DVec3| (v[kx] - sx * v[kz], v[ky] - sy * v[kz]);
+    let ((ax, ay), (bx, by), (cx, cy)) = (shear(a), shear(b), shear(c));
+    let u = cx * by - cy * bx;
+    let v = ax * cy - ay * cx;
+    let w = bx * ay - by * ax;
+    if (u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0) {
+        return None;
+    }
+    let det = u + v + w;
+    if det == 0.0 {
+        return None;
+    }
+    let t = (u * sz * a[kz] + v * sz * b[kz] + w * sz * c[kz]) / det;
+    t.is_finite().then_some(t)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A seeded generator (xorshift): the same triangles and segments every run.
+    struct Seeded(u64);
+
+    impl Seeded {
+        fn unit(&mut self) -> f64 {
+            self.0 ^= self.0 << 13;
+            self.0 ^= self.0 >> 7;
+            self.0 ^= self.0 << 17;
+            (self.0 >> 11) as f64 / (1u64 << 53) as f64
+        }
+
+        fn point(&mut self, scale: f64) -> DVec3 {
+            DVec3::new(self.unit(), self.unit(), self.unit()) * scale
+        }
+    }
+
+    fn scene(n: usize, seed: u64) -> (Vec<[f32; 3]>, Vec<u32>) {
+        let mut r = Seeded(seed);
+        let mut positions = Vec::new();
+        for _ in 0..n {
+            let centre = r.point(20.0);
+            for _ in 0..3 {
+                positions.push((centre + r.point(2.0)).as_vec3().to_array());
+            }
+        }
+        let indices = (0..positions.len() as u32).collect();
+        (positions, indices)
+    }
+
+    /// Every triangle tested, no tree: what the tree must answer.
+    fn brute(bvh: &TriangleBvh, from: DVec3, to: DVec3, t_min: f64) -> bool {
+        bvh.triangles
+            .iter()
+            .any(|&t| hit(from, to - from, t).is_some_and(|t| t > t_min && t < 1.0))
+    }
+
+    #[test]
+    fn the_tree_answers_as_every_triangle_does() {
+        let (positions, indices) = scene(500, 7);
+        let bvh = TriangleBvh::build(&positions, &indices);
+        assert!(bvh.covers());
+        let mut r = Seeded(99);
+        let (mut blocked, mut nodes) = (0, 0);
+        for _ in 0..2000 {
+            let (from, to) = (r.point(22.0), r.point(22.0));
+            let (tree, visits) = bvh.blocked(from, to, 1e-9);
+            assert_eq!(tree, brute(&bvh, from, to, 1e-9), "{from} -> {to}");
+            blocked += usize::from(tree);
+            nodes += visits.nodes;
+        }
+        // Both answers occur, and the walk visits far fewer nodes than the tree holds.
+        assert!(blocked > 100 && blocked < 1900, "{blocked} of 2000 blocked");
+        assert!(
+            (nodes as usize) < 2000 * bvh.nodes.len() / 4,
+            "{nodes} visits"
+        );
+    }
+
+    /// Möller-Trumbore in f32, the usual test: the deliberate break of watertightness.
+    fn moller_trumbore(origin: DVec3, dir: DVec3, t: [DVec3; 3]) -> bool {
+        let (o, d) = (origin.as_vec3(), dir.as_vec3());
+        let [a, b, c] = t.map(|v| v.as_vec3());
+        let (e1, e2) = (b - a, c - a);
+        let p = d.cross(e2);
+        let det = e1.dot(p);
+        if det == 0.0 {
+            return false;
+        }
+        let s = o - a;
+        let u = s.dot(p) / det;
+        let q = s.cross(e1);
+        let v = d.dot(q) / det;
+        u >= 0.0 && v >= 0.0 && u + v <= 1.0
+    }
+
+    /// A ray through the edge two triangles share, or the corner a fan shares, hits; the
+    /// usual test in f32 (Möller-Trumbore) lets some through.
+    #[test]
+    fn no_ray_passes_through_a_shared_edge_or_corner() {
+        // The unit square in z = 0, split along its diagonal; and a fan of six around the
+        // origin.
+        let square = [
+            [DVec3::ZERO, DVec3::X, DVec3::new(1.0, 1.0, 0.0)],
+            [DVec3::ZERO, DVec3::new(1.0, 1.0, 0.0), DVec3::Y],
+        ];
+        let fan: Vec<[DVec3; 3]> = (0..6)
+            .map(|i| {
+                let at = |k: i32| {
+                    let a = std::f64::consts::TAU * k as f64 / 6.0;
+                    DVec3::new(a.cos(), a.sin(), 0.0)
+                };
+                [DVec3::ZERO, at(i), at(i + 1)]
+            })
+            .collect();
+        let mut r = Seeded(3);
+        let mut lost = 0;
+        for _ in 0..1000 {
+            // On the diagonal, from a random point above to one below.
+            let s = r.unit();
+            let on = DVec3::new(s, s, 0.0);
+            let from = on + DVec3::new(r.unit() - 0.5, r.unit() - 0.5, 1.0 + r.unit());
+            let dir = (on - from) * 2.0;
+            assert!(
+                square.iter().any(|&t| hit(from, dir, t).is_some()),
+                "{from}"
+            );
+            lost += usize::from(!square.iter().any(|&t| moller_trumbore(from, dir, t)));
+            let from = DVec3::new(r.unit() - 0.5, r.unit() - 0.5, 1.0 + r.unit());
+            assert!(
+                fan.iter().any(|&t| hit(from, -from * 2.0, t).is_some()),
+                "{from}"
+            );
+        }
+        assert!(lost > 0, "the f32 test lost no ray through the shared edge");
+    }
+
+    /// Triangles of no area are counted and left out; no query meets NaN.
+    #[test]
+    fn degenerate_triangles_are_counted_and_skipped() {
+        let positions = [
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [2.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+        ];
+        let indices = [0, 1, 2, 0, 0, 3, 0, 1, 3];
+        let bvh = TriangleBvh::build(&positions, &indices);
+        assert_eq!((bvh.degenerate, bvh.triangles.len()), (2, 1));
+        let from = DVec3::new(0.2, 0.2, 1.0);
+        assert!(bvh.blocked(from, DVec3::new(0.2, 0.2, -1.0), 0.0).0);
+        assert!(!bvh.blocked(from, DVec3::new(2.5, 0.2, -1.0), 0.0).0);
+        assert!(
+            !TriangleBvh::build(&positions, &indices[..3])
+                .blocked(from, -from, 0.0)
+                .0
+        );
+    }
+
+    /// The deliberate break: a node whose box no longer holds a child loses hits, and
+    /// `covers` says so.
+    #[test]
+    fn a_box_that_misses_a_child_is_caught() {
+        let (positions, indices) = scene(200, 11);
+        let mut bvh = TriangleBvh::build(&positions, &indices);
+        let mut r = Seeded(5);
+        let segments: Vec<(DVec3, DVec3)> =
+            (0..500).map(|_| (r.point(22.0), r.point(22.0))).collect();
+        let agree = |b: &TriangleBvh| {
+            segments
+                .iter()
+                .all(|&(f, t)| b.blocked(f, t, 1e-9).0 == brute(b, f, t, 1e-9))
+        };
+        assert!(agree(&bvh));
+        let inner = bvh.nodes.iter().position(|n| n.count == 0).unwrap();
+        let child = bvh.nodes[inner].first as usize;
+        bvh.nodes[inner].max = bvh.nodes[child].min;
+        assert!(!bvh.covers());
+        assert!(!agree(&bvh), "a shrunk box lost no hit");
+    }
+}
