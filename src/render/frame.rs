@@ -30,7 +30,7 @@ use super::bindings::Binding;
 use super::error::RenderError;
 use super::reflect;
 use crate::compose::{ClusterPass, ComposedPass, Pass, PassId, RasterPass, ScreenPass};
-use crate::variant::{CullingMethod, Variant};
+use crate::variant::{CullingMethod, Pipeline, Variant};
 
 /// What a compute dispatch covers: one invocation per pixel or per cluster, or one
 /// workgroup.
@@ -105,9 +105,7 @@ impl Frame {
             support: plan.support.iter().map(step).collect::<Result<_, _>>()?,
         })
     }
-}
 
-impl Frame {
     /// Whether this frame runs exactly the passes of `plan`.
     pub fn runs(&self, plan: &crate::compose::FramePlan) -> bool {
         let ids = |s: &[Step]| s.iter().map(|s| s.pass).collect::<Vec<_>>();
@@ -164,8 +162,10 @@ impl Step {
 
 /// The images pass `id` renders into.
 fn attachments(v: &Variant, id: PassId) -> Vec<&'static str> {
-    let msaa_forward = v.msaa.on() && !v.pipeline.is_deferred();
-    let colour = if msaa_forward { "hdr_samples" } else { "hdr" };
+    // Multisampled colour goes to its own target, but in clustered deferred, whose
+    // resolve shades the samples (`FrameResources::new`).
+    let samples = v.msaa.on() && v.pipeline != Pipeline::ClusteredDeferred;
+    let colour = if samples { "hdr_samples" } else { "hdr" };
     match id {
         PassId::Raster(RasterPass::DepthPrepass) => vec!["depth"],
         PassId::Raster(RasterPass::GBuffer) => {
