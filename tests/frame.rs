@@ -1,6 +1,6 @@
 //! The frame as data (`render::frame`): every shipped variant's frame is laid out with a
-//! typed name for every binding, and no step reads what the GPU builds before a step of
-//! the frame wrote it.
+//! typed name for every binding, no step reads what the GPU builds before a step of the
+//! frame wrote it, and every entry point the renderer names is a shader's.
 
 use clusterlab::compose::Composer;
 use clusterlab::render::frame::Work;
@@ -182,4 +182,86 @@ fn wgsl_frame_prints_the_steps_in_order() {
     assert!(at(". light_assign") < at(". forward"), "{}", out.stdout);
     assert!(out.stdout.contains("writes"), "{}", out.stdout);
     assert!(out.stdout.contains("into   hdr"), "{}", out.stdout);
+}
+
+/// The entry points the renderer names (`get("reduce")`, a dispatch step, a pipeline's
+/// `("vs_main", "fs_main")`, a post step): each as Rust writes it.
+fn named_entries(source: &str) -> Vec<String> {
+    let mut found = Vec::new();
+    for line in source.lines() {
+        let code = line.split("//").next().unwrap_or("");
+        let literals: Vec<&str> = code.split('"').skip(1).step_by(2).collect();
+        let entry_context = [
+            "get(",
+            "groups_for(",
+            "Step::Dispatch(",
+            "Step::Indirect(",
+            "long_lists(",
+            "Over::",
+            "ComputePipelines::new(",
+            "step(pass, ",
+        ]
+        .iter()
+        .any(|c| code.contains(c));
+        for l in literals {
+            let is_name = !l.is_empty() && l.chars().all(|c| c.is_ascii_lowercase() || c == '_');
+            let shader_prefix = ["vs_", "fs_", "cs_"].iter().any(|p| l.starts_with(p));
+            if is_name && (shader_prefix || entry_context) {
+                found.push(l.to_string());
+            }
+        }
+    }
+    found
+}
+
+/// The entry points the shaders declare: each function after `@compute`, `@fragment` or
+/// `@vertex`.
+fn shader_entries() -> Vec<String> {
+    let mut files = Vec::new();
+    wgsl_files(std::path::Path::new("shaders"), &mut files);
+    let mut entries = Vec::new();
+    for file in files {
+        let text = std::fs::read_to_string(&file).unwrap();
+        let mut stage = false;
+        for line in text.lines() {
+            let line = line.trim_start();
+            stage |= ["@compute", "@fragment", "@vertex"]
+                .iter()
+                .any(|s| line.contains(s));
+            if let Some(rest) = line.split("fn ").nth(1).filter(|_| stage) {
+                entries.push(rest.split('(').next().unwrap_or("").trim().to_string());
+                stage = false;
+            }
+        }
+    }
+    entries
+}
+
+/// Every entry point the renderer names is one a shader declares: a misspelt entry fails
+/// here rather than when a frame first needs it. The deliberate break: `get("reduc")`.
+#[test]
+fn every_entry_the_renderer_names_is_a_shaders() {
+    let entries = shader_entries();
+    assert!(entries.iter().any(|e| e == "reduce") && entries.iter().any(|e| e == "fs_main"));
+    let unknown = |source: &str| -> Vec<String> {
+        named_entries(source)
+            .into_iter()
+            .filter(|n| !entries.contains(n))
+            .collect()
+    };
+    assert_eq!(unknown("cp.set_pipeline(p.get(\"reduc\"));"), ["reduc"]);
+    let mut sources = Vec::new();
+    crate::common::rust_sources(std::path::Path::new("src/render"), &mut sources);
+    let mut wrong = Vec::new();
+    let mut named = 0;
+    for file in sources {
+        let text = std::fs::read_to_string(&file).unwrap();
+        named += named_entries(&text).len();
+        for n in unknown(&text) {
+            wrong.push(format!("{}: `{n}`", file.display()));
+        }
+    }
+    // The scan finds the renderer's entries at all (more than the screen passes' own).
+    assert!(named > 40, "only {named} entry names found");
+    assert!(wrong.is_empty(), "entries no shader declares: {wrong:#?}");
 }
