@@ -15,7 +15,7 @@ fn shipped() -> Vec<clusterlab::variant::LoadedVariant> {
 /// What a frame reads that no step of it builds: what the CPU uploads (the view, the
 /// lights, textures, the moving set, the sampler's frame, the starting cluster range;
 /// the lists themselves with CPU assignment), and what a frame keeps for the next (the
-/// sampled loops' reservoirs; the depth range and marks of the frame before).
+/// sampled loops' reservoirs of the frame before).
 fn given(v: &Variant, b: Binding) -> bool {
     use Binding::*;
     let cpu_lists = v.pipeline.is_clustered() && v.clusters().assignment == Assignment::Cpu;
@@ -28,9 +28,7 @@ fn given(v: &Variant, b: Binding) -> bool {
             | MovingMask
             | SampleFrame
             | ClusterRange
-            | Reservoirs
             | PreviousReservoirs
-            | ClusterActive
     ) || cpu_lists && matches!(b, LightCounts | LightOffsets | LightIndices)
 }
 

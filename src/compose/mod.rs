@@ -21,6 +21,7 @@ pub use light_loop::LightLoop;
 pub use passes::{
     ClusterPass, FramePlan, Pass, PassId, PassKind, PostPass, RasterPass, ScreenPass,
     keeps_still_image, pass_flags, passes, passes_for, plan, reads_visible_depths,
+    shades_samples_apart,
 };
 pub use resolver::ShaderResolver;
 

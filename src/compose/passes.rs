@@ -206,6 +206,13 @@ pub fn keeps_still_image(v: &Variant) -> bool {
         && (v.pipeline.is_deferred() || v.depth_prepass)
 }
 
+/// Whether `v` shades into a multisampled colour target that a later pass resolves to one
+/// sample a pixel (`sample_resolve`): every multisampled pipeline but clustered deferred,
+/// whose resolve resolves the samples as it shades them.
+pub fn shades_samples_apart(v: &Variant) -> bool {
+    v.msaa.on() && v.pipeline != Pipeline::ClusteredDeferred
+}
+
 /// The flags pass `id` sets over its variant's: StaticDynamic's moving lists take every
 /// light they are given (`still_lists` leaves the moving ones out of the still lists), and
 /// the still image's passes write it (`still_pass`) rather than read it.
@@ -290,8 +297,7 @@ pub fn passes_for(v: &Variant, blend: bool) -> Vec<Pass> {
         Pipeline::ClusteredDeferred => screen(ScreenPass::Resolve, "passes::resolve"),
         Pipeline::DeferredScissor => screen(ScreenPass::ScissorLights, "passes::scissor_lights"),
     });
-    // The clustered deferred resolve resolves the samples as it shades them.
-    if v.msaa.on() && v.pipeline != Pipeline::ClusteredDeferred {
+    if shades_samples_apart(v) {
         out.push(screen(ScreenPass::SampleResolve, "passes::sample_resolve"));
     }
     // Blended surfaces over the opaque frame, shaded forward in every pipeline (deferred's

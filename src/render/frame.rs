@@ -30,7 +30,7 @@ use super::bindings::Binding;
 use super::error::RenderError;
 use super::reflect;
 use crate::compose::{ClusterPass, ComposedPass, Pass, PassId, RasterPass, ScreenPass};
-use crate::variant::{CullingMethod, Pipeline, Variant};
+use crate::variant::{CullingMethod, Variant};
 
 /// What a compute dispatch covers: one invocation per pixel or per cluster, or one
 /// workgroup.
@@ -162,9 +162,7 @@ impl Step {
 
 /// The images pass `id` renders into.
 fn attachments(v: &Variant, id: PassId) -> Vec<&'static str> {
-    // Multisampled colour goes to its own target, but in clustered deferred, whose
-    // resolve shades the samples (`FrameResources::new`).
-    let samples = v.msaa.on() && v.pipeline != Pipeline::ClusteredDeferred;
+    let samples = crate::compose::shades_samples_apart(v);
     let colour = if samples { "hdr_samples" } else { "hdr" };
     match id {
         PassId::Raster(RasterPass::DepthPrepass) => vec!["depth"],

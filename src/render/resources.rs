@@ -13,7 +13,7 @@ use super::targets::{
 use crate::cpu::depth::DepthMapping;
 use crate::gpu::Gpu;
 use crate::scene::{Light, Scene, Vertex};
-use crate::variant::{ListUpdate, Pipeline, Variant};
+use crate::variant::{ListUpdate, Variant};
 
 /// Mirrors `View` in `shaders/common/view.wesl` (432 bytes).
 #[repr(C)]
@@ -364,7 +364,7 @@ impl FrameResources {
         let targets = Targets {
             depth: Target::multisampled(gpu, "depth", (w, h), depth.format, samples),
             hdr: Target::new(gpu, "hdr", w, h, gpu.hdr_format),
-            hdr_samples: (variant.msaa.on() && variant.pipeline != Pipeline::ClusteredDeferred)
+            hdr_samples: crate::compose::shades_samples_apart(variant)
                 .then(|| Target::multisampled(gpu, "hdr samples", (w, h), gpu.hdr_format, samples)),
             shading_depth: (variant.msaa.on() && variant.depth_prepass).then(|| {
                 Target::multisampled(gpu, "shading depth", (w, h), SHADING_DEPTH_FORMAT, samples)
