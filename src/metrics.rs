@@ -27,6 +27,28 @@ pub struct ErrorMetrics {
     /// it: the mean of (x - r)^2 / (r^2 + RELATIVE_MSE_OFFSET) per channel.
     #[serde(default)]
     pub relative_mse: f64,
+    /// With shadows: what the reference's rays found, and the error beside the pixels
+    /// whose ambiguous pairs allow more.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub shadows: Option<ShadowError>,
+}
+
+/// A shadowed frame's error where the reference allows only rounding.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ShadowError {
+    /// Pairs (sample, light) the reference traced a ray for, those it found blocked, and
+    /// those within the GPU's error of an occluder (either answer right).
+    pub pairs: u64,
+    pub blocked: u64,
+    pub ambiguous: u64,
+    /// The ambiguous pairs' share of the pairs.
+    pub ambiguous_share: f64,
+    /// Pixels with an ambiguous pair.
+    pub ambiguous_pixels: u64,
+    /// The largest difference of the displayed images outside the range a pixel's
+    /// ambiguous pairs allow (each ambiguous light in or out): what an exact variant holds
+    /// to 1 LSB.
+    pub max_outside_ambiguity_8bit: u32,
 }
 
 /// What relative MSE adds to the reference's square, so that black pixels do not divide by
@@ -63,6 +85,10 @@ pub fn compare(frame: &FrameOutput, reference: &ReferenceFrame) -> ErrorMetrics 
     }
     let samples = (3 * n.max(1)) as f64;
     let mse8 = sq8 / samples;
+    let shadows = reference
+        .shadows
+        .as_ref()
+        .map(|f| shadow_error(frame, reference, f));
     ErrorMetrics {
         max_abs_8bit: max8,
         rmse: (sq_hdr / samples).sqrt(),
@@ -73,6 +99,39 @@ pub fn compare(frame: &FrameOutput, reference: &ReferenceFrame) -> ErrorMetrics 
         pixels_over_1lsb: over1,
         nan_pixels: nan,
         relative_mse: relative / samples,
+        shadows,
+    }
+}
+
+/// The error of a shadowed frame outside what its ambiguous pairs allow: at a pixel with
+/// one, the distance from the range between its lowest and highest display values (and the
+/// reference's own); elsewhere the plain difference.
+fn shadow_error(
+    frame: &FrameOutput,
+    reference: &ReferenceFrame,
+    f: &crate::cpu::frame::ShadowFigures,
+) -> ShadowError {
+    let n = frame.ldr.len().min(reference.ldr.len());
+    let mut ranges = f.ranges.iter().peekable();
+    let mut worst = 0u32;
+    for i in 0..n {
+        let range = ranges.next_if(|(at, _, _)| *at as usize == i);
+        for c in 0..3 {
+            let (got, own) = (frame.ldr[i][c] as i32, reference.ldr[i][c] as i32);
+            let (lo, hi) = match range {
+                Some((_, lo, hi)) => ((lo[c] as i32).min(own), (hi[c] as i32).max(own)),
+                None => (own, own),
+            };
+            worst = worst.max((lo - got).max(got - hi).max(0) as u32);
+        }
+    }
+    ShadowError {
+        pairs: f.pairs,
+        blocked: f.blocked,
+        ambiguous: f.ambiguous,
+        ambiguous_share: f.ambiguous as f64 / f.pairs.max(1) as f64,
+        ambiguous_pixels: f.ranges.len() as u64,
+        max_outside_ambiguity_8bit: worst,
     }
 }
 

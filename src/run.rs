@@ -656,6 +656,15 @@ pub fn inexact(variant: &Variant, gpu: &Gpu, error: Option<&ErrorMetrics>) -> Op
 /// [`inexact`] for a variant whose claim is known.
 fn inexact_figures(exact: bool, error: Option<&ErrorMetrics>) -> Option<String> {
     let e = error?;
+    // With shadows, a pixel's ambiguous pairs widen its range (`metrics::ShadowError`).
+    if let Some(s) = &e.shadows {
+        return (exact && s.max_outside_ambiguity_8bit > EXACT_LSB).then(|| {
+            format!(
+                "max {} LSB against the reference outside the {} pixels its {} ambiguous shadow rays allow more: an exact variant is within {EXACT_LSB} LSB there",
+                s.max_outside_ambiguity_8bit, s.ambiguous_pixels, s.ambiguous
+            )
+        });
+    }
     (exact && e.max_abs_8bit > EXACT_LSB).then(|| {
         format!(
             "max {} LSB against the reference, {} pixels over {EXACT_LSB} LSB: an exact variant is within {EXACT_LSB} LSB",

@@ -12,7 +12,7 @@ fn shipped() -> Vec<clusterlab::variant::LoadedVariant> {
     clusterlab::variant::load_args(&["variants".to_string()]).expect("the shipped variants")
 }
 
-/// What a frame reads that no step of it builds: what the CPU uploads (the view, the
+/// What a frame reads that no step of it builds: what the CPU uploads (the view, the occluders, the
 /// lights, textures, the moving set, the sampler's frame, the starting cluster range;
 /// the lists themselves with CPU assignment), and what a frame keeps for the next (the
 /// sampled loops' reservoirs of the frame before).
@@ -26,6 +26,7 @@ fn given(v: &Variant, b: Binding) -> bool {
             | BaseColorSampler
             | MovingLights
             | MovingMask
+            | Occluders
             | SampleFrame
             | ClusterRange
             | PreviousReservoirs

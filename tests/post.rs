@@ -304,6 +304,7 @@ fn the_whole_chain_is_close_to_the_reference() {
             &scene.lights,
             scene.camera.eye,
             &params,
+            None,
             clusterlab::reference::EXPOSURE,
         );
         let band = |c: DVec3| {

@@ -32,6 +32,7 @@ mod properties;
 mod readme;
 mod sampling;
 mod sequence;
+mod shadows;
 mod shards;
 mod skipping;
 mod stress;

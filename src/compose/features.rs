@@ -168,6 +168,7 @@ pub fn feature_flags(v: &Variant) -> Vec<(&'static str, bool)> {
             matches!(v.shading.model, ShadingModel::BlinnPhong { .. }),
         ),
         ("ggx", v.shading.model == ShadingModel::Ggx),
+        ("shadows", v.shading.shadows.traced()),
         // The spot cone in the shading: on for every variant; a renderer turns it off for a
         // scene without spots (`render::Renderer::new`).
         ("spot_lights", true),
@@ -375,6 +376,8 @@ pub fn constants_module(v: &Variant) -> String {
             crate::cpu::post::bloom_weight_sum(bloom.radius) as f32,
         ),
         ("CULL_THRESHOLD", threshold),
+        ("SHADOW_OFFSET", crate::cpu::shadows::SHADOW_OFFSET as f32),
+        ("SHADOW_BOX_SLACK", crate::cpu::shadows::BOX_SLACK as f32),
     ];
     let mut text = String::new();
     for (name, value) in u32s {

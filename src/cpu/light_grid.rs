@@ -232,6 +232,7 @@ mod tests {
             ambient: 0.03,
             toon_bands: None,
             resolve: crate::common::MsaaResolve::Box,
+            shadows: None,
         });
         let eye = DVec3::new(0.0, 2.0, 15.0);
         let mut reached = 0;

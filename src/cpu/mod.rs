@@ -13,6 +13,7 @@ pub mod normals;
 pub mod occlusion;
 pub mod post;
 pub mod shading;
+pub mod shadows;
 pub mod sort;
 pub mod truth;
 pub mod zbin;
@@ -24,4 +25,5 @@ pub const SHARED_U32S: &[(&str, u32)] = &[
     ("DEPTH_CELLS", clusters::DEPTH_CELLS),
     ("BVH_WIDTH", bvh::BVH_WIDTH),
     ("SORT_BLOCK", sort::SORT_BLOCK),
+    ("SHADOW_STACK", occlusion::SHADOW_STACK),
 ];

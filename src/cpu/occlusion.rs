@@ -11,6 +11,10 @@
 
 use glam::DVec3;
 
+/// Deepest tree the shaders' traversal stack holds (`SHADOW_STACK`, generated from this):
+/// a median split halves the triangles at each level, so 2^31 triangles stay within it.
+pub const SHADOW_STACK: u32 = 32;
+
 /// Most triangles a leaf holds.
 pub const LEAF_TRIANGLES: usize = 4;
 
@@ -36,6 +40,17 @@ pub struct TriangleBvh {
     pub order: Vec<u32>,
     /// Triangles of the scene left out for having no area.
     pub degenerate: usize,
+}
+
+/// What a shadow ray finds between its ends.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Seen {
+    /// No triangle near the segment: the light reaches the point.
+    Open,
+    /// A triangle crosses it with room to spare: the light is blocked.
+    Blocked,
+    /// A triangle passes within the GPU's error of it: either answer is right.
+    Ambiguous,
 }
 
 /// What one query did: nodes whose box it tested, triangles it tested.
@@ -146,6 +161,63 @@ impl TriangleBvh {
         (false, visits)
     }
 
+    /// What a segment within `reach` of `from`-`to` (every point of it moved by at most
+    /// `reach`: the GPU's ray, whose ends lie that close) finds: `Blocked` where every such
+    /// segment crosses a triangle, `Open` where none meets one, `Ambiguous` otherwise. A
+    /// triangle decides `Blocked` when the segment crosses it, both ends lie farther than
+    /// `reach` from its plane and the segment passes farther than `reach` from its edges
+    /// (moving the segment continuously to any other within reach, its crossing could
+    /// leave the triangle only through an edge or an end); it cannot block any of them
+    /// when the segment passes farther than `reach` from it.
+    pub fn classify(&self, from: DVec3, to: DVec3, reach: f64) -> (Seen, Visits) {
+        let mut visits = Visits::default();
+        if self.triangles.is_empty() {
+            return (Seen::Open, visits);
+        }
+        let (lo, hi) = (from.min(to) - reach, from.max(to) + reach);
+        let mut near = Vec::new();
+        let mut stack = vec![0u32];
+        while let Some(at) = stack.pop() {
+            let node = self.nodes[at as usize];
+            visits.nodes += 1;
+            // The segment's box grown by `reach` against the node's: cheap and conservative.
+            if node.min.cmpgt(hi).any() || node.max.cmplt(lo).any() {
+                continue;
+            }
+            if node.count == 0 {
+                stack.extend([node.first, node.first + 1]);
+                continue;
+            }
+            for &t in &self.order[node.first as usize..(node.first + node.count) as usize] {
+                visits.triangles += 1;
+                match triangle_seen(from, to, self.triangles[t as usize], reach) {
+                    Seen::Blocked => return (Seen::Blocked, visits),
+                    Seen::Ambiguous => near.push(self.triangles[t as usize]),
+                    Seen::Open => {}
+                }
+            }
+        }
+        let seen = match near.is_empty() {
+            true => Seen::Open,
+            false => patch_seen(from, to, &near, reach),
+        };
+        (seen, visits)
+    }
+
+    /// Levels of the tree: 1 where the root is a leaf.
+    pub fn depth(&self) -> u32 {
+        let mut deepest = 0;
+        let mut stack = vec![(0u32, 1u32)];
+        while let Some((at, level)) = stack.pop() {
+            deepest = deepest.max(level);
+            let node = self.nodes[at as usize];
+            if node.count == 0 && !self.triangles.is_empty() {
+                stack.extend([(node.first, level + 1), (node.first + 1, level + 1)]);
+            }
+        }
+        deepest
+    }
+
     /// Whether every node's box holds its children's (inner) or its triangles (leaf): the
     /// tree finds every hit only then.
     pub fn covers(&self) -> bool {
@@ -191,6 +263,171 @@ fn box_meets(min: DVec3, max: DVec3, from: DVec3, inverse: DVec3, t_min: f64) ->
         far = far.min(hi);
     }
     near <= far
+}
+
+/// What the segment `a`-`b` finds of `triangle` within `reach` (`TriangleBvh::classify`).
+fn triangle_seen(a: DVec3, b: DVec3, triangle: [DVec3; 3], reach: f64) -> Seen {
+    let [p, q, r] = triangle;
+    let normal = (q - p).cross(r - p).normalize();
+    let (da, db) = (normal.dot(a - p), normal.dot(b - p));
+    // Both ends on one side, farther than `reach` from the plane: nothing within reach.
+    if (da > reach && db > reach) || (da < -reach && db < -reach) {
+        return Seen::Open;
+    }
+    let edges = [(p, q), (q, r), (r, p)];
+    let to_edges = edges
+        .iter()
+        .map(|&(e0, e1)| segment_distance(a, b, e0, e1))
+        .fold(f64::INFINITY, f64::min);
+    let crosses = da * db < 0.0 && {
+        let x = a + (b - a) * (da / (da - db));
+        inside(x, triangle, normal)
+    };
+    if crosses {
+        let clear = to_edges > reach && da.abs() > reach && db.abs() > reach;
+        return if clear {
+            Seen::Blocked
+        } else {
+            Seen::Ambiguous
+        };
+    }
+    // Missed: its distance is to an edge, or from an end to the face.
+    let end_in_face =
+        |x: DVec3, d: f64| d.abs() <= reach && inside(x - normal * d, triangle, normal);
+    if to_edges <= reach || end_in_face(a, da) || end_in_face(b, db) {
+        Seen::Ambiguous
+    } else {
+        Seen::Open
+    }
+}
+
+/// What the segment `a`-`b` finds of `near`, the triangles within `reach` of it, none of
+/// which decides alone: where they form a patch whose boundary (the edges only one of
+/// them has) lies farther than `reach` from the segment, and both ends lie farther than
+/// `reach` from every one of them, every segment within reach crosses the patch as many
+/// times as this one does, modulo 2 (moving it continuously, a crossing appears or goes
+/// only through the boundary or at an end); an odd count is a crossing for all of them,
+/// which a watertight test finds. Typically a ray through the shared edge of two
+/// triangles of one surface.
+fn patch_seen(a: DVec3, b: DVec3, near: &[[DVec3; 3]], reach: f64) -> Seen {
+    let key = |p: DVec3| p.to_array().map(f64::to_bits);
+    let mut edges: std::collections::HashMap<_, (u32, DVec3, DVec3)> = Default::default();
+    for &[p, q, r] in near {
+        for (e0, e1) in [(p, q), (q, r), (r, p)] {
+            let k = if key(e0) <= key(e1) {
+                (key(e0), key(e1))
+            } else {
+                (key(e1), key(e0))
+            };
+            edges.entry(k).or_insert((0, e0, e1)).0 += 1;
+        }
+    }
+    let boundary_near = edges
+        .values()
+        .any(|&(n, e0, e1)| n == 1 && segment_distance(a, b, e0, e1) <= reach);
+    let end_near = near
+        .iter()
+        .any(|&t| point_triangle_distance(a, t) <= reach || point_triangle_distance(b, t) <= reach);
+    if boundary_near || end_near {
+        return Seen::Ambiguous;
+    }
+    // Every segment within reach crosses as often, modulo 2: count on one that passes no
+    // edge (this one, or one moved by a small part of `reach` in a direction of no
+    // particular axis, where this one runs through an edge).
+    let shifts = [
+        DVec3::ZERO,
+        DVec3::new(0.31, 0.57, 0.76),
+        DVec3::new(-0.66, 0.24, 0.71),
+    ];
+    for shift in shifts.map(|w| w * (reach * 1e-3)) {
+        if let Some(crossings) = crossings(a + shift, b + shift, near, reach * 1e-6) {
+            return if crossings % 2 == 1 {
+                Seen::Blocked
+            } else {
+                Seen::Ambiguous
+            };
+        }
+    }
+    Seen::Ambiguous
+}
+
+/// How many of `triangles` the segment `a`-`b` crosses; None where it passes within
+/// `tolerance` of an edge, where the count could take one crossing twice.
+fn crossings(a: DVec3, b: DVec3, triangles: &[[DVec3; 3]], tolerance: f64) -> Option<u32> {
+    let mut count = 0;
+    for &t in triangles {
+        let [p, q, r] = t;
+        let normal = (q - p).cross(r - p).normalize();
+        let (da, db) = (normal.dot(a - p), normal.dot(b - p));
+        if da * db >= 0.0 {
+            continue;
+        }
+        let x = a + (b - a) * (da / (da - db));
+        let on_edge = [(p, q), (q, r), (r, p)]
+            .iter()
+            .any(|&(e0, e1)| segment_distance(x, x, e0, e1) <= tolerance);
+        if on_edge {
+            return None;
+        }
+        count += inside(x, t, normal) as u32;
+    }
+    Some(count)
+}
+
+/// The distance from `x` to `triangle`: to its face where `x` projects inside it, else to
+/// its nearest edge.
+fn point_triangle_distance(x: DVec3, triangle: [DVec3; 3]) -> f64 {
+    let [p, q, r] = triangle;
+    let normal = (q - p).cross(r - p).normalize();
+    let d = normal.dot(x - p);
+    if inside(x - normal * d, triangle, normal) {
+        return d.abs();
+    }
+    [(p, q), (q, r), (r, p)]
+        .iter()
+        .map(|&(e0, e1)| segment_distance(x, x, e0, e1))
+        .fold(f64::INFINITY, f64::min)
+}
+
+/// Whether `x`, on the plane of `triangle` (unit `normal`), is inside it or on its edges.
+fn inside(x: DVec3, [p, q, r]: [DVec3; 3], normal: DVec3) -> bool {
+    let side = |e0: DVec3, e1: DVec3| (e1 - e0).cross(x - e0).dot(normal) >= 0.0;
+    side(p, q) && side(q, r) && side(r, p)
+}
+
+/// The distance between segments `p0`-`p1` and `q0`-`q1` (Ericson, Real-Time Collision
+/// Detection, 5.1.9: the closest points' parameters, clamped to the segments).
+pub fn segment_distance(p0: DVec3, p1: DVec3, q0: DVec3, q1: DVec3) -> f64 {
+    let (d1, d2, r) = (p1 - p0, q1 - q0, p0 - q0);
+    let (a, e, f) = (d1.length_squared(), d2.length_squared(), d2.dot(r));
+    let (s, t) = if a <= f64::MIN_POSITIVE && e <= f64::MIN_POSITIVE {
+        (0.0, 0.0)
+    } else if a <= f64::MIN_POSITIVE {
+        (0.0, (f / e).clamp(0.0, 1.0))
+    } else {
+        let c = d1.dot(r);
+        if e <= f64::MIN_POSITIVE {
+            ((-c / a).clamp(0.0, 1.0), 0.0)
+        } else {
+            let b = d1.dot(d2);
+            let denom = a * e - b * b;
+            let mut s = if denom > 0.0 {
+                ((b * f - c * e) / denom).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
+            let mut t = (b * s + f) / e;
+            if t < 0.0 {
+                t = 0.0;
+                s = (-c / a).clamp(0.0, 1.0);
+            } else if t > 1.0 {
+                t = 1.0;
+                s = ((b - c) / a).clamp(0.0, 1.0);
+            }
+            (s, t)
+        }
+    };
+    ((p0 + d1 * s) - (q0 + d2 * t)).length()
 }
 
 /// Where the ray `origin + t dir` crosses `triangle` (either side), as `t`; None where it
@@ -385,5 +622,37 @@ mod tests {
         bvh.nodes[inner].max = bvh.nodes[child].min;
         assert!(!bvh.covers());
         assert!(!agree(&bvh), "a shrunk box lost no hit");
+    }
+
+    /// A unit square of two triangles at z = 0, within `reach` = 1e-3: a segment through
+    /// their shared diagonal is blocked (the patch decides what neither triangle does
+    /// alone, the deliberate break), one within reach of the outer edge or ending within
+    /// reach of the face is ambiguous, one beyond reach of the square is open.
+    #[test]
+    fn a_patch_decides_what_no_triangle_alone_does() {
+        let corners: [[f32; 3]; 4] = [
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [1.0, 1.0, 0.0],
+            [0.0, 1.0, 0.0],
+        ];
+        let square = TriangleBvh::build(&corners, &[0, 1, 2, 0, 2, 3]);
+        let half = TriangleBvh::build(&corners, &[0, 1, 2]);
+        let reach = 1e-3;
+        let down = |x: f64, y: f64, end: f64| {
+            square
+                .classify(DVec3::new(x, y, 1.0), DVec3::new(x, y, end), reach)
+                .0
+        };
+        assert_eq!(down(0.5, 0.5, -1.0), Seen::Blocked);
+        assert_eq!(down(0.5 + 1e-9, 0.5, -1.0), Seen::Blocked);
+        assert_eq!(down(0.3, 0.6, -1.0), Seen::Blocked);
+        assert_eq!(down(0.9995, 0.5, -1.0), Seen::Ambiguous);
+        assert_eq!(down(1.01, 0.5, -1.0), Seen::Open);
+        assert_eq!(down(0.3, 0.6, 5e-4), Seen::Ambiguous);
+        assert_eq!(down(0.3, 0.6, 2e-3), Seen::Open);
+        // One triangle alone: the diagonal is its boundary.
+        let alone = half.classify(DVec3::new(0.5, 0.5, 1.0), DVec3::new(0.5, 0.5, -1.0), reach);
+        assert_eq!(alone.0, Seen::Ambiguous);
     }
 }

@@ -18,6 +18,8 @@ pub struct ShadingParams {
     pub toon_bands: Option<u32>,
     /// How a pixel's samples become its colour, when it has more than one.
     pub resolve: crate::common::MsaaResolve,
+    /// With shadows: what the GPU's shading surface is made of (its rays' error).
+    pub shadows: Option<super::shadows::ShadowSource>,
 }
 
 /// The BRDF of a shading model.

@@ -5,8 +5,9 @@ use crate::common::DepthMapping;
 use crate::cpu::clusters::Grid;
 use crate::cpu::post::{CameraPair, PostParams};
 use crate::cpu::shading::{Brdf, ShadingParams};
+use crate::cpu::shadows::{PositionSource, ShadowSource};
 use crate::scene::Scene;
-use crate::variant::{ShadingModel, ToonMode, Variant};
+use crate::variant::{DepthFormat, GBufferLayout, ShadingModel, ToonMode, Variant};
 
 impl ShadingParams {
     pub fn of(v: &Variant) -> Self {
@@ -30,7 +31,25 @@ impl ShadingParams {
                 .as_ref()
                 .filter(|t| t.mode == ToonMode::PerLight)
                 .map(|t| t.bands),
+            shadows: v.shading.shadows.traced().then(|| shadow_source(v)),
         }
+    }
+}
+
+/// What `v`'s shading surface is made of, for its shadow rays' error.
+fn shadow_source(v: &Variant) -> ShadowSource {
+    let deferred = v.pipeline.is_deferred();
+    let position = if deferred && v.gbuffer().layout == GBufferLayout::Compact {
+        PositionSource::FromDepth {
+            reversed: v.depth.reversed_z,
+            unorm24: v.depth.format == DepthFormat::Unorm24,
+        }
+    } else {
+        PositionSource::Stored
+    };
+    ShadowSource {
+        position,
+        codec: deferred.then(|| v.normal_codec()),
     }
 }
 

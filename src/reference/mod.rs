@@ -12,10 +12,12 @@ use crate::compose::Composer;
 use crate::cpu::frame::{ReferenceFrame, post_process, shade_reference};
 use crate::cpu::post::{CameraPair, Geometry, PostParams};
 use crate::cpu::shading::ShadingParams;
+use crate::cpu::shadows::ShadowRays;
 use crate::cpu::truth::RasterTruth;
 use crate::gpu::Gpu;
 use crate::render::RenderError;
 use crate::render::raster_truth;
+use crate::render::shadows::Occluders;
 use crate::scene::Scene;
 use crate::variant::LoadedVariant;
 
@@ -36,6 +38,8 @@ pub struct ReferenceCache {
     frames: Mutex<HashMap<String, Kept>>,
     /// Shadings before post effects, by scene (name, file and parameters).
     shadings: Mutex<HashMap<String, Vec<Shading>>>,
+    /// The occluders of each scene that a variant with shadows was shaded on.
+    occluders: Mutex<HashMap<String, Arc<Occluders>>>,
 }
 
 type Kept = (Vec<Arc<crate::compose::Composition>>, Slot);
@@ -131,12 +135,7 @@ impl ReferenceCache {
         scene: &Scene,
     ) -> Result<ReferenceJob, ReferenceError> {
         let v = &variant.variant;
-        let scene_key = format!(
-            "{}|{:?}|{:?}",
-            scene.name,
-            scene.file.as_ref().map(|f| &f.sha256),
-            scene.params
-        );
+        let scene_key = scene_key_of(scene);
         // Everything the raster truth, the shading and the post chain depend on.
         let key = format!(
             "{scene_key}|{:?}|{:?}|{:?}|{}|{:?}",
@@ -228,13 +227,13 @@ impl ReferenceCache {
         }
         let truth = same_truth.unwrap_or_else(|| Arc::new(truth));
         let start = Instant::now();
-        let frame = Arc::new(shade_reference(
-            &truth,
-            &scene.lights,
-            scene.camera.eye,
-            &params,
-            EXPOSURE,
-        ));
+        let occluders = params.shadows.map(|_| {
+            let mut kept = self.occluders.lock().expect("cache lock");
+            kept.entry(scene_key_of(scene))
+                .or_insert_with(|| Arc::new(Occluders::of(scene)))
+                .clone()
+        });
+        let frame = Arc::new(shade(&truth, scene, &params, occluders.as_deref()));
         let ms = start.elapsed().as_secs_f64() * 1e3;
         known.push(Shading {
             truth: truth.clone(),
@@ -244,6 +243,42 @@ impl ReferenceCache {
         });
         (SharedShading { truth, frame }, ms)
     }
+}
+
+/// `truth` shaded in f64 with `scene`'s lights, tracing shadow rays to `occluders` where
+/// `params` has shadows.
+fn shade(
+    truth: &RasterTruth,
+    scene: &Scene,
+    params: &ShadingParams,
+    occluders: Option<&Occluders>,
+) -> ReferenceFrame {
+    let rays = params.shadows.zip(occluders).map(|(source, o)| ShadowRays {
+        bvh: &o.bvh,
+        eye: scene.camera.eye,
+        view: scene.camera.view(),
+        near: scene.camera.near,
+        source,
+        reach: o.reach,
+    });
+    shade_reference(
+        truth,
+        &scene.lights,
+        scene.camera.eye,
+        params,
+        rays.as_ref(),
+        EXPOSURE,
+    )
+}
+
+/// What tells scenes apart: name, file and parameters.
+fn scene_key_of(scene: &Scene) -> String {
+    format!(
+        "{}|{:?}|{:?}",
+        scene.name,
+        scene.file.as_ref().map(|f| &f.sha256),
+        scene.params
+    )
 }
 
 /// A cached shading and the truth it was shaded from.
@@ -275,13 +310,9 @@ pub fn reference_frame(
 ) -> Result<(ReferenceFrame, f64), ReferenceError> {
     let truth = raster_truth(gpu, composer, &variant.variant, scene)?;
     let start = Instant::now();
-    let mut reference = shade_reference(
-        &truth,
-        &scene.lights,
-        scene.camera.eye,
-        &ShadingParams::of(&variant.variant),
-        EXPOSURE,
-    );
+    let params = ShadingParams::of(&variant.variant);
+    let occluders = params.shadows.map(|_| Occluders::of(scene));
+    let mut reference = shade(&truth, scene, &params, occluders.as_ref());
     let params = PostParams::of(&variant.variant);
     if params.any() {
         post(&mut reference, &truth, &params, variant, scene);

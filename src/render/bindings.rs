@@ -21,6 +21,7 @@ pub enum Binding {
     BaseColorSampler,
     MovingLights,
     MovingMask,
+    Occluders,
     // The surfaces: depth, the G-buffer, and what the forward passes leave per sample.
     DepthTexture,
     #[strum(serialize = "gbuffer0")]

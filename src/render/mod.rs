@@ -31,6 +31,7 @@ mod resources;
 mod reuse;
 mod sampling;
 mod screen;
+pub mod shadows;
 mod skips;
 mod state;
 mod stats;
@@ -258,8 +259,16 @@ impl<'g> Renderer<'g> {
             let c = variant.clusters();
             c.method().check(gpu, c.grid, scene.lights.len(), &sizes)?;
         }
+        let occluders = match variant.shading.shadows.traced() {
+            true => {
+                let occluders = shadows::Occluders::of(scene);
+                occluders.check(scene, gpu.max_storage_bytes())?;
+                Some(occluders.words())
+            }
+            false => None,
+        };
         let res = gpu.scoped("creating resources", || {
-            FrameResources::new(gpu, variant, scene, proxies, &sizes)
+            FrameResources::new(gpu, variant, scene, proxies, &sizes, occluders.as_deref())
         })?;
         let post_passes: Vec<_> = composed
             .iter()

@@ -80,10 +80,17 @@ pub struct SceneBuffers {
     pub light_count: u32,
     /// The base colour texture array and its sampler (scenes with textures).
     pub base_color: Option<(wgpu::TextureView, wgpu::Sampler)>,
+    /// The occluders' tree and triangles (frames with shadows: `render::shadows`).
+    pub occluders: Option<wgpu::Buffer>,
 }
 
 impl SceneBuffers {
-    pub fn upload(gpu: &Gpu, scene: &Scene, mapping: DepthMapping) -> Self {
+    pub fn upload(
+        gpu: &Gpu,
+        scene: &Scene,
+        mapping: DepthMapping,
+        occluders: Option<&[[u32; 4]]>,
+    ) -> Self {
         let init = |label: &str, contents: &[u8], usage: wgpu::BufferUsages| {
             gpu.device
                 .create_buffer_init(&wgpu::util::BufferInitDescriptor {
@@ -133,6 +140,13 @@ impl SceneBuffers {
             ),
             light_count: scene.lights.len() as u32,
             base_color: scene.textures.as_deref().map(|t| upload_textures(gpu, t)),
+            occluders: occluders.map(|words| {
+                init(
+                    "occluders",
+                    bytemuck::cast_slice(words),
+                    wgpu::BufferUsages::STORAGE,
+                )
+            }),
         }
     }
 
@@ -142,6 +156,7 @@ impl SceneBuffers {
         match name {
             Binding::View => Some(self.view.as_entire_binding()),
             Binding::Lights => Some(self.lights.as_entire_binding()),
+            Binding::Occluders => Some(self.occluders.as_ref()?.as_entire_binding()),
             Binding::BaseColorTextures => Some(wgpu::BindingResource::TextureView(
                 &self.base_color.as_ref()?.0,
             )),
@@ -356,6 +371,7 @@ impl FrameResources {
         scene: &Scene,
         proxies: Option<super::clusters::ProxyLayout>,
         sizes: &BufferSizes,
+        occluders: Option<&[[u32; 4]]>,
     ) -> Self {
         let (w, h) = (scene.params.width, scene.params.height);
         let sampling = variant.shading.lights.sampling();
@@ -422,7 +438,7 @@ impl FrameResources {
                 })
             });
         Self {
-            scene: SceneBuffers::upload(gpu, scene, depth.mapping),
+            scene: SceneBuffers::upload(gpu, scene, depth.mapping, occluders),
             targets,
             clusters,
             moving,

@@ -73,7 +73,7 @@ pub fn raster_truth(
     let depth = DepthSetup::of(variant);
     let (textures, blended, blended_offsets) =
         gpu.scoped("raster truth", || -> Result<_, RenderError> {
-            let buffers = SceneBuffers::upload(gpu, scene, depth.mapping);
+            let buffers = SceneBuffers::upload(gpu, scene, depth.mapping, None);
             let samples = variant.msaa.samples;
             // Multisampled after a pre-pass, the pre-pass decides which fragment each sample
             // shows, as in the variant (`common/sample_owner.wesl`).

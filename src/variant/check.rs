@@ -67,6 +67,7 @@ pub fn check(v: &Variant) -> Vec<Problem> {
     check_normals(v, &mut out);
     check_shading(&v.shading, &mut out);
     check_sampling(v, &mut out);
+    check_shadows(v, &mut out);
     if v.shading.model == ShadingModel::Ggx
         && v.post
             .toon
@@ -329,6 +330,40 @@ fn check_shading(s: &Shading, out: &mut Vec<Problem>) {
                 format!("is {specular}; it must be in 0..=1"),
             ));
         }
+    }
+}
+
+/// Shadows where a frame can trace them and the reference can hold them to its bound.
+fn check_shadows(v: &Variant, out: &mut Vec<Problem>) {
+    if !v.shading.shadows.traced() {
+        return;
+    }
+    let mut refuse = |why: String| out.push(problem("shading.shadows", why));
+    if v.pipeline == Pipeline::DeferredScissor {
+        refuse(
+            "DeferredScissor adds each light in its own rectangle, outside the light loops that trace shadow rays; use ClusteredDeferred, ClusteredForward or NaiveForward, or shadows: None".into(),
+        );
+    }
+    if v.shading.lights.sampling().is_some() {
+        refuse(
+            "Exact traces a ray for every light of the list, and a sampled light loop shades a few of them; use lights: Exact with it, or shadows: None".into(),
+        );
+    }
+    let after_shading = [
+        (
+            "toon",
+            v.post
+                .toon
+                .as_ref()
+                .is_some_and(|t| t.mode == ToonMode::PostProcess),
+        ),
+        ("bloom", v.post.bloom.is_some()),
+        ("motion_blur", v.post.motion_blur.is_some()),
+    ];
+    for (effect, _) in after_shading.iter().filter(|(_, on)| *on) {
+        refuse(format!(
+            "post.{effect} works on the shaded image, and the reference bounds a shadow's ambiguous pixels in the shading itself (docs/design.md, Shadows); remove post.{effect} (toon's PerLight mode is shading), or use shadows: None"
+        ));
     }
 }
 

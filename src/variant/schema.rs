@@ -503,6 +503,11 @@ pub struct Shading {
     /// How a surface point's lights are summed: every light of its list (`Exact`), or an
     /// unbiased or labelled-biased estimate from a few of them (`Sampled`).
     pub lights: Lights,
+    /// Whether the scene's opaque triangles block light: `None` lights every point a
+    /// light's range reaches; `Exact` traces one shadow ray per pixel and light that
+    /// reaches it, against a BVH of the scene's opaque triangles (masked and blended
+    /// triangles receive shadows but cast none).
+    pub shadows: Shadows,
 }
 
 impl Default for Shading {
@@ -511,6 +516,33 @@ impl Default for Shading {
             model: ShadingModel::Lambert,
             ambient: 0.02,
             lights: Lights::Exact,
+            shadows: Shadows::None,
+        }
+    }
+}
+
+/// How a light's visibility from a surface point is found.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize, JsonSchema)]
+pub enum Shadows {
+    /// No shadows: every light lights what its range reaches.
+    #[default]
+    None,
+    /// One shadow ray from each pixel to the centre of each light that reaches it, through
+    /// a BVH of the scene's opaque triangles with a watertight ray-triangle test: exact
+    /// against the f64 reference, which traces the same rays.
+    Exact,
+}
+
+impl Shadows {
+    /// Whether a frame traces shadow rays.
+    pub fn traced(self) -> bool {
+        self != Shadows::None
+    }
+
+    pub fn label(self) -> &'static str {
+        match self {
+            Shadows::None => "unshadowed",
+            Shadows::Exact => "exact shadows",
         }
     }
 }

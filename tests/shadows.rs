@@ -1,0 +1,106 @@
+//! Exact shadows against the f64 reference: every shipped shadowed variant, Forward+ and
+//! deferred, on the built-in scenes with occluders and a glTF file, within 1 LSB outside
+//! the ambiguous pairs, which stay under 0.1% of the pairs; a ray without its offset (its
+//! surface then shadows itself) fails; what cannot shadow is refused.
+
+use crate::common::{self, EditedShaders, gpu, load, small};
+use clusterlab::compose::Composer;
+use clusterlab::metrics::ShadowError;
+use clusterlab::run::{CellOptions, EXACT_LSB, run_scene};
+use clusterlab::scene::{self, Scene};
+use clusterlab::variant::LoadedVariant;
+
+/// The shipped variants with exact shadows: one Forward+, one deferred.
+const SHADOWED: [&str; 2] = ["forward_plus_shadows", "clustered_deferred_shadows"];
+
+/// Most ambiguous pairs a frame may have, as a share of its rays (the 0.1%).
+const MAX_AMBIGUOUS_SHARE: f64 = 1e-3;
+
+/// The shadow figures of `v` on `scene`, shaded by `composer`'s shaders.
+fn shadow_error(composer: &Composer, v: &LoadedVariant, scene: &Scene) -> ShadowError {
+    let r = run_scene(&gpu(), composer, v, scene, CellOptions::default())
+        .unwrap_or_else(|e| panic!("{} on {}: {e}", v.name, scene.name));
+    let error = r.report.error.expect("an error against the reference");
+    error.shadows.expect("a shadowed frame's figures")
+}
+
+/// A scene's defaults at 160x90: small enough for a debug build, large enough for shadows.
+fn built_in(name: &str) -> Scene {
+    scene::generate(name, small(name, 160, 90, None)).expect("built-in scene")
+}
+
+/// Each occluder scene and a glTF file (the stage, exported: plinths and statues under
+/// spots): some rays blocked, every pixel within 1 LSB of the reference or of the range its
+/// ambiguous pairs allow, and few pairs ambiguous.
+#[test]
+fn exact_shadows_are_within_1_lsb_outside_ambiguous_pairs() {
+    let dir = common::scratch("gltf");
+    let glb = dir.join("stage.glb");
+    let stage = built_in("stage");
+    std::fs::write(&glb, scene::export::to_glb(&stage).expect("export")).expect("write");
+    let file = glb.to_str().expect("utf-8 path");
+    let mut params = scene::defaults(file).expect("load");
+    (params.width, params.height) = (160, 90);
+    let from_file = scene::generate(file, params).expect("load");
+    let scenes = [built_in("atrium"), stage, built_in("spheres"), from_file];
+    let composer = Composer::default();
+    for name in SHADOWED {
+        let v = load(name);
+        for scene in &scenes {
+            let s = shadow_error(&composer, &v, scene);
+            let at = format!("{name} on {}: {s:?}", scene.name);
+            // A test that could not fail: some rays must be blocked.
+            assert!(s.blocked * 100 >= s.pairs, "under 1% of rays blocked, {at}");
+            assert!(s.max_outside_ambiguity_8bit <= EXACT_LSB, "{at}");
+            assert!(s.ambiguous_share <= MAX_AMBIGUOUS_SHARE, "{at}");
+        }
+    }
+}
+
+/// The deliberate break: without its offset a ray starts on its own surface, which then
+/// shadows it where f32 puts the start below the surface.
+#[test]
+fn a_ray_without_its_offset_shadows_its_own_surface() {
+    let v = load("forward_plus_shadows");
+    let scene = built_in("atrium");
+    let fine = shadow_error(&Composer::default(), &v, &scene);
+    assert!(fine.max_outside_ambiguity_8bit <= EXACT_LSB, "{fine:?}");
+    let no_offset = EditedShaders::of(
+        "shading/shadows.wesl",
+        "no-offset",
+        &[(
+            "s.normal * (SHADOW_OFFSET * scale)",
+            "s.normal * (0.0 * scale)",
+        )],
+    );
+    let broken = shadow_error(&no_offset.composer, &v, &scene);
+    assert!(
+        broken.max_outside_ambiguity_8bit > EXACT_LSB,
+        "self-shadowing went unseen: {broken:?}"
+    );
+}
+
+/// A scene with no opaque triangle to cast a shadow is refused for a shadowed variant, with
+/// the reason; so is a variant whose lights or pipeline cannot trace them.
+#[test]
+fn shadows_that_would_do_nothing_are_refused() {
+    let v = load("forward_plus_shadows");
+    let mut scene = built_in("glass");
+    scene.blended.extend(std::mem::take(&mut scene.indices));
+    let error = clusterlab::render::Renderer::new(&gpu(), &Composer::default(), &v.variant, &scene)
+        .err()
+        .expect("refused")
+        .to_string();
+    assert!(
+        error.contains("shading.shadows") && error.contains("no opaque triangle"),
+        "{error}"
+    );
+    let mut sampled = v.variant.clone();
+    sampled.shading.lights =
+        clusterlab::variant::Lights::Sampled(clusterlab::variant::Sampling::default());
+    let problems = clusterlab::variant::check(&sampled);
+    assert!(
+        problems.iter().any(|p| p.field == "shading.shadows"),
+        "{problems:?}"
+    );
+}
