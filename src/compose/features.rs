@@ -23,6 +23,10 @@ pub const SCAN_BLOCK: u32 = SCAN_LANES * CLUSTERS_PER_LANE;
 /// `assign_bvh.wesl`).
 pub const WALK_CUT_SHORT: u32 = u32::MAX;
 
+/// Words a pixel's shadow ray counters take: rays, those blocked, nodes visited
+/// (`shading/light_loop/counters.wesl`, `pixel_rays`).
+pub const RAY_COUNTERS: u32 = 3;
+
 /// What a scene turns on in its frames' shaders.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct SceneFeatures {
@@ -325,6 +329,7 @@ pub fn constants_module(v: &Variant) -> String {
         ("SCAN_LANES", SCAN_LANES),
         ("CLUSTERS_PER_LANE", CLUSTERS_PER_LANE),
         ("WALK_CUT_SHORT", WALK_CUT_SHORT),
+        ("RAY_COUNTERS", RAY_COUNTERS),
         ("GRID_X", clusters.grid.0),
         ("GRID_Y", clusters.grid.1),
         ("GRID_Z", clusters.grid.2),

@@ -13,9 +13,9 @@ mod resolver;
 
 pub use diagnostics::SourceLocation;
 pub use features::{
-    CLUSTERS_PER_LANE, LIGHTS_PER_ROW, SCAN_BLOCK, SCAN_LANES, SceneFeatures, WALK_CUT_SHORT,
-    constants_module, feature_flags, features_with, frame_features, perturbation_note,
-    perturbed_depth_ulps,
+    CLUSTERS_PER_LANE, LIGHTS_PER_ROW, RAY_COUNTERS, SCAN_BLOCK, SCAN_LANES, SceneFeatures,
+    WALK_CUT_SHORT, constants_module, feature_flags, features_with, frame_features,
+    perturbation_note, perturbed_depth_ulps,
 };
 pub use light_loop::LightLoop;
 pub use passes::{

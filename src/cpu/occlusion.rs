@@ -4,15 +4,18 @@
 //! an edge. A segment from a surface point to a light's centre is blocked when it crosses a
 //! triangle strictly between `t_min` and its end.
 //!
-//! The tree is built once per scene by median splits on the longest axis of the triangles'
-//! centroids, `LEAF_TRIANGLES` at most a leaf; a node's box is the union of its triangles'.
+//! The tree is built once per scene by binned surface-area-heuristic splits of the
+//! triangles' centroids (median splits on the longest axis where SAH finds none, and where
+//! the levels left would not hold SAH's deepest tree), `LEAF_TRIANGLES` at most a leaf; a
+//! node's box is the union of its triangles'.
 //! Triangles of no area (repeated or collinear corners) are counted and left out: they hide
 //! nothing and would only add NaN to the tests.
 
 use glam::DVec3;
 
 /// Deepest tree the shaders' traversal stack holds (`SHADOW_STACK`, generated from this):
-/// a median split halves the triangles at each level, so 2^31 triangles stay within it.
+/// the build turns to median splits, which halve the triangles at each level, where SAH's
+/// could go deeper, so 2^31 triangles stay within it.
 pub const SHADOW_STACK: u32 = 32;
 
 /// Most triangles a leaf holds.
@@ -85,38 +88,52 @@ impl TriangleBvh {
             let [a, b, c] = triangles[t as usize];
             (a + b + c) / 3.0
         };
-        // (node, first, end) still to make.
-        let mut todo = vec![(0usize, 0usize, order.len())];
-        while let Some((at, first, end)) = todo.pop() {
-            let (min, max) = order[first..end].iter().fold(
+        let bounds = |t: u32| {
+            let [a, b, c] = triangles[t as usize];
+            (a.min(b).min(c), a.max(b).max(c))
+        };
+        // (node, first, end, level) still to make.
+        let mut todo = vec![(0usize, 0usize, order.len(), 1u32)];
+        while let Some((at, first, end, level)) = todo.pop() {
+            let (min, max) = order[first..end].iter().map(|&t| bounds(t)).fold(
                 (DVec3::INFINITY, DVec3::NEG_INFINITY),
-                |(lo, hi), &t| {
-                    let [a, b, c] = triangles[t as usize];
-                    (lo.min(a).min(b).min(c), hi.max(a).max(b).max(c))
-                },
+                |(lo, hi), (a, b)| (lo.min(a), hi.max(b)),
             );
             nodes[at].min = min;
             nodes[at].max = max;
-            if end - first <= LEAF_TRIANGLES {
+            let count = end - first;
+            if count <= LEAF_TRIANGLES {
                 nodes[at].first = first as u32;
-                nodes[at].count = (end - first) as u32;
+                nodes[at].count = count as u32;
                 continue;
             }
-            let (lo, hi) = order[first..end]
-                .iter()
-                .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), &t| {
-                    (lo.min(centroid(t)), hi.max(centroid(t)))
-                });
-            let axis = (hi - lo).max_position();
-            let half = (end - first) / 2;
-            order[first..end].select_nth_unstable_by(half, |&a, &b| {
-                centroid(a)[axis].total_cmp(&centroid(b)[axis])
-            });
+            let run = &mut order[first..end];
+            // Median splits from where the levels left would not hold SAH's worst case.
+            let levels_needed = (count.div_ceil(LEAF_TRIANGLES)).next_power_of_two().ilog2();
+            let sah = (level + levels_needed < SHADOW_STACK)
+                .then(|| sah_split(run, &centroid, &bounds))
+                .flatten();
+            let half = match sah {
+                Some(half) => half,
+                None => {
+                    let (lo, hi) = run
+                        .iter()
+                        .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), &t| {
+                            (lo.min(centroid(t)), hi.max(centroid(t)))
+                        });
+                    let axis = (hi - lo).max_position();
+                    let half = count / 2;
+                    run.select_nth_unstable_by(half, |&a, &b| {
+                        centroid(a)[axis].total_cmp(&centroid(b)[axis])
+                    });
+                    half
+                }
+            };
             let child = nodes.len();
             nodes[at].first = child as u32;
             nodes.extend([nodes[at]; 2]);
-            todo.push((child, first, first + half));
-            todo.push((child + 1, first + half, end));
+            todo.push((child, first, first + half, level + 1));
+            todo.push((child + 1, first + half, end, level + 1));
         }
         if triangles.is_empty() {
             nodes[0].min = DVec3::ZERO;
@@ -263,6 +280,71 @@ fn box_meets(min: DVec3, max: DVec3, from: DVec3, inverse: DVec3, t_min: f64) ->
         far = far.min(hi);
     }
     near <= far
+}
+
+/// Bins of the surface area heuristic's split search, per axis.
+const SAH_BINS: usize = 16;
+
+/// Split `run` where the surface area heuristic (binned, on the centroids) finds the
+/// cheapest pair of children, putting the first child's triangles first; None where no
+/// split beats the median (all centroids in one bin).
+fn sah_split(
+    run: &mut [u32],
+    centroid: &impl Fn(u32) -> DVec3,
+    bounds: &impl Fn(u32) -> (DVec3, DVec3),
+) -> Option<usize> {
+    let (lo, hi) = run
+        .iter()
+        .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), &t| {
+            (lo.min(centroid(t)), hi.max(centroid(t)))
+        });
+    let area = |(a, b): (DVec3, DVec3)| {
+        let d = (b - a).max(DVec3::ZERO);
+        d.x * d.y + d.y * d.z + d.z * d.x
+    };
+    let join = |(a, b): (DVec3, DVec3), (c, d): (DVec3, DVec3)| (a.min(c), b.max(d));
+    let empty = (DVec3::INFINITY, DVec3::NEG_INFINITY);
+    let bin_of = |t: u32, axis: usize| {
+        let b = (centroid(t)[axis] - lo[axis]) / (hi[axis] - lo[axis]) * SAH_BINS as f64;
+        (b as usize).min(SAH_BINS - 1)
+    };
+    // The cheapest split: (cost, axis, the first bin of the second child).
+    let mut best: Option<(f64, usize, usize)> = None;
+    for axis in (0..3).filter(|&a| hi[a] > lo[a]) {
+        let mut bins = [(0usize, empty); SAH_BINS];
+        for &t in run.iter() {
+            let b = &mut bins[bin_of(t, axis)];
+            *b = (b.0 + 1, join(b.1, bounds(t)));
+        }
+        // Cost of splitting before bin k: each side's area times its triangles.
+        let mut lefts = [(0usize, empty); SAH_BINS];
+        let mut left = (0usize, empty);
+        for (k, bin) in bins.iter().enumerate() {
+            left = (left.0 + bin.0, join(left.1, bin.1));
+            lefts[k] = left;
+        }
+        let mut right = (0usize, empty);
+        for k in (1..SAH_BINS).rev() {
+            right = (right.0 + bins[k].0, join(right.1, bins[k].1));
+            let l = lefts[k - 1];
+            if l.0 == 0 || right.0 == 0 {
+                continue;
+            }
+            let cost = area(l.1) * l.0 as f64 + area(right.1) * right.0 as f64;
+            if best.is_none_or(|(c, _, _)| cost < c) {
+                best = Some((cost, axis, k));
+            }
+        }
+    }
+    let (_, axis, k) = best?;
+    let mut ahead = 0;
+    for i in 0..run.len() {
+        if bin_of(run[i], axis) < k {
+            run.swap(i, ahead);
+            ahead += 1;
+        }
+    }
+    (ahead > 0 && ahead < run.len()).then_some(ahead)
 }
 
 /// What the segment `a`-`b` finds of `triangle` within `reach` (`TriangleBvh::classify`).

@@ -236,6 +236,16 @@ fn work(m: &Measured) -> Option<crate::render::AssignmentWork> {
     m.stats.and_then(|s| s.assignment_work)
 }
 
+/// A cell's shadow rays, where its frame traced them.
+fn rays(m: &Measured) -> Option<crate::render::ShadowRays> {
+    m.stats.and_then(|s| s.shadow_rays)
+}
+
+/// A shadowed cell's error outside its ambiguous pairs.
+fn shadow_error<'a>(m: &Measured<'a>) -> Option<&'a crate::metrics::ShadowError> {
+    m.error.and_then(|e| e.shadows.as_ref())
+}
+
 /// Every result column, in table order.
 pub const COLUMNS: &[Column] = &[
     Column {
@@ -455,6 +465,30 @@ pub const COLUMNS: &[Column] = &[
         text: |m| or_dash(m.error, |e| e.pixels_over_1lsb.to_string()),
     },
     Column {
+        key: "max_outside_ambiguity_8bit",
+        heading: "max8 decided",
+        meaning: "max8 decided: shadows, the largest 8-bit difference outside the range a pixel's ambiguous shadow rays allow (an exact variant is within 1)",
+        shown: CSV_AND_HTML,
+        value: |m| shadow_error(m).map(|s| s.max_outside_ambiguity_8bit).into(),
+        text: |m| {
+            or_dash(shadow_error(m), |s| {
+                s.max_outside_ambiguity_8bit.to_string()
+            })
+        },
+    },
+    Column {
+        key: "ambiguous_share",
+        heading: "ambiguous",
+        meaning: "ambiguous: shadows, the share of the reference's shadow rays within the GPU's error of an occluder's edge or surface (either answer right)",
+        shown: CSV_AND_HTML,
+        value: |m| shadow_error(m).map(|s| s.ambiguous_share).into(),
+        text: |m| {
+            or_dash(shadow_error(m), |s| {
+                format!("{:.3}%", 100.0 * s.ambiguous_share)
+            })
+        },
+    },
+    Column {
         key: "relative_mse",
         heading: "relMSE",
         meaning: "relMSE: mean of (frame - reference)^2 / (reference^2 + 0.01) over HDR channels, the sampling literature's error",
@@ -541,6 +575,34 @@ pub const COLUMNS: &[Column] = &[
         shown: CSV_AND_HTML,
         value: |m| Cell::Text(m.stats.and_then(|s| s.sampler.clone()).unwrap_or_default()),
         text: |m| m.stats.and_then(|s| s.sampler.clone()).unwrap_or_default(),
+    },
+    Column {
+        key: "shadow_rays",
+        heading: "rays",
+        meaning: "rays: shadows, the shadow rays the frame traced (a pixel and a light above 0 each)",
+        shown: CSV_AND_HTML,
+        value: |m| rays(m).map(|r| r.traced).into(),
+        text: |m| or_dash(rays(m), |r| count(r.traced)),
+    },
+    Column {
+        key: "shadow_rays_blocked",
+        heading: "blocked",
+        meaning: "blocked: shadows, the rays an occluder blocked",
+        shown: CSV_AND_HTML,
+        value: |m| rays(m).map(|r| r.blocked).into(),
+        text: |m| or_dash(rays(m), |r| count(r.blocked)),
+    },
+    Column {
+        key: "nodes_per_ray",
+        heading: "nodes/ray",
+        meaning: "nodes/ray: shadows, the BVH nodes whose box a ray's walk tested, per ray",
+        shown: CSV_AND_HTML,
+        value: |m| rays(m).and_then(|r| r.nodes_per_ray()).into(),
+        text: |m| {
+            or_dash(rays(m).and_then(|r| r.nodes_per_ray()), |n| {
+                format!("{n:.1}")
+            })
+        },
     },
     Column {
         key: "edge_fraction",

@@ -236,7 +236,8 @@ pub const TRANSPARENCY_GROUP: [&str; 14] = [
 /// light-count sweep of naive forward, Forward+ and clustered deferred on the atrium, those
 /// with 1 and 4 samples (`MSAA_GROUP`), and every pipeline and culling method on the glass
 /// scene (`TRANSPARENCY_GROUP`, at a quarter of its pixels), the sampled light loops beside
-/// exact ones where lists are long (`SAMPLING_EXACT`), and the list strategies in sequences.
+/// exact ones where lists are long (`SAMPLING_EXACT`), the shadowed variants beside their
+/// twins (`SHADOW_TWINS`), and the list strategies in sequences.
 /// The image size of the default matrix's group of every variant on every scene, and of its
 /// sequences: small enough that the matrix stays within about two minutes on a 2-core
 /// machine without a GPU while most cells time the 6 frames a 95% interval needs.
@@ -257,7 +258,7 @@ pub fn default_groups() -> Result<Vec<Group>, String> {
             name: "variants".into(),
             variants: variants
                 .iter()
-                .filter(|e| !updates(e) && !samples(e))
+                .filter(|e| !updates(e) && !samples(e) && !shadows(e))
                 .cloned()
                 .collect(),
             scenes,
@@ -310,6 +311,15 @@ pub fn default_groups() -> Result<Vec<Group>, String> {
                 Sweep::Radius(vec![SAMPLING_RADIUS]),
             ],
             size: Some(SAMPLING_SIZE),
+            sequence: None,
+        },
+        // What shadows cost: every shadowed variant beside its unshadowed twins.
+        Group {
+            name: "shadows".into(),
+            variants: shadow_variants(&variants)?,
+            scenes: SHADOW_SCENES.map(String::from).to_vec(),
+            sweeps: vec![],
+            size: Some(VARIANTS_SIZE),
             sequence: None,
         },
         // Lights that move: every list strategy, frame after frame.
@@ -367,6 +377,28 @@ fn sampling_variants(variants: &[VariantEntry]) -> Result<Vec<VariantEntry>, Str
 }
 
 /// Whether a variant's light loop samples (`shading.lights`).
+/// The unshadowed variants the shadows group times beside the shadowed ones: the same
+/// Forward+ and deferred frames without rays.
+pub const SHADOW_TWINS: [&str; 2] = ["forward_plus", "deferred_3_targets"];
+
+/// The scenes of the shadows group: the hall of columns and the spheres on their floor.
+pub const SHADOW_SCENES: [&str; 2] = ["atrium", "spheres"];
+
+/// The default matrix's shadows group: `SHADOW_TWINS` and every variant of `variants` that
+/// traces shadow rays.
+fn shadow_variants(variants: &[VariantEntry]) -> Result<Vec<VariantEntry>, String> {
+    let mut out = find_variants(&SHADOW_TWINS.map(String::from))?;
+    out.extend(variants.iter().filter(|e| shadows(e)).cloned());
+    Ok(out)
+}
+
+/// Whether a variant traces shadow rays.
+fn shadows(e: &VariantEntry) -> bool {
+    e.loaded
+        .as_ref()
+        .is_ok_and(|v| v.variant.shading.shadows.traced())
+}
+
 fn samples(e: &VariantEntry) -> bool {
     e.loaded
         .as_ref()

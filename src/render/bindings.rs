@@ -79,6 +79,7 @@ pub enum Binding {
     PixelClusters,
     PixelShadings,
     PixelCandidates,
+    PixelRays,
     // Sampled light loops (`SampleBuffers`).
     SampleFrame,
     Reservoirs,

@@ -47,7 +47,7 @@ pub use frame::{Frame, Step};
 pub use passes::{PassRunner, shader_module};
 pub use resources::{SceneBuffers, ViewUniform};
 pub use reuse::FrameChange;
-pub use stats::{FrameStats, PixelCounters};
+pub use stats::{FrameStats, PixelCounters, ShadowRays};
 pub use targets::{DepthSetup, F32_BITS_FORMAT, LDR_FORMAT};
 pub use truth::raster_truth;
 

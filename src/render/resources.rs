@@ -10,6 +10,7 @@ use super::reflect::{BufferSizes, Slot};
 use super::targets::{
     DepthSetup, F32_BITS_FORMAT, LDR_FORMAT, SHADING_DEPTH_FORMAT, Target, Targets,
 };
+use crate::compose::RAY_COUNTERS;
 use crate::cpu::depth::DepthMapping;
 use crate::gpu::Gpu;
 use crate::scene::{Light, Scene, Vertex};
@@ -250,6 +251,8 @@ pub struct Counters {
     pub shadings: Option<wgpu::Buffer>,
     /// Sampled light loops: the candidates each pixel drew or walked.
     pub candidates: Option<wgpu::Buffer>,
+    /// Frames with shadows: each pixel's rays, those blocked and the nodes they visited.
+    pub rays: Option<wgpu::Buffer>,
 }
 
 impl Counters {
@@ -260,18 +263,21 @@ impl Counters {
         pixels: u64,
         multisampled: bool,
         sampled: bool,
+        shadowed: bool,
     ) -> Self {
-        let buffer = |name: Binding| {
+        let buffer_of = |name: Binding, elements: u64| {
             gpu.device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some(name.name()),
-                size: sizes.bindable(name, pixels),
+                size: sizes.bindable(name, elements),
                 usage: wgpu::BufferUsages::STORAGE
                     | wgpu::BufferUsages::COPY_SRC
                     | wgpu::BufferUsages::COPY_DST,
                 mapped_at_creation: false,
             })
         };
+        let buffer = |name: Binding| buffer_of(name, pixels);
         Self {
+            rays: shadowed.then(|| buffer_of(Binding::PixelRays, RAY_COUNTERS as u64 * pixels)),
             evals: buffer(Binding::PixelEvals),
             useful: buffer(Binding::PixelUseful),
             clusters: buffer(Binding::PixelClusters),
@@ -286,6 +292,7 @@ impl Counters {
             .into_iter()
             .chain(&self.shadings)
             .chain(&self.candidates)
+            .chain(&self.rays)
         {
             encoder.clear_buffer(b, 0, None);
         }
@@ -449,6 +456,7 @@ impl FrameResources {
                 w as u64 * h as u64,
                 variant.msaa.on(),
                 sampling.is_some(),
+                variant.shading.shadows.traced(),
             ),
             transparent_depths,
             sampling: sampling.map(|s| {
@@ -515,6 +523,7 @@ impl FrameResources {
                 .candidates
                 .as_ref()
                 .map(|b| b.as_entire_binding()),
+            Binding::PixelRays => self.counters.rays.as_ref().map(|b| b.as_entire_binding()),
             _ => self
                 .targets
                 .gbuffer

@@ -38,6 +38,10 @@ pub struct FrameStats {
     /// forward without a pre-pass also each fragment drawn over later).
     #[serde(default)]
     pub edge_fraction: f64,
+    /// Frames with shadows: the shadow rays traced (one per pixel and light above 0), those
+    /// an occluder blocked, and the BVH nodes their walks visited.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub shadow_rays: Option<ShadowRays>,
     /// Light-cluster pairs left out by a per-cluster cap.
     pub dropped_lights: u64,
     /// Clusters that hold at least one visible sample.
@@ -78,6 +82,21 @@ pub struct FrameStats {
     pub assignment_work: Option<AssignmentWork>,
 }
 
+/// What a frame's shadow rays did, counted on the GPU.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, serde::Deserialize)]
+pub struct ShadowRays {
+    pub traced: u64,
+    pub blocked: u64,
+    pub node_visits: u64,
+}
+
+impl ShadowRays {
+    /// Mean nodes a ray's walk visited (None without rays).
+    pub fn nodes_per_ray(&self) -> Option<f64> {
+        (self.traced > 0).then(|| self.node_visits as f64 / self.traced as f64)
+    }
+}
+
 impl FrameStats {
     /// Useful evaluations over those performed (1 when none was performed).
     pub fn useful_fraction(&self) -> Option<f64> {
@@ -99,6 +118,9 @@ pub struct PixelCounters {
     pub shadings: Vec<u32>,
     /// Sampled loops: the candidates each pixel drew or walked (empty for exact loops).
     pub candidates: Vec<u32>,
+    /// Frames with shadows: each pixel's rays, those blocked and the nodes they visited,
+    /// three words a pixel (empty without shadows).
+    pub rays: Vec<u32>,
 }
 
 impl PixelCounters {
@@ -173,6 +195,7 @@ impl<'g> Renderer<'g> {
                 .map(read)
                 .transpose()?
                 .unwrap_or_default(),
+            rays: c.rays.as_ref().map(read).transpose()?.unwrap_or_default(),
         })
     }
 
@@ -219,6 +242,18 @@ impl<'g> Renderer<'g> {
             post_bytes_per_pixel: self.passes.post.bytes_per_pixel(),
             frame_bytes_per_pixel: self.frame_bytes_per_pixel(),
             list_reallocations: self.state.reallocations,
+            shadow_rays: self.variant.shading.shadows.traced().then(|| {
+                let words = crate::compose::RAY_COUNTERS as usize;
+                let word = |k: usize| {
+                    let each = pixels.rays.iter().skip(k).step_by(words);
+                    each.map(|&n| n as u64).sum()
+                };
+                ShadowRays {
+                    traced: word(0),
+                    blocked: word(1),
+                    node_visits: word(2),
+                }
+            }),
             ..Default::default()
         };
         if let Some(c) = &self.res.clusters {

@@ -887,6 +887,7 @@ pub fn all() -> Vec<Case> {
     .with_edits(vec![set_slicing(ZSlicing::OlssonCubic, "olsson")]));
     spot_cases(&mut cases);
     transparency_cases(&mut cases);
+    shadow_cases(&mut cases);
     motion_cases(&mut cases);
     cases
 }
@@ -1061,6 +1062,72 @@ fn facing_square(
         albedo,
         corners,
     );
+}
+
+/// Forward+ and clustered deferred with exact shadows.
+fn shadowed() -> Vec<(String, Variant)> {
+    [Pipeline::ClusteredForward, Pipeline::ClusteredDeferred]
+        .into_iter()
+        .map(|p| {
+            let name = format!("{}_shadows", p.short_name());
+            let mut v = variant(&name, p);
+            v.shading.shadows = Shadows::Exact;
+            (name, v)
+        })
+        .collect()
+}
+
+/// A user's variant with exact shadows (where it can trace them).
+fn set_shadows() -> Edit {
+    Edit::new("_shadows", |v| {
+        v.shading.shadows = Shadows::Exact;
+        Ok(())
+    })
+}
+
+/// Shadow rays where they are hardest on the room's boxes and sphere: lights a hair above
+/// the floor (rays from the floor graze it), lights a hair off a box's faces (the occluder
+/// touches the light), lights inside a box and inside the sphere (every ray out blocked).
+fn shadow_cases(cases: &mut Vec<Case>) {
+    let room_lit = |name: &str, lights: Vec<Light>| {
+        let mut all = lattice(8, 3.0);
+        all.extend(lights);
+        lit_room(name, SIZE, all)
+    };
+    let grazing = (0..8)
+        .map(|i| light(DVec3::new(-4.0 + i as f64, 0.01, 1.5), 4.0, 3.0))
+        .collect();
+    // The red box spans x -2.5..-1, y 0..2, z -2..-0.5.
+    let touching = vec![
+        light(DVec3::new(-1.0 + 1e-3, 1.0, -1.2), 3.0, 3.0),
+        light(DVec3::new(-1.8, 2.0 + 1e-3, -1.2), 3.0, 3.0),
+        light(DVec3::new(-1.8, 1.0, -0.5 + 1e-3), 3.0, 3.0),
+    ];
+    let inside = vec![
+        light(DVec3::new(-1.8, 1.0, -1.2), 4.0, 3.0),
+        light(DVec3::new(0.3, 1.0, 0.5), 4.0, 3.0),
+    ];
+    for (name, what, lights) in [
+        (
+            "shadow_grazing_light",
+            "shadow rays that graze the floor: lights 0.01 above it",
+            grazing,
+        ),
+        (
+            "shadow_occluder_touching_light",
+            "lights 1e-3 off a box's faces: the occluder inside the light's range, at its centre",
+            touching,
+        ),
+        (
+            "shadow_light_inside_occluder",
+            "lights inside a box and inside the sphere: every ray out of them blocked",
+            inside,
+        ),
+    ] {
+        cases.push(
+            case(name, what, room_lit(name, lights), shadowed()).with_edits(vec![set_shadows()]),
+        );
+    }
 }
 
 /// Masked and blended materials on the room: a pane on the near plane, 64 panes over the

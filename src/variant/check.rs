@@ -344,6 +344,11 @@ fn check_shadows(v: &Variant, out: &mut Vec<Problem>) {
             "DeferredScissor adds each light in its own rectangle, outside the light loops that trace shadow rays; use ClusteredDeferred, ClusteredForward or NaiveForward, or shadows: None".into(),
         );
     }
+    if v.pipeline.is_clustered() && v.clusters().update == ListUpdate::StaticDynamic {
+        refuse(
+            "StaticDynamic shades its still lights once into an image kept across frames, and its light loop traces no shadow rays yet; use update: Rebuild, Patch or Refit, or shadows: None".into(),
+        );
+    }
     if v.shading.lights.sampling().is_some() {
         refuse(
             "Exact traces a ray for every light of the list, and a sampled light loop shades a few of them; use lights: Exact with it, or shadows: None".into(),

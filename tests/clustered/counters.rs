@@ -418,6 +418,7 @@ fn a_hand_built_scene_counts_what_was_worked_out_by_hand() {
                 sampler: None,
                 max_useful_per_pixel: 1,
                 edge_fraction: 0.0,
+                shadow_rays: None,
                 dropped_lights: 0,
                 active_clusters: 6,
                 assigned_clusters: assigned,
