@@ -678,7 +678,7 @@ fn inexact_figures(exact: bool, error: Option<&ErrorMetrics>) -> Option<String> 
 pub const EXACT_LSB: u32 = 1;
 
 /// Whether `variant` claims to be exact on `gpu`, within [`EXACT_LSB`] of the reference:
-/// every light of every list evaluated (not sampled, no cap that drops lights and counts
+/// every light of every list evaluated and every shadow ray traced (not sampled, no cap that drops lights and counts
 /// them), a shaded image (not a debug view), normals packed in 32 bits or more where a
 /// G-buffer holds them, and no Compact layout multisampled (it shades a sample on the pixel
 /// centre's ray) or with GGX (roughness and metallic in 8 bits move a highlight: 3 LSB on
@@ -703,6 +703,7 @@ pub fn exact_claim(variant: &Variant, gpu: &Gpu) -> bool {
     let toon_on_rounded =
         v.post.toon.is_some() && gpu.hdr_format != wgpu::TextureFormat::Rgba32Float;
     v.shading.lights.sampling().is_none()
+        && v.shading.shadows.sampling().is_none()
         && !capped
         && v.debug_view == DebugView::Off
         && !compact_lossy

@@ -54,6 +54,16 @@ pub(crate) fn unbiased_samplers() -> Vec<(LoadedVariant, u32)> {
     ]
 }
 
+/// Each shipped shadow estimator claimed unbiased (measured on one still frame).
+pub(crate) fn unbiased_shadow_samplers() -> Vec<LoadedVariant> {
+    vec![load("forward_plus_shadows_importance_1")]
+}
+
+/// Each shipped shadow estimator biased by design, with what its label must say.
+pub(crate) fn labelled_biased_shadow_samplers() -> Vec<(LoadedVariant, &'static str)> {
+    vec![]
+}
+
 /// Each shipped sampler that is biased by design, with what its label must say.
 pub(crate) fn labelled_biased_samplers() -> Vec<(LoadedVariant, &'static str)> {
     vec![(
@@ -71,6 +81,15 @@ fn biased_samplers_are_labelled_biased() {
         assert!(!s.unbiased(), "{}", v.name);
         assert_eq!(s.bias_label(), label, "{}", v.name);
     }
+    for (v, label) in labelled_biased_shadow_samplers() {
+        let s = v.variant.shading.shadows.sampling().unwrap();
+        assert!(!s.unbiased(), "{}", v.name);
+        assert_eq!(s.bias_label(), label, "{}", v.name);
+    }
+    for v in unbiased_shadow_samplers() {
+        let s = v.variant.shading.shadows.sampling().unwrap();
+        assert!(s.unbiased(), "{}", v.name);
+    }
     let twin = load("clustered_deferred_restir_spatiotemporal");
     let s = twin.variant.shading.lights.sampling().unwrap();
     assert_eq!(s.bias_label(), "unbiased while still, biased in motion");
@@ -81,7 +100,8 @@ fn unbiased_samplers_pass_the_z_tests() {
     let gpu = gpu();
     let composer = Composer::default();
     let mut failures = Vec::new();
-    for (v, count) in unbiased_samplers() {
+    let shadows = unbiased_shadow_samplers().into_iter().map(|v| (v, 1));
+    for (v, count) in unbiased_samplers().into_iter().chain(shadows) {
         let t = bias_of(&gpu, &composer, &v, &frames(count));
         eprintln!("{}: {t:?}", v.name);
         // The RMSE of the mean image falls as 1/sqrt(S) for an unbiased estimator: from 1
@@ -95,8 +115,8 @@ fn unbiased_samplers_pass_the_z_tests() {
     assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
 
-/// A deliberate break: the variant, the light loop unit edited, what the edit does, the
-/// edit, and the frames the z-tests take.
+/// A deliberate break: the variant, the shading module edited (under `shading/`), what
+/// the edit does, the edit, and the frames the z-tests take.
 type Break = (
     &'static str,
     &'static str,
@@ -109,10 +129,10 @@ type Break = (
 #[test]
 fn each_deliberate_break_fails_the_z_tests() {
     let gpu = gpu();
-    let breaks: [Break; 4] = [
+    let breaks: [Break; 5] = [
         (
             "forward_plus_ris_8",
-            "ris",
+            "light_loop/ris",
             "zero-target candidates skipped (one public port's bias)",
             (
                 "let w = goal * f32(list.count);",
@@ -122,21 +142,21 @@ fn each_deliberate_break_fails_the_z_tests() {
         ),
         (
             "forward_plus_stochastic_culling",
-            "stochastic_culling",
+            "light_loop/stochastic_culling",
             "kept lights not reweighted",
             (" / keep_probability(light, d2);", ";"),
             1,
         ),
         (
             "clustered_deferred_restir_temporal",
-            "reservoir",
+            "light_loop/reservoir",
             "the reused reservoir's count left out of M",
             ("out.count += count;", "out.count += 1.0;"),
             4,
         ),
         (
             "clustered_deferred_restir_spatiotemporal",
-            "restir_spatiotemporal",
+            "light_loop/restir_spatiotemporal",
             "neighbours merged without their M",
             (
                 "let own = count[k] * target_at(surface[k], y);",
@@ -144,10 +164,17 @@ fn each_deliberate_break_fails_the_z_tests() {
             ),
             4,
         ),
+        (
+            "forward_plus_shadows_importance_1",
+            "shadows/sampled",
+            "a drawn light not weighted by its probability",
+            ("f32(draws) * total / (lum * rays)", "f32(draws) / rays"),
+            1,
+        ),
     ];
     let mut passed = Vec::new();
     for (name, unit, what, edit, count) in breaks {
-        let module = format!("shading/light_loop/{unit}.wesl");
+        let module = format!("shading/{unit}.wesl");
         let edited = EditedShaders::of(&module, &format!("bias-{name}"), &[edit]);
         let t = bias_of(&gpu, &edited.composer, &load(name), &frames(count));
         eprintln!("{name}, {what}: {t:?}");

@@ -131,6 +131,7 @@ fn spatial_reuse(v: &Variant) -> Option<crate::variant::SpatialReuse> {
 
 pub fn feature_flags(v: &Variant) -> Vec<(&'static str, bool)> {
     let p = v.pipeline;
+    let shadow_sampler = v.shading.shadows.sampling().map(|s| s.method);
     let clusters = v.clusters();
     let codec = v.normal_codec();
     let layout = v.gbuffer().layout;
@@ -173,6 +174,12 @@ pub fn feature_flags(v: &Variant) -> Vec<(&'static str, bool)> {
         ),
         ("ggx", v.shading.model == ShadingModel::Ggx),
         ("shadows", v.shading.shadows.traced()),
+        ("shadows_exact", v.shading.shadows == Shadows::Exact),
+        ("shadows_sampled", shadow_sampler.is_some()),
+        (
+            "shadows_importance",
+            shadow_sampler == Some(ShadowSampler::Importance),
+        ),
         // The spot cone in the shading: on for every variant; a renderer turns it off for a
         // scene without spots (`render::Renderer::new`).
         ("spot_lights", true),
@@ -330,6 +337,10 @@ pub fn constants_module(v: &Variant) -> String {
         ("CLUSTERS_PER_LANE", CLUSTERS_PER_LANE),
         ("WALK_CUT_SHORT", WALK_CUT_SHORT),
         ("RAY_COUNTERS", RAY_COUNTERS),
+        (
+            "SHADOW_RAYS",
+            v.shading.shadows.sampling().map_or(1, |s| s.rays),
+        ),
         ("GRID_X", clusters.grid.0),
         ("GRID_Y", clusters.grid.1),
         ("GRID_Z", clusters.grid.2),

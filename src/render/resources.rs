@@ -240,6 +240,16 @@ fn upload_textures(
     (view, sampler)
 }
 
+/// Where `variant` draws random numbers (a sampled light loop, or sampled shadows): its
+/// seed, and whether it reuses earlier frames' reservoirs.
+fn random_numbers(variant: &Variant) -> Option<(u32, bool)> {
+    let lights = variant.shading.lights.sampling();
+    let shadows = variant.shading.shadows.sampling();
+    lights
+        .map(|s| (s.seed, s.reuses_frames()))
+        .or(shadows.map(|s| (s.seed, false)))
+}
+
 /// Per-pixel counters of instrumented frames (group 3 of the shading passes, in
 /// `shaders/shading/light_loop/counters.wesl`): light evaluations, useful ones, and the cluster each
 /// pixel looked up (index + 1; 0 for background).
@@ -459,9 +469,9 @@ impl FrameResources {
                 variant.shading.shadows.traced(),
             ),
             transparent_depths,
-            sampling: sampling.map(|s| {
+            sampling: random_numbers(variant).map(|seeded| {
                 let pixels = w as u64 * h as u64;
-                super::sampling::SampleBuffers::new(gpu, sizes, s, pixels, scene.params.time)
+                super::sampling::SampleBuffers::new(gpu, sizes, seeded, pixels, scene.params.time)
             }),
         }
     }

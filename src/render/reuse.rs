@@ -176,7 +176,8 @@ impl Renderer<'_> {
             _ => {}
         }
         // A sampled frame draws new random numbers: it is never the last one again.
-        let sampled = self.variant.shading.lights.sampling().is_some();
+        let sampled = self.variant.shading.lights.sampling().is_some()
+            || self.variant.shading.shadows.sampling().is_some();
         let unchanged = reuse && view_holds && moved.is_empty() && !disturbed && !sampled;
         Redo {
             surfaces: !(reuse && view_holds) || disturbed,

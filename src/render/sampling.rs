@@ -1,10 +1,10 @@
-//! What a sampled light loop binds (`common/sampling.wesl`, `shading/light_loop/`): the
-//! frame's seed, and with temporal reuse each pixel's reservoir of this frame and the last.
+//! What a sampled light loop or sampled shadows bind (`common/sampling.wesl`,
+//! `shading/light_loop/`, `shading/shadows/`): the frame's seed, and with temporal reuse
+//! each pixel's reservoir of this frame and the last.
 
 use super::reflect::BufferSizes;
 use crate::gpu::Gpu;
 use crate::render::bindings::Binding;
-use crate::variant::Sampling;
 
 /// The uniform `sample_frame`.
 #[repr(C)]
@@ -38,11 +38,12 @@ pub struct SampleBuffers {
 }
 
 impl SampleBuffers {
-    /// The buffers at the sizes the light loop declares (`restir_temporal.wesl`).
+    /// The buffers at the sizes the light loop declares (`restir_temporal.wesl`), for a
+    /// variant seeded `seed` whose loop reuses earlier frames' reservoirs or not.
     pub fn new(
         gpu: &Gpu,
         sizes: &BufferSizes,
-        sampling: &Sampling,
+        (seed, reuses_frames): (u32, bool),
         pixels: u64,
         time: f64,
     ) -> Self {
@@ -64,9 +65,8 @@ impl SampleBuffers {
                 mapped_at_creation: false,
             })
         };
-        let reservoirs = sampling
-            .reuses_frames()
-            .then(|| [reservoir("reservoirs"), reservoir("previous reservoirs")]);
+        let reservoirs =
+            reuses_frames.then(|| [reservoir("reservoirs"), reservoir("previous reservoirs")]);
         let kept_per_pixel = match &reservoirs {
             Some(_) => 2 * sizes.bindable(Binding::PreviousReservoirs, 1) as u32,
             None => 0,
@@ -75,7 +75,7 @@ impl SampleBuffers {
             frame,
             reservoirs,
             kept_per_pixel,
-            seed: sampling.seed,
+            seed,
             written: SampleFrame::default(),
         };
         out.set_frame(gpu, time, false);

@@ -333,6 +333,9 @@ fn check_shading(s: &Shading, out: &mut Vec<Problem>) {
     }
 }
 
+/// Most shadow rays a sampled estimate traces per pixel.
+pub const MAX_SHADOW_RAYS: u32 = 16;
+
 /// Shadows where a frame can trace them and the reference can hold them to its bound.
 fn check_shadows(v: &Variant, out: &mut Vec<Problem>) {
     if !v.shading.shadows.traced() {
@@ -351,8 +354,22 @@ fn check_shadows(v: &Variant, out: &mut Vec<Problem>) {
     }
     if v.shading.lights.sampling().is_some() {
         refuse(
-            "Exact traces a ray for every light of the list, and a sampled light loop shades a few of them; use lights: Exact with it, or shadows: None".into(),
+            "shadows trace rays to the lights of an exact light loop, and a sampled light loop shades a few of them; use lights: Exact with it, or shadows: None".into(),
         );
+    }
+    let zbinning = v.pipeline.is_clustered() && v.clusters().method() == CullingMethod::ZBinning;
+    if v.shading.shadows.sampling().is_some() && zbinning {
+        refuse(
+            "Sampled draws its rays' lights from a list, and z-binning walks bins and tile masks; use another culling, or shadows: Exact".into(),
+        );
+    }
+    if let Some(s) = v.shading.shadows.sampling()
+        && !(1..=MAX_SHADOW_RAYS).contains(&s.rays)
+    {
+        refuse(format!(
+            "Sampled: rays is {}; it must be in 1..={MAX_SHADOW_RAYS}",
+            s.rays
+        ));
     }
     let after_shading = [
         (

@@ -4,8 +4,8 @@ mod check;
 mod schema;
 
 pub use check::{
-    MAX_BIG_TILES, MAX_CAP, MAX_CLUSTERS, MAX_GRID_XY, MAX_GRID_Z, NORMAL_BITS, Problem,
-    SAMPLE_COUNTS, check,
+    MAX_BIG_TILES, MAX_CAP, MAX_CLUSTERS, MAX_GRID_XY, MAX_GRID_Z, MAX_SHADOW_RAYS, NORMAL_BITS,
+    Problem, SAMPLE_COUNTS, check,
 };
 pub use schema::*;
 

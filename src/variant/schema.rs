@@ -522,7 +522,7 @@ impl Default for Shading {
 }
 
 /// How a light's visibility from a surface point is found.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize, JsonSchema)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize, JsonSchema)]
 pub enum Shadows {
     /// No shadows: every light lights what its range reaches.
     #[default]
@@ -531,6 +531,42 @@ pub enum Shadows {
     /// a BVH of the scene's opaque triangles with a watertight ray-triangle test: exact
     /// against the f64 reference, which traces the same rays.
     Exact,
+    /// A few shadow rays per pixel, to lights of its list drawn at random: an estimate of
+    /// the shadowed light (`docs/design.md`, Shadows).
+    Sampled(ShadowSampling),
+}
+
+/// Shadows estimated from a few rays a pixel.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields, default)]
+pub struct ShadowSampling {
+    /// The estimator.
+    pub method: ShadowSampler,
+    /// Shadow rays a pixel traces, in 1..=16.
+    pub rays: u32,
+    /// Seed of the random numbers, mixed with each pixel and each frame's time.
+    pub seed: u32,
+}
+
+impl Default for ShadowSampling {
+    fn default() -> Self {
+        Self {
+            method: ShadowSampler::Importance,
+            rays: 1,
+            seed: 0,
+        }
+    }
+}
+
+/// Estimators of a pixel's shadowed light from `rays` rays. Both draw the rays' lights
+/// from the pixel's list in proportion to the luminance of their unshadowed light,
+/// stratified (one draw in each of `rays` equal parts of the sum), and trace one ray a
+/// drawn light.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
+pub enum ShadowSampler {
+    /// Each drawn light's light if its ray is clear, weighted by the inverse of its
+    /// probability over `rays`. Unbiased.
+    Importance,
 }
 
 impl Shadows {
@@ -539,11 +575,44 @@ impl Shadows {
         self != Shadows::None
     }
 
-    pub fn label(self) -> &'static str {
+    /// The sampler, if the shadows are estimated.
+    pub fn sampling(&self) -> Option<&ShadowSampling> {
         match self {
-            Shadows::None => "unshadowed",
-            Shadows::Exact => "exact shadows",
+            Shadows::Sampled(s) => Some(s),
+            Shadows::None | Shadows::Exact => None,
         }
+    }
+
+    pub fn label(self) -> String {
+        match self {
+            Shadows::None => "unshadowed".into(),
+            Shadows::Exact => "exact shadows".into(),
+            Shadows::Sampled(s) => format!("{} ({})", s.label(), s.bias_label()),
+        }
+    }
+}
+
+impl ShadowSampling {
+    /// Whether the estimate's expectation is the exact shadowed light.
+    pub fn unbiased(&self) -> bool {
+        match self.method {
+            ShadowSampler::Importance => true,
+        }
+    }
+
+    pub fn bias_label(&self) -> &'static str {
+        match self.method {
+            ShadowSampler::Importance => "unbiased",
+        }
+    }
+
+    /// The estimator and its rays, e.g. "ratio shadows, 1 ray".
+    pub fn label(&self) -> String {
+        let method = match self.method {
+            ShadowSampler::Importance => "importance-sampled shadows",
+        };
+        let s = if self.rays == 1 { "" } else { "s" };
+        format!("{method}, {} ray{s}", self.rays)
     }
 }
 
