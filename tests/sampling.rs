@@ -61,7 +61,10 @@ pub(crate) fn unbiased_shadow_samplers() -> Vec<LoadedVariant> {
 
 /// Each shipped shadow estimator biased by design, with what its label must say.
 pub(crate) fn labelled_biased_shadow_samplers() -> Vec<(LoadedVariant, &'static str)> {
-    vec![]
+    vec![(
+        load("forward_plus_shadows_ratio_1"),
+        "biased: a ratio of estimates",
+    )]
 }
 
 /// Each shipped sampler that is biased by design, with what its label must say.

@@ -180,6 +180,10 @@ pub fn feature_flags(v: &Variant) -> Vec<(&'static str, bool)> {
             "shadows_importance",
             shadow_sampler == Some(ShadowSampler::Importance),
         ),
+        (
+            "shadows_ratio",
+            shadow_sampler == Some(ShadowSampler::Ratio),
+        ),
         // The spot cone in the shading: on for every variant; a renderer turns it off for a
         // scene without spots (`render::Renderer::new`).
         ("spot_lights", true),

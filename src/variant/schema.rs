@@ -567,6 +567,11 @@ pub enum ShadowSampler {
     /// Each drawn light's light if its ray is clear, weighted by the inverse of its
     /// probability over `rays`. Unbiased.
     Importance,
+    /// The ratio estimator (Heitz, Hill & McGuire 2018): the list's exact unshadowed light
+    /// times the ratio of the draws' estimate with visibility to the same estimate without,
+    /// per channel. Biased (a ratio of two estimates) and consistent; no noise where every
+    /// ray agrees.
+    Ratio,
 }
 
 impl Shadows {
@@ -597,12 +602,14 @@ impl ShadowSampling {
     pub fn unbiased(&self) -> bool {
         match self.method {
             ShadowSampler::Importance => true,
+            ShadowSampler::Ratio => false,
         }
     }
 
     pub fn bias_label(&self) -> &'static str {
         match self.method {
             ShadowSampler::Importance => "unbiased",
+            ShadowSampler::Ratio => "biased: a ratio of estimates",
         }
     }
 
@@ -610,6 +617,7 @@ impl ShadowSampling {
     pub fn label(&self) -> String {
         let method = match self.method {
             ShadowSampler::Importance => "importance-sampled shadows",
+            ShadowSampler::Ratio => "ratio shadows",
         };
         let s = if self.rays == 1 { "" } else { "s" };
         format!("{method}, {} ray{s}", self.rays)
