@@ -423,6 +423,16 @@ fn culling_stem(m: clusterlab::variant::CullingMethod) -> &'static str {
     }
 }
 
+/// A shadow estimator's file stem (`shaders/shading/shadows/<method>.wesl`): an exhaustive
+/// match, so a new estimator is named here before this test compiles.
+fn shadow_stem(s: clusterlab::variant::ShadowSampler) -> &'static str {
+    use clusterlab::variant::ShadowSampler;
+    match s {
+        ShadowSampler::Importance => "importance",
+        ShadowSampler::Ratio => "ratio",
+    }
+}
+
 /// The section of `doc` that opens with `heading`, up to the next bold heading.
 fn how_to<'a>(doc: &'a str, heading: &str) -> &'a str {
     let start = doc
@@ -477,12 +487,15 @@ fn every_how_to_names_files_that_exist_for_every_unit() {
         .iter()
         .map(|e| e.name.to_string())
         .collect();
+    let estimators: Vec<String> = clusterlab::variant::ShadowSampler::iter()
+        .map(|s| shadow_stem(s).to_string())
+        .collect();
     let kinds: [(&str, &str, &[String], usize); 5] = [
         ("**A culling method**", "<method>", &methods, 8),
         ("**A sampler or light loop**", "<loop>", &loops, 5),
         ("**A normal codec**", "<name>", &[], 6),
         ("**A study**", "<name>", &studies, 3),
-        ("**A shadow method**", "<method>", &[], 5),
+        ("**A sampled shadow method**", "<method>", &estimators, 4),
     ];
     let missing_in = |files: &[String], units: &[String], placeholder: &str| -> Vec<String> {
         let mut missing = Vec::new();

@@ -8,7 +8,7 @@ use clusterlab::compose::Composer;
 use clusterlab::gpu::Gpu;
 use clusterlab::gpu::expect::{self, Allowance, Check};
 use clusterlab::study::{self, Finished, Study, StudyOptions};
-use clusterlab::study::{codecs, culling, depth, msaa, slicing};
+use clusterlab::study::{codecs, culling, depth, msaa, shadows, slicing};
 
 /// Study `S` with `options`, every point run.
 fn run<S: Study>(gpu: &Gpu, options: StudyOptions) -> Finished<S> {
@@ -717,4 +717,32 @@ fn the_scale_study_runs_every_method_exactly() {
         assert_eq!((r.radius_min, r.radius_max), scale::radius_range(r.lights));
     }
     assert!(done.plot().is_some());
+}
+
+/// The shadows study runs every shadowed variant and its twin at every ray budget; exact
+/// shadows stay within 1 LSB outside ambiguous pairs; its figures are its frames': rays
+/// traced where shadows are on, none where off, more rays for a bigger budget, and each
+/// shadowed frame's cost over its twin's.
+#[test]
+fn the_shadows_study_runs_every_method_and_budget() {
+    let gpu = common::gpu();
+    let done = run::<shadows::ShadowStudy>(&gpu, small((96, 54), &[256]));
+    let rows = &done.rows;
+    let sampled = 2;
+    assert_eq!(
+        rows.len(),
+        shadows::VARIANTS.len() + sampled * shadows::RAYS.len()
+    );
+    assert!(done.ok, "{rows:#?}");
+    for r in rows {
+        let unshadowed = r.method == "unshadowed";
+        assert_eq!(r.rays == 0, unshadowed, "{}: {} rays", r.variant, r.rays);
+        assert!(r.over_unshadowed.is_some(), "{}", r.variant);
+    }
+    let rays = |name: &str| rows.iter().find(|r| r.variant == name).map(|r| r.rays);
+    let one = rays("forward_plus_shadows_importance_1").unwrap();
+    let sixteen = rays("forward_plus_shadows_importance_1@16rays").unwrap();
+    assert!(sixteen > one, "{one} and {sixteen} rays");
+    let notes = done.table().notes.join("\n");
+    assert!(notes.contains("exact shadows:"), "{notes}");
 }

@@ -10,6 +10,7 @@ pub mod depth;
 pub mod msaa;
 pub mod sampling;
 pub mod scale;
+pub mod shadows;
 mod shared;
 pub mod slicing;
 pub mod temporal;
@@ -102,6 +103,7 @@ pub const STUDIES: &[Entry] = &[
     Entry::of::<temporal::TemporalStudy>(),
     Entry::of::<sampling::SamplingStudy>(),
     Entry::of::<scale::ScaleStudy>(),
+    Entry::of::<shadows::ShadowStudy>(),
 ];
 
 /// The study of that name.

@@ -562,7 +562,9 @@ impl Default for ShadowSampling {
 /// from the pixel's list in proportion to the luminance of their unshadowed light,
 /// stratified (one draw in each of `rays` equal parts of the sum), and trace one ray a
 /// drawn light.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
+#[derive(
+    Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, JsonSchema, strum::EnumIter,
+)]
 pub enum ShadowSampler {
     /// Each drawn light's light if its ray is clear, weighted by the inverse of its
     /// probability over `rays`. Unbiased.

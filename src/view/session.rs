@@ -10,7 +10,7 @@ use crate::compose::Composer;
 use crate::gpu::Gpu;
 use crate::render::{FrameOutput, FrameStats, Renderer};
 use crate::scene::{CameraPose, FRAME_DT, MAX_TIME_S, Scene, SceneParams};
-use crate::variant::{self, DebugView, LoadedVariant, Variant};
+use crate::variant::{self, DebugView, LoadedVariant, Shadows, Variant};
 
 /// Frames the pass-time graph keeps.
 pub const HISTORY: usize = 120;
@@ -24,6 +24,8 @@ pub struct Setup {
     /// file's (as `render --debug-view` does).
     pub debug_view: DebugView,
     pub samples: u32,
+    /// The variant's shadows, as the panel sets them over the file's.
+    pub shadows: Shadows,
     /// A built-in scene or a glTF file.
     pub scene: String,
     pub params: SceneParams,
@@ -97,6 +99,7 @@ impl<'g> Session<'g> {
             variant: path,
             debug_view: loaded.variant.debug_view,
             samples: loaded.variant.msaa.samples,
+            shadows: loaded.variant.shading.shadows,
             ..self.setup.clone()
         })
     }
@@ -123,17 +126,20 @@ impl<'g> Session<'g> {
         self.change(setup);
     }
 
-    /// The variant the setup says: the file, with the panel's debug view and samples.
+    /// The variant the setup says: the file, with the panel's debug view, samples and
+    /// shadows.
     pub fn variant(&self) -> Result<LoadedVariant, String> {
         let mut loaded = variant::load(&self.setup.variant).map_err(|e| e.to_string())?;
         let v = &mut loaded.variant;
         (v.debug_view, v.msaa.samples) = (self.setup.debug_view, self.setup.samples);
+        v.shading.shadows = self.setup.shadows;
         if let Some(p) = variant::check(v).first() {
             return Err(format!(
-                "{}: with the panel's debug view {} and {} samples: field `{}` {}",
+                "{}: with the panel's debug view {}, {} samples and {}: field `{}` {}",
                 self.setup.variant.display(),
                 self.setup.debug_view.name(),
                 self.setup.samples,
+                self.setup.shadows.label(),
                 p.field,
                 p.message
             ));

@@ -19,7 +19,7 @@ use super::watch::{Changed, Watch};
 use crate::gpu::Gpu;
 use crate::scene::{CameraPose, FRAME_DT};
 use crate::sequence::animation::{ANIMATION_FRAMES, Thumbnail};
-use crate::variant::{DebugView, SAMPLE_COUNTS};
+use crate::variant::{DebugView, SAMPLE_COUNTS, ShadowSampler, ShadowSampling, Shadows};
 
 /// A change on disk woke the loop.
 struct Wake;
@@ -70,6 +70,7 @@ fn open(options: ViewOptions, gpu: &Gpu) -> Result<bool, String> {
             variant: options.variant.clone(),
             debug_view: DebugView::Off,
             samples: 1,
+            shadows: Shadows::None,
             scene: options.scene.clone(),
             params: options.params,
             camera: options.camera,
@@ -800,6 +801,14 @@ impl App<'_, '_> {
                     ui.selectable_value(&mut setup.samples, n, n.to_string());
                 }
             });
+        egui::ComboBox::from_label("shadows")
+            .selected_text(setup.shadows.label())
+            .width(200.0)
+            .show_ui(ui, |ui| {
+                for s in shadow_choices(setup.shadows) {
+                    ui.selectable_value(&mut setup.shadows, s, s.label());
+                }
+            });
         ui.label("Other options: edit the variant file; it reloads on save.");
         self.session.change(setup);
         ui.separator();
@@ -951,7 +960,34 @@ impl App<'_, '_> {
             "evaluations {}, useful {}, dropped {}",
             stats.light_evals, stats.useful_light_evals, stats.dropped_lights
         ));
+        if let Some(r) = stats.shadow_rays {
+            let nodes = r.nodes_per_ray().map_or("-".into(), |n| format!("{n:.1}"));
+            ui.label(format!(
+                "shadow rays {}, blocked {}, BVH nodes per ray {nodes}",
+                r.traced, r.blocked
+            ));
+        }
     }
+}
+
+/// The shadows the panel offers: none, exact, each estimator at one ray, and `current`.
+fn shadow_choices(current: Shadows) -> Vec<Shadows> {
+    let sampled = |method| {
+        Shadows::Sampled(ShadowSampling {
+            method,
+            ..ShadowSampling::default()
+        })
+    };
+    let mut out = vec![
+        Shadows::None,
+        Shadows::Exact,
+        sampled(ShadowSampler::Importance),
+        sampled(ShadowSampler::Ratio),
+    ];
+    if !out.contains(&current) {
+        out.push(current);
+    }
+    out
 }
 
 /// The flight a held key gives: forward, right, up.
