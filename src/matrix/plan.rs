@@ -381,8 +381,9 @@ fn sampling_variants(variants: &[VariantEntry]) -> Result<Vec<VariantEntry>, Str
 /// Forward+ and deferred frames without rays.
 pub const SHADOW_TWINS: [&str; 2] = ["forward_plus", "deferred_3_targets"];
 
-/// The scenes of the shadows group: the hall of columns and the spheres on their floor.
-pub const SHADOW_SCENES: [&str; 2] = ["atrium", "spheres"];
+/// The scenes of the shadows group: the hall of columns (`study shadows` and
+/// `tests/shadows.rs` take the others).
+pub const SHADOW_SCENES: [&str; 1] = ["atrium"];
 
 /// The default matrix's shadows group: `SHADOW_TWINS` and every variant of `variants` that
 /// traces shadow rays.
