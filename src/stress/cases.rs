@@ -1077,10 +1077,13 @@ fn shadowed() -> Vec<(String, Variant)> {
         .collect()
 }
 
-/// A user's variant with exact shadows (where it can trace them).
+/// A user's variant with its own shadows, or exact ones where it has none (where it can
+/// trace them).
 fn set_shadows() -> Edit {
     Edit::new("_shadows", |v| {
-        v.shading.shadows = Shadows::Exact;
+        if !v.shading.shadows.traced() {
+            v.shading.shadows = Shadows::Exact;
+        }
         Ok(())
     })
 }
