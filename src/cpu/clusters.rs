@@ -409,6 +409,12 @@ pub const INTERPOLATION_PRECISION: f64 = 1e-5;
 /// which move z by up to a step times |dz/dd| <= z^2 / near, so z / near steps relative.
 /// The shaders' `depth_margin` is this, in f32.
 pub fn depth_margin(z: f64, near: f64, reversed: bool, unorm24: bool) -> f64 {
+    MARK_MARGIN + stored_depth_error(z, near, reversed, unorm24)
+}
+
+/// How far, relative to `z`, a view depth rebuilt from a stored depth may lie from the
+/// exact one for the storing alone: the interpolation and 24-bit terms of `depth_margin`.
+pub fn stored_depth_error(z: f64, near: f64, reversed: bool, unorm24: bool) -> f64 {
     let amplification = if reversed {
         1.0
     } else {
@@ -419,7 +425,7 @@ pub fn depth_margin(z: f64, near: f64, reversed: bool, unorm24: bool) -> f64 {
     } else {
         0.0
     };
-    MARK_MARGIN + INTERPOLATION_PRECISION * amplification + step
+    INTERPOLATION_PRECISION * amplification + step
 }
 
 /// One step of a 24-bit normalized depth buffer.

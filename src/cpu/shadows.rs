@@ -19,7 +19,7 @@
 
 use glam::{DMat4, DVec3};
 
-use super::clusters::{INTERPOLATION_PRECISION, UNORM24_DEPTH_STEP};
+use super::clusters::{INTERPOLATION_PRECISION, stored_depth_error};
 use super::occlusion::{Seen, TriangleBvh, Visits};
 use crate::common::NormalCodec;
 
@@ -92,22 +92,11 @@ impl ShadowRays<'_> {
     /// How far the GPU's shading position of `p` may lie from it.
     pub fn position_error(&self, p: DVec3) -> f64 {
         let stored = 2.0 * INTERPOLATION_PRECISION * 3f64.sqrt() * p.abs().max_element();
-        let near = self.near;
         match self.source.position {
             PositionSource::Stored => stored,
             PositionSource::FromDepth { reversed, unorm24 } => {
                 let z = -self.view.transform_point3(p).z;
-                let amplification = if reversed {
-                    1.0
-                } else {
-                    (z - near).max(0.0) / near
-                };
-                let step = if unorm24 {
-                    UNORM24_DEPTH_STEP * z / near
-                } else {
-                    0.0
-                };
-                let depth = INTERPOLATION_PRECISION * amplification + step + DEPTH_ARITHMETIC;
+                let depth = stored_depth_error(z, self.near, reversed, unorm24) + DEPTH_ARITHMETIC;
                 stored + depth * (p - self.eye).length()
             }
         }
