@@ -229,10 +229,11 @@ pub fn shade_reference(
             let mut bounds = (!low.is_empty()).then(|| (DVec3::from(low[i]), DVec3::from(high[i])));
             for (f, s) in truth.blended_at(i).iter().zip(layers) {
                 let alpha = f.alpha();
-                colour = alpha * s.colour + (1.0 - alpha) * colour;
+                // The first ambiguous layer starts the range from what lies under it.
                 if s.ambiguous > 0 && bounds.is_none() {
                     bounds = Some((colour, colour));
                 }
+                colour = alpha * s.colour + (1.0 - alpha) * colour;
                 if let Some((lo, hi)) = bounds.as_mut() {
                     *lo = alpha * (s.colour - s.held) + (1.0 - alpha) * *lo;
                     *hi = alpha * (s.colour + s.left) + (1.0 - alpha) * *hi;
