@@ -11,6 +11,8 @@
 //! Triangles of no area (repeated or collinear corners) are counted and left out: they hide
 //! nothing and would only add NaN to the tests.
 
+use std::ops::ControlFlow;
+
 use glam::DVec3;
 
 /// Deepest tree the shaders' traversal stack holds (`SHADOW_STACK`, generated from this):
@@ -147,20 +149,22 @@ impl TriangleBvh {
         }
     }
 
-    /// Whether a triangle crosses the segment from `from` to `to` at a fraction `t` of it
-    /// with `t_min < t < 1`, and what the walk visited.
-    pub fn blocked(&self, from: DVec3, to: DVec3, t_min: f64) -> (bool, Visits) {
+    /// Walk the nodes whose box `meets` holds, and give each of their leaves' triangles to
+    /// `triangle` until it breaks; what the walk visited.
+    fn walk(
+        &self,
+        meets: impl Fn(&Node) -> bool,
+        mut triangle: impl FnMut([DVec3; 3]) -> ControlFlow<()>,
+    ) -> Visits {
         let mut visits = Visits::default();
         if self.triangles.is_empty() {
-            return (false, visits);
+            return visits;
         }
-        let dir = to - from;
-        let inverse = dir.recip();
         let mut stack = vec![0u32];
         while let Some(at) = stack.pop() {
             let node = self.nodes[at as usize];
             visits.nodes += 1;
-            if !box_meets(node.min, node.max, from, inverse, t_min) {
+            if !meets(&node) {
                 continue;
             }
             if node.count == 0 {
@@ -169,13 +173,32 @@ impl TriangleBvh {
             }
             for &t in &self.order[node.first as usize..(node.first + node.count) as usize] {
                 visits.triangles += 1;
-                if hit(from, dir, self.triangles[t as usize]).is_some_and(|t| t > t_min && t < 1.0)
-                {
-                    return (true, visits);
+                if triangle(self.triangles[t as usize]).is_break() {
+                    return visits;
                 }
             }
         }
-        (false, visits)
+        visits
+    }
+
+    /// Whether a triangle crosses the segment from `from` to `to` at a fraction `t` of it
+    /// with `t_min < t < 1`, and what the walk visited.
+    pub fn blocked(&self, from: DVec3, to: DVec3, t_min: f64) -> (bool, Visits) {
+        let dir = to - from;
+        let inverse = dir.recip();
+        let mut blocked = false;
+        let visits = self.walk(
+            |node| box_meets(node.min, node.max, from, inverse, t_min),
+            |triangle| {
+                blocked = hit(from, dir, triangle).is_some_and(|t| t > t_min && t < 1.0);
+                if blocked {
+                    ControlFlow::Break(())
+                } else {
+                    ControlFlow::Continue(())
+                }
+            },
+        );
+        (blocked, visits)
     }
 
     /// What a segment within `reach` of `from`-`to` (every point of it moved by at most
@@ -187,32 +210,26 @@ impl TriangleBvh {
     /// leave the triangle only through an edge or an end); it cannot block any of them
     /// when the segment passes farther than `reach` from it.
     pub fn classify(&self, from: DVec3, to: DVec3, reach: f64) -> (Seen, Visits) {
-        let mut visits = Visits::default();
-        if self.triangles.is_empty() {
-            return (Seen::Open, visits);
-        }
-        let (lo, hi) = (from.min(to) - reach, from.max(to) + reach);
+        let inverse = (to - from).recip();
         let mut near = Vec::new();
-        let mut stack = vec![0u32];
-        while let Some(at) = stack.pop() {
-            let node = self.nodes[at as usize];
-            visits.nodes += 1;
-            // The segment's box grown by `reach` against the node's: cheap and conservative.
-            if node.min.cmpgt(hi).any() || node.max.cmplt(lo).any() {
-                continue;
-            }
-            if node.count == 0 {
-                stack.extend([node.first, node.first + 1]);
-                continue;
-            }
-            for &t in &self.order[node.first as usize..(node.first + node.count) as usize] {
-                visits.triangles += 1;
-                match triangle_seen(from, to, self.triangles[t as usize], reach) {
-                    Seen::Blocked => return (Seen::Blocked, visits),
-                    Seen::Ambiguous => near.push(self.triangles[t as usize]),
-                    Seen::Open => {}
+        let mut blocked = false;
+        let visits = self.walk(
+            // A segment within reach of a triangle meets its node's box grown by reach.
+            |node| box_meets(node.min - reach, node.max + reach, from, inverse, 0.0),
+            |triangle| match triangle_seen(from, to, triangle, reach) {
+                Seen::Blocked => {
+                    blocked = true;
+                    ControlFlow::Break(())
                 }
-            }
+                Seen::Ambiguous => {
+                    near.push(triangle);
+                    ControlFlow::Continue(())
+                }
+                Seen::Open => ControlFlow::Continue(()),
+            },
+        );
+        if blocked {
+            return (Seen::Blocked, visits);
         }
         let seen = match near.is_empty() {
             true => Seen::Open,
