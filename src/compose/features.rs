@@ -348,6 +348,12 @@ pub fn constants_module(v: &Variant) -> String {
         ("GRID_X", clusters.grid.0),
         ("GRID_Y", clusters.grid.1),
         ("GRID_Z", clusters.grid.2),
+        ("MORTON_BITS", crate::cpu::bvh::morton_axis(clusters.grid).0),
+        (
+            "MORTON_SHIFT",
+            crate::cpu::bvh::morton_axis(clusters.grid).1,
+        ),
+        ("RADIX_PASSES", crate::cpu::bvh::radix_passes(clusters.grid)),
         ("LIGHT_CAP", cap),
         ("BIG_TILE", clusters.big_tiles.unwrap_or(1)),
         ("NORMAL_BITS", v.normal_codec().bits() / 2),

@@ -1,26 +1,50 @@
-//! Twin of `passes/assign_bvh.wesl`: Olsson 2012's light BVH. Lights are ordered by the
-//! Morton code of the centre of their cluster range (then by index), and a tree of
-//! `BVH_WIDTH` children a node is built over that order, each node the union of its
-//! children's ranges; a cluster walks the tree to the lights whose range holds it. Bounds
-//! are integer boxes of clusters (tiles across, down, slices), so a walk finds exactly the
-//! lights one-level assignment walks for that cluster, with no slack to derive.
+//! Twin of `passes/assign_bvh.wesl`: a linear BVH over the lights. Lights are ordered by the
+//! Morton code of the centre of their range of clusters (then by index: the GPU's radix
+//! sort is stable), and a binary radix tree is built over that order, each internal node
+//! holding the union of its children's ranges. The GPU builds each node in parallel
+//! (Karras 2012); this twin builds the same tree top down, from its definition: a node's
+//! range of sorted entries splits where the highest bit of (key, position) that differs
+//! across it turns to 1. Bounds are integer boxes of clusters (tiles across, down, slices),
+//! so a walk finds exactly the lights one-level assignment walks, with no slack to derive.
 
-use super::sort::{NO_KEY, sorted_size};
+/// Bits of a Morton digit each pass of the GPU's radix sort takes.
+pub const RADIX_BITS: u32 = 6;
+/// Invocations of a radix-sort workgroup, and the entries each counts and writes in order.
+pub const RADIX_LANES: u32 = 32;
+pub const RADIX_ITEMS: u32 = 32;
+/// Clusters across, down and deep of the tile that walks the tree once for all its
+/// clusters.
+pub const TILE: (u32, u32, u32) = (2, 2, 16);
+/// Bits of a Morton code an axis holds at most (3 x 10 fit a word).
+const MAX_AXIS_BITS: u32 = 10;
+/// Marks a child that is a leaf (its sorted position) rather than an internal node.
+pub const LEAF: u32 = 0x8000_0000;
 
-/// Children of a node.
-pub const BVH_WIDTH: u32 = 32;
 /// A light's range of clusters as the GPU packs it (`light_range::cluster_span`):
 /// x0 | x1 << 16, y0 | y1 << 16, k0 | k1 << 16, and 1 when the range is not empty.
 pub type Range = [u32; 4];
+/// A node's bounds: the x, y and slice spans, packed as a range's; `EMPTY` spans meet
+/// nothing.
+pub type Bounds = [u32; 3];
+/// The packed span of no cluster: first 0xffff, last 0.
+pub const EMPTY: u32 = 0xffff;
 
-/// Nodes of each level above the lights, from the lowest (one per `BVH_WIDTH` sorted
-/// lights) to the root (one node).
-pub fn level_sizes(n: u32) -> Vec<u32> {
-    let mut sizes = vec![n.div_ceil(BVH_WIDTH)];
-    while sizes[sizes.len() - 1] > 1 {
-        sizes.push(sizes[sizes.len() - 1].div_ceil(BVH_WIDTH));
-    }
-    sizes
+/// How a range's centre becomes a Morton axis: its bits, and the shift that brings the
+/// largest centre (in half clusters, 2 (cells - 1)) to at most MAX_AXIS_BITS bits.
+pub fn morton_axis(grid: (u32, u32, u32)) -> (u32, u32) {
+    let most = 2 * (grid.0.max(grid.1).max(grid.2).max(1) - 1);
+    let bits = (u32::BITS - most.leading_zeros()).max(1);
+    (bits.min(MAX_AXIS_BITS), bits.saturating_sub(MAX_AXIS_BITS))
+}
+
+/// Passes of the radix sort: enough digits for every bit of a Morton code.
+pub fn radix_passes(grid: (u32, u32, u32)) -> u32 {
+    (3 * morton_axis(grid).0).div_ceil(RADIX_BITS)
+}
+
+/// Bits 0..10 of `v` spread to every third bit.
+fn spread(v: u32) -> u32 {
+    (0..MAX_AXIS_BITS).fold(0, |out, b| out | ((v >> b) & 1) << (3 * b))
 }
 
 /// The first and last of a packed pair.
@@ -28,26 +52,21 @@ fn span(v: u32) -> (u32, u32) {
     (v & 0xffff, v >> 16)
 }
 
-/// Bits 0..10 of `v` spread to every third bit.
-fn spread(v: u32) -> u32 {
-    (0..10).fold(0, |out, b| out | ((v >> b) & 1) << (3 * b))
-}
-
-/// A range's Morton key: its centre in half clusters, scaled to 10 bits an axis, x in the
-/// lowest bit; `NO_KEY` for an empty range.
+/// A range's Morton code: its centre in half clusters, x in the lowest bit; an empty
+/// range's is the largest code.
 pub fn morton_key(r: Range, grid: (u32, u32, u32)) -> u32 {
+    let (bits, shift) = morton_axis(grid);
     if r[3] == 0 {
-        return NO_KEY;
+        return (1 << (3 * bits)) - 1;
     }
-    let axis = |v: u32, cells: u32| {
+    let axis = |v: u32| {
         let (a, b) = span(v);
-        ((a + b) * 1024 / (2 * cells)).min(1023)
+        spread((a + b) >> shift)
     };
-    spread(axis(r[0], grid.0)) | spread(axis(r[1], grid.1)) << 1 | spread(axis(r[2], grid.2)) << 2
+    axis(r[0]) | axis(r[1]) << 1 | axis(r[2]) << 2
 }
 
-/// The sorted order: (key, light) by key then light, padded to `sorted_size` with
-/// (`NO_KEY`, `NO_KEY`).
+/// The sorted order: (key, light) by key, then light.
 pub fn order(ranges: &[Range], grid: (u32, u32, u32)) -> Vec<[u32; 2]> {
     let mut order: Vec<[u32; 2]> = ranges
         .iter()
@@ -55,99 +74,164 @@ pub fn order(ranges: &[Range], grid: (u32, u32, u32)) -> Vec<[u32; 2]> {
         .map(|(i, &r)| [morton_key(r, grid), i as u32])
         .collect();
     order.sort_unstable();
-    order.resize(sorted_size(ranges.len() as u32) as usize, [NO_KEY; 2]);
     order
 }
 
-/// The union of two ranges (either may be empty).
-fn union(a: Range, b: Range) -> Range {
-    match (a[3], b[3]) {
-        (0, _) => b,
-        (_, 0) => a,
-        _ => {
-            let join = |u: u32, v: u32| {
-                let ((a0, a1), (b0, b1)) = (span(u), span(v));
-                a0.min(b0) | a1.max(b1) << 16
-            };
-            [join(a[0], b[0]), join(a[1], b[1]), join(a[2], b[2]), 1]
-        }
-    }
-}
-
-/// Every level's nodes, the lowest first, each the union of its children's ranges (padding
-/// and missing children are empty).
-pub fn nodes(order: &[[u32; 2]], ranges: &[Range]) -> Vec<Range> {
-    let sizes = level_sizes(order.len() as u32);
-    let light = |p: usize| match order.get(p) {
-        Some(&[_, i]) if (i as usize) < ranges.len() => ranges[i as usize],
-        _ => [0; 4],
-    };
-    let mut all: Vec<Range> = Vec::new();
-    let mut below_start = 0;
-    for (level, &size) in sizes.iter().enumerate() {
-        let start = all.len();
-        for m in 0..size as usize {
-            let children = m * BVH_WIDTH as usize..(m + 1) * BVH_WIDTH as usize;
-            let node = children.fold([0; 4], |acc, c| {
-                let child = match level {
-                    0 => light(c),
-                    _ if c < start - below_start => all[below_start + c],
-                    _ => [0; 4],
-                };
-                union(acc, child)
-            });
-            all.push(node);
-        }
-        below_start = start;
-    }
-    all
-}
-
-/// Whether range `r` holds cluster (x, y, k).
-pub fn holds(r: Range, x: u32, y: u32, k: u32) -> bool {
-    let inside = |v: u32, c: u32| {
-        let (a, b) = span(v);
-        a <= c && c <= b
-    };
-    r[3] != 0 && inside(r[0], x) && inside(r[1], y) && inside(r[2], k)
-}
-
-/// The lights whose range holds cluster (x, y, k), in sorted order, found by walking the
-/// tree from the root: a node is entered only where its range holds the cluster.
-pub fn walk(
-    order: &[[u32; 2]],
-    nodes: &[Range],
-    ranges: &[Range],
-    at: (u32, u32, u32),
-) -> Vec<u32> {
-    let sizes = level_sizes(order.len() as u32);
-    let starts: Vec<usize> = sizes
-        .iter()
-        .scan(0, |start, &s| {
-            let this = *start;
-            *start += s as usize;
-            Some(this)
-        })
-        .collect();
-    let (x, y, k) = at;
-    let mut found = Vec::new();
-    // (level, node): level 0 the sorted lights, level l the nodes of `sizes[l - 1]`.
-    let mut stack = vec![(sizes.len(), 0usize)];
-    while let Some((level, node)) = stack.pop() {
-        if level == 0 {
-            let i = order[node][1];
-            if (i as usize) < ranges.len() && holds(ranges[i as usize], x, y, k) {
-                found.push(i);
-            }
+/// The tree over a sorted order: each internal node's children (an internal node's index,
+/// or `LEAF` | a sorted position), node 0 the root; n entries make n - 1 nodes.
+pub fn tree(order: &[[u32; 2]]) -> Vec<[u32; 2]> {
+    let n = order.len();
+    let mut nodes = vec![[0; 2]; n.saturating_sub(1)];
+    // (key, position): unique, so every range of two or more entries splits.
+    let code = |p: usize| (order[p][0] as u64) << 32 | p as u64;
+    let mut ranges = vec![(0, n.saturating_sub(1), 0)];
+    while let Some((first, last, node)) = ranges.pop() {
+        if first == last {
             continue;
         }
-        if node < sizes[level - 1] as usize && holds(nodes[starts[level - 1] + node], x, y, k) {
-            let first = node * BVH_WIDTH as usize;
-            stack.extend(
-                (first..first + BVH_WIDTH as usize)
-                    .rev()
-                    .map(|c| (level - 1, c)),
-            );
+        // The highest bit that differs across the range: entries up to `split` have it 0.
+        let differs = 63 - (code(first) ^ code(last)).leading_zeros();
+        let (mut split, mut above) = (first, last);
+        while above - split > 1 {
+            let mid = (split + above) / 2;
+            match code(mid) >> differs == code(first) >> differs {
+                true => split = mid,
+                false => above = mid,
+            }
+        }
+        // Karras's numbering: an internal child is named by its range's end at the split.
+        let child = |a: usize, b: usize, at: usize| match a == b {
+            true => LEAF | a as u32,
+            false => at as u32,
+        };
+        nodes[node] = [
+            child(first, split, split),
+            child(split + 1, last, split + 1),
+        ];
+        ranges.push((first, split, split));
+        ranges.push((split + 1, last, split + 1));
+    }
+    nodes
+}
+
+/// Each node's parent: the internal nodes' first (the root's 0), then the leaves'.
+pub fn parents(nodes: &[[u32; 2]]) -> Vec<u32> {
+    let n = nodes.len() + 1;
+    let mut parents = vec![0; 2 * n - 1];
+    for (i, children) in nodes.iter().enumerate() {
+        for &c in children {
+            parents[slot(c, n)] = i as u32;
+        }
+    }
+    parents
+}
+
+/// Where child `code`'s parent is kept, of `n` leaves.
+fn slot(code: u32, n: usize) -> usize {
+    match code & LEAF {
+        0 => code as usize,
+        _ => n - 1 + (code & !LEAF) as usize,
+    }
+}
+
+/// A light's range as bounds.
+pub fn light_bounds(r: Range) -> Bounds {
+    match r[3] {
+        0 => [EMPTY; 3],
+        _ => [r[0], r[1], r[2]],
+    }
+}
+
+/// The union of two bounds.
+fn join(a: Bounds, b: Bounds) -> Bounds {
+    std::array::from_fn(|k| {
+        let ((a0, a1), (b0, b1)) = (span(a[k]), span(b[k]));
+        a0.min(b0) | a1.max(b1) << 16
+    })
+}
+
+/// Each internal node's bounds: the union of its children's.
+pub fn bounds(order: &[[u32; 2]], nodes: &[[u32; 2]], ranges: &[Range]) -> Vec<Bounds> {
+    let mut bounds = vec![[EMPTY; 3]; nodes.len()];
+    // Children before parents: a node's internal children are visited after it going down,
+    // so the reverse of a depth-first order is bottom up.
+    let mut down = Vec::with_capacity(nodes.len());
+    let mut stack = if nodes.is_empty() { vec![] } else { vec![0] };
+    while let Some(node) = stack.pop() {
+        down.push(node);
+        stack.extend(
+            nodes[node]
+                .iter()
+                .filter(|&&c| c & LEAF == 0)
+                .map(|&c| c as usize),
+        );
+    }
+    for &node in down.iter().rev() {
+        bounds[node] = nodes[node]
+            .iter()
+            .map(|&c| child_bounds(c, order, &bounds, ranges))
+            .fold([EMPTY; 3], join);
+    }
+    bounds
+}
+
+fn child_bounds(code: u32, order: &[[u32; 2]], bounds: &[Bounds], ranges: &[Range]) -> Bounds {
+    match code & LEAF {
+        0 => bounds[code as usize],
+        _ => light_bounds(ranges[order[(code & !LEAF) as usize][1] as usize]),
+    }
+}
+
+/// The first node (as `node: child`) whose bounds do not cover a child's: none in a tree
+/// the walks can trust.
+pub fn uncovered(
+    order: &[[u32; 2]],
+    nodes: &[[u32; 2]],
+    bounds: &[Bounds],
+    ranges: &[Range],
+) -> Option<String> {
+    (0..nodes.len()).find_map(|node| {
+        nodes[node].iter().find_map(|&c| {
+            let child = child_bounds(c, order, bounds, ranges);
+            (join(bounds[node], child) != bounds[node] && child != [EMPTY; 3])
+                .then(|| format!("node {node}: child {c:#x}"))
+        })
+    })
+}
+
+/// Whether bounds meet the clusters [lo, hi] (each (x, y, slice)).
+pub fn meets(b: Bounds, lo: [u32; 3], hi: [u32; 3]) -> bool {
+    (0..3).all(|k| {
+        let (first, last) = span(b[k]);
+        first <= hi[k] && last >= lo[k]
+    })
+}
+
+/// The lights whose range meets the clusters [lo, hi], in the walk's order (left child
+/// first), found by walking the tree from the root: a node is entered only where its
+/// bounds meet them.
+pub fn walk(
+    order: &[[u32; 2]],
+    nodes: &[[u32; 2]],
+    bounds: &[Bounds],
+    ranges: &[Range],
+    (lo, hi): ([u32; 3], [u32; 3]),
+) -> Vec<u32> {
+    let mut found = Vec::new();
+    let mut stack = match order.len() {
+        0 => vec![],
+        1 => vec![LEAF],
+        _ => vec![0],
+    };
+    while let Some(code) = stack.pop() {
+        if code & LEAF != 0 {
+            let i = order[(code & !LEAF) as usize][1];
+            if meets(light_bounds(ranges[i as usize]), lo, hi) {
+                found.push(i);
+            }
+        } else if meets(bounds[code as usize], lo, hi) {
+            let [left, right] = nodes[code as usize];
+            stack.extend([right, left]);
         }
     }
     found
@@ -161,68 +245,94 @@ mod tests {
         [x.0 | x.1 << 16, y.0 | y.1 << 16, k.0 | k.1 << 16, 1]
     }
 
-    /// A walk finds exactly the lights whose range holds the cluster (every one of a
-    /// brute-force search, none else), for ranges of every size over a small grid.
-    #[test]
-    fn a_walk_finds_exactly_the_ranges_that_hold_the_cluster() {
-        let grid = (8, 5, 6);
+    /// Seeded ranges over `grid`, every 17th empty, many sharing a centre.
+    fn ranges(count: usize, grid: (u32, u32, u32)) -> Vec<Range> {
         let mut seed = 7u32;
         let mut next = |m: u32| {
             seed = seed.wrapping_mul(1664525).wrapping_add(1013904223);
             (seed >> 8) % m
         };
-        let mut ranges = Vec::new();
-        for i in 0..1500 {
-            if i % 17 == 0 {
-                ranges.push([0; 4]);
-                continue;
-            }
-            let mut axis = |cells: u32| {
-                let a = next(cells);
-                (a, (a + next(3)).min(cells - 1))
-            };
-            ranges.push(range(axis(grid.0), axis(grid.1), axis(grid.2)));
-        }
-        let order = order(&ranges, grid);
-        assert_eq!(order.len(), 2048);
-        let (lights, padding) = order.split_at(ranges.len());
-        assert!(lights.windows(2).all(|w| w[0] < w[1]));
-        assert!(padding.iter().all(|&e| e == [NO_KEY; 2]));
-        let nodes = nodes(&order, &ranges);
-        assert_eq!(nodes.len(), 64 + 2 + 1);
-        for k in 0..grid.2 {
-            for y in 0..grid.1 {
-                for x in 0..grid.0 {
-                    let mut got = walk(&order, &nodes, &ranges, (x, y, k));
-                    got.sort_unstable();
-                    let want: Vec<u32> = (0..ranges.len() as u32)
-                        .filter(|&i| holds(ranges[i as usize], x, y, k))
-                        .collect();
-                    assert_eq!(got, want, "cluster ({x}, {y}, {k})");
+        (0..count)
+            .map(|i| {
+                if i % 17 == 0 {
+                    return [0; 4];
+                }
+                let mut axis = |cells: u32| {
+                    let a = next(cells);
+                    (a, (a + next(3)).min(cells - 1))
+                };
+                range(axis(grid.0), axis(grid.1), axis(grid.2))
+            })
+            .collect()
+    }
+
+    /// A walk for a cluster, and for a tile of clusters, finds exactly the lights whose
+    /// range meets it (every one of a brute-force search, none else), at every size that
+    /// has an edge: 1, 2, a power of two and one more.
+    #[test]
+    fn a_walk_finds_exactly_the_ranges_that_meet_the_clusters() {
+        let grid = (8, 5, 6);
+        for count in [1, 2, 3, 1024, 1025, 1500] {
+            let ranges = ranges(count, grid);
+            let order = order(&ranges, grid);
+            let nodes = tree(&order);
+            let bounds = bounds(&order, &nodes, &ranges);
+            assert_eq!(uncovered(&order, &nodes, &bounds, &ranges), None);
+            for k in 0..grid.2 {
+                for y in 0..grid.1 {
+                    for x in 0..grid.0 {
+                        for side in [1, 2] {
+                            let lo = [x, y, k];
+                            let hi = [x + side - 1, y + side - 1, k + side - 1];
+                            let mut got = walk(&order, &nodes, &bounds, &ranges, (lo, hi));
+                            got.sort_unstable();
+                            let want: Vec<u32> = (0..count as u32)
+                                .filter(|&i| meets(light_bounds(ranges[i as usize]), lo, hi))
+                                .collect();
+                            assert_eq!(got, want, "{count} lights, clusters {lo:?}..{hi:?}");
+                        }
+                    }
                 }
             }
         }
     }
 
-    /// The Morton key puts x in the lowest bit, y next, then the slice, and leaves empty
-    /// ranges last.
+    /// Every node but the root has one parent, and each internal node covers the sorted
+    /// entries between its leftmost and rightmost leaves: a binary tree over the order.
     #[test]
-    fn morton_keys_interleave_x_y_and_slice() {
-        let grid = (1024, 1024, 1024);
-        let one = |x, y, k| morton_key(range((x, x), (y, y), (k, k)), grid);
-        assert_eq!(one(0, 0, 0), 0);
-        assert_eq!(one(1, 0, 0), 1);
-        assert_eq!(one(0, 1, 0), 2);
-        assert_eq!(one(0, 0, 1), 4);
-        assert_eq!(one(3, 0, 0), 0b1001);
-        assert_eq!(one(1023, 1023, 1023), (1 << 30) - 1);
-        assert_eq!(morton_key([0; 4], grid), NO_KEY);
+    fn the_tree_is_a_binary_tree_over_the_order() {
+        let grid = (8, 5, 6);
+        for count in [2, 3, 4, 5, 1025] {
+            let order = order(&ranges(count, grid), grid);
+            let nodes = tree(&order);
+            let parents = parents(&nodes);
+            let mut seen = vec![0; 2 * count - 1];
+            for children in &nodes {
+                for &c in children {
+                    seen[slot(c, count)] += 1;
+                }
+            }
+            assert_eq!(seen[0], 0, "{count}: the root has no parent");
+            assert!(seen[1..].iter().all(|&s| s == 1), "{count}: {seen:?}");
+            assert_eq!(parents.len(), 2 * count - 1);
+        }
     }
 
-    /// One node per BVH_WIDTH entries a level, up to the root.
+    /// The Morton code puts x in the lowest bit, y next, then the slice, and leaves empty
+    /// ranges last; a grid too fine for 10 bits an axis is shifted down.
     #[test]
-    fn levels_shrink_by_the_width_to_one_root() {
-        assert_eq!(level_sizes(512), vec![16, 1]);
-        assert_eq!(level_sizes(1 << 18), vec![8192, 256, 8, 1]);
+    fn morton_codes_interleave_x_y_and_slice() {
+        let grid = (512, 512, 512);
+        assert_eq!(morton_axis(grid), (10, 0));
+        let one = |x, y, k| morton_key(range((x, x), (y, y), (k, k)), grid);
+        assert_eq!(one(0, 0, 0), 0);
+        assert_eq!(one(1, 0, 0), 0b1000);
+        assert_eq!(one(0, 1, 0), 0b10000);
+        assert_eq!(morton_key(range((0, 1), (0, 0), (0, 0)), grid), 1);
+        assert_eq!(one(511, 511, 511), (1 << 30) - 1 - 0b111);
+        assert_eq!(morton_key([0; 4], grid), (1 << 30) - 1);
+        assert_eq!(morton_axis((20, 12, 256)), (9, 0));
+        assert_eq!(radix_passes((20, 12, 256)), 5);
+        assert_eq!(morton_axis((2000, 1, 1)), (10, 2));
     }
 }

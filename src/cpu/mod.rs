@@ -23,7 +23,12 @@ pub mod zslice;
 /// module (`compose::constants_module`): each written once, here.
 pub const SHARED_U32S: &[(&str, u32)] = &[
     ("DEPTH_CELLS", clusters::DEPTH_CELLS),
-    ("BVH_WIDTH", bvh::BVH_WIDTH),
+    ("RADIX_BITS", bvh::RADIX_BITS),
+    ("RADIX_LANES", bvh::RADIX_LANES),
+    ("RADIX_ITEMS", bvh::RADIX_ITEMS),
+    ("TILE_X", bvh::TILE.0),
+    ("TILE_Y", bvh::TILE.1),
+    ("TILE_Z", bvh::TILE.2),
     ("SORT_BLOCK", sort::SORT_BLOCK),
     ("SHADOW_STACK", occlusion::SHADOW_STACK),
 ];

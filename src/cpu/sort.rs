@@ -1,5 +1,5 @@
 //! Twin of `clustering/sort.wesl`: the shape of the GPU's bitonic sort of (key, light)
-//! entries, which the light BVH and z-binning share: its padded size, and the merges after
+//! entries, which z-binning uses: its padded size, and the merges after
 //! each block is sorted in a workgroup's memory.
 
 /// Entries one workgroup sorts in its own memory (two per invocation).

@@ -71,7 +71,11 @@ pub enum Binding {
     SortJobs,
     BinRanges,
     TileMasks,
+    SortScratch,
+    RadixCounts,
     BvhNodes,
+    BvhParents,
+    BvhBounds,
     PatchClusters,
     // The counters of instrumented frames (`shading/light_loop/counters.wesl`).
     PixelEvals,

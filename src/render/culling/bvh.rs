@@ -1,61 +1,110 @@
-//! Olsson 2012's light BVH (`passes/assign_bvh.wesl`, twin `cpu::bvh`): each block of the
-//! lights' Morton order sorted in a workgroup's memory, then the bitonic merges, the tree
-//! built level by level, and each cluster's walk counted, summed into offsets, walked again
-//! to write its list, and the lists sorted. A merge step and a level are told apart by
-//! their dispatch's workgroup count: a merge carries its place in the schedule as
-//! workgroups beyond the blocks (which return at once), a level is its nodes.
+//! The light BVH (`passes/assign_bvh.wesl`, twin `cpu::bvh`), built on the GPU in linear
+//! time every frame: Morton codes, an LSD radix sort (a count, a scan and a scatter a
+//! pass), Karras's internal nodes, the bounds bottom up; or with `refit` the bounds alone
+//! over the last frame's order. Then a walk per tile of clusters, lists written from the
+//! running total, the long ones by a walk of their own, every list sorted.
 
-use super::one_level::scan_blocks;
-use super::steps::{Clear, Over, Plan, Step, check_sorted, long_lists, sort_lights, sorted_lights};
-use crate::cpu::bvh::level_sizes;
-use crate::cpu::sort::sorted_size;
+use super::steps::{Clear, Over, Plan, Step, long_lists};
+use crate::cpu::bvh::{RADIX_BITS, RADIX_ITEMS, RADIX_LANES, TILE, radix_passes};
 use crate::gpu::{Gpu, GpuError};
 use crate::render::bindings::Binding;
-use crate::render::clusters::ClusterBuffers;
+use crate::render::clusters::{ClusterBuffers, WORD_BYTES};
 use crate::render::reflect::BufferSizes;
 
-/// Most lights: the lowest level's dispatch has a workgroup per node of 32 sorted entries,
-/// at most 65535, and the sorted order is a power of two: 2^20 entries make 32768 nodes.
-const MAX_LIGHTS: u32 = 1 << 20;
+/// Most lights: a dispatch of an invocation per light (64 a workgroup) has at most 65535
+/// workgroups.
+const MAX_LIGHTS: u32 = 65535 * 64;
 
-/// The tree built (`refit` false: the lights sorted by key first) or refitted over the
-/// previous frame's order (Moreau et al. 2019: each node's range recomputed from its
-/// children, whatever the order; the walks stay exact).
-pub(super) fn plan(c: &ClusterBuffers, lights: u32, refit: bool) -> Plan<'_> {
-    let mut clears = vec![Clear::whole(c.named(Binding::LightCounts))];
-    clears.extend(Clear::long_lists(c));
+/// Workgroups of a radix-sort pass's count and scatter: a tile of entries each.
+fn radix_tiles(lights: u32) -> u32 {
+    lights.div_ceil(RADIX_LANES * RADIX_ITEMS)
+}
+
+/// The steps that build the tree (`refit` false: sorted by Morton code and built) or set
+/// its bounds again over the last order, after the lights' ranges.
+pub(super) fn build(c: &ClusterBuffers, lights: u32, refit: bool) -> Plan<'_> {
+    // The bounds' arrival counts, and the sort's pass count, start at zero.
+    let mut clears = vec![Clear::whole(c.named(Binding::BvhBounds))];
     let mut steps = vec![Step::Dispatch("transform_lights", Over::Threads(lights, 1))];
     if !refit {
-        steps.extend(sort_lights(lights));
+        clears.push(Clear(c.named(Binding::RadixCounts), 0, Some(WORD_BYTES)));
+        steps.push(Step::Dispatch("morton_codes", Over::Threads(lights, 1)));
+        let tiles = Over::Groups(radix_tiles(lights), 1, 1);
+        for _ in 0..radix_passes(c.grid) {
+            steps.extend([
+                Step::Dispatch("radix_count", tiles),
+                Step::Dispatch("radix_scan", Over::Groups(1, 1, 1)),
+                Step::Dispatch("radix_scatter", tiles),
+            ]);
+        }
+        steps.push(Step::Dispatch(
+            "build_nodes",
+            Over::Threads(lights.saturating_sub(1), 1),
+        ));
     }
-    for nodes in level_sizes(sorted_size(lights)) {
-        steps.push(Step::Dispatch("build_nodes", Over::Groups(nodes, 1, 1)));
-    }
+    steps.push(Step::Dispatch("fit_nodes", Over::Threads(lights, 1)));
+    Plan { clears, steps }
+}
+
+/// The tree built or refitted, then the lists.
+pub(super) fn plan(c: &ClusterBuffers, lights: u32, refit: bool) -> Plan<'_> {
+    let Plan {
+        mut clears,
+        mut steps,
+    } = build(c, lights, refit);
+    // Clusters that take no part keep empty lists.
+    clears.extend([
+        Clear::whole(c.named(Binding::LightCounts)),
+        Clear::whole(c.named(Binding::LightOffsets)),
+    ]);
+    clears.extend(Clear::long_lists(c));
+    let (x, y, z) = c.grid;
+    let tiles = Over::Groups(x.div_ceil(TILE.0), y.div_ceil(TILE.1), z.div_ceil(TILE.2));
+    steps.push(Step::Dispatch("assign_tiles", tiles));
+    steps.extend(long_lists(c, "fill_long_lists"));
     steps.extend([
-        Step::Dispatch("count_clusters", Over::Threads(c.clusters, 1)),
-        Step::Dispatch("scan_local", scan_blocks(c)),
-        Step::Dispatch("scan_blocks", Over::Groups(1, 1, 1)),
-        Step::Dispatch("fill_clusters", Over::Threads(c.clusters, 1)),
+        Step::Dispatch("reset_long_lists", Over::Groups(1, 1, 1)),
         Step::Dispatch("finish_lists", Over::Threads(c.clusters, 1)),
     ]);
     steps.extend(long_lists(c, "sort_long_lists"));
     Plan { clears, steps }
 }
 
-/// The sorted order (a key and a light each) and every level's nodes (a range each).
+/// The sort's two sides (a key and a light an entry), its counts, and the tree: children
+/// and bounds per internal node, a parent per node.
 pub(super) fn own_buffers(lights: u32) -> Vec<(Binding, u64)> {
-    let n = sorted_size(lights);
-    let nodes: u64 = level_sizes(n).iter().map(|&s| s as u64).sum();
-    vec![sorted_lights(lights), (Binding::BvhNodes, nodes)]
+    let n = lights.max(1) as u64;
+    let internal = n.saturating_sub(1).max(1);
+    let counts = 2 + (1u64 << RADIX_BITS) * radix_tiles(lights).max(1) as u64;
+    vec![
+        (Binding::SortedLights, n),
+        (Binding::SortScratch, n),
+        (Binding::RadixCounts, counts),
+        (Binding::BvhNodes, internal),
+        (Binding::BvhParents, 2 * n - 1),
+        // Bounds (3 words) and the arrival count.
+        (Binding::BvhBounds, 4 * internal),
+    ]
 }
 
-/// Refuse a frame of more lights than the tree's lowest level can be built for, or whose
-/// order does not fit one buffer.
+/// Refuse a frame of more lights than a dispatch of one invocation a light reaches, or
+/// whose sorted order does not fit one buffer.
 pub(super) fn check(gpu: &Gpu, lights: usize, sizes: &BufferSizes) -> Result<(), GpuError> {
     if lights > MAX_LIGHTS as usize {
         return Err(GpuError::TooLarge(format!(
             "the light BVH is built for at most {MAX_LIGHTS} lights and the scene has {lights}; use fewer lights or another `clusters.culling`"
         )));
     }
-    check_sorted(gpu, "the light BVH", lights, sizes)
+    let max = gpu.max_storage_bytes();
+    for (name, count) in own_buffers(lights as u32) {
+        let bytes = sizes.bytes(name, count).unwrap_or(0);
+        if bytes > max {
+            return Err(GpuError::TooLarge(format!(
+                "the light BVH's `{}` for {lights} lights takes {bytes} bytes, more than the {max} bytes adapter `{}` allows in one buffer; use fewer lights",
+                name.name(),
+                gpu.adapter.name
+            )));
+        }
+    }
+    Ok(())
 }

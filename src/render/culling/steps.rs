@@ -47,6 +47,7 @@ pub(super) enum Step<'a> {
 }
 
 /// What a dispatch covers.
+#[derive(Clone, Copy)]
 pub(super) enum Over {
     /// One invocation per item (x, y), in workgroups of the entry's own size.
     Threads(u32, u32),
@@ -77,7 +78,7 @@ pub(super) fn long_lists<'a>(c: &'a ClusterBuffers, entry: &'static str) -> [Ste
     ]
 }
 
-/// The lights sorted by key (`clustering/sort.wesl`, shared by the BVH and z-binning):
+/// The lights sorted by key (`clustering/sort.wesl`, z-binning's bitonic sort):
 /// each block sorted in a workgroup's memory, then each merge step, which carries its
 /// place in the schedule as workgroups beyond the blocks.
 pub(super) fn sort_lights(lights: u32) -> Vec<Step<'static>> {
