@@ -700,7 +700,8 @@ fn the_sampling_study_measures_every_sampler_against_the_exact_variants() {
 
 /// The scale study runs every method exactly at each count it is given, and every method
 /// finds the same useful evaluations on the same frame (each is exact: one that left out a
-/// light would find fewer); the radius shrinks with the count as its rule says.
+/// light would find fewer); the radius shrinks with the count as its rule says; the light
+/// BVH's row, and no other, times its build.
 #[test]
 fn the_scale_study_runs_every_method_exactly() {
     use clusterlab::study::scale;
@@ -715,6 +716,13 @@ fn the_scale_study_runs_every_method_exactly() {
         assert!(r.useful_evaluations > 0 && r.evaluations >= r.useful_evaluations);
         assert!(r.max_abs_8bit <= clusterlab::run::EXACT_LSB, "{r:#?}");
         assert_eq!((r.radius_min, r.radius_max), scale::radius_range(r.lights));
+        // The build is timed for the light BVH alone, and is part of its assignment.
+        assert_eq!(
+            r.build_ms.is_some(),
+            r.variant == "forward_plus_bvh",
+            "{r:#?}"
+        );
+        assert!(r.build_ms.is_none_or(|b| b > 0.0), "{r:#?}");
     }
     assert!(done.plot().is_some());
 }

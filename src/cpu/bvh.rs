@@ -77,11 +77,14 @@ pub fn order(ranges: &[Range], grid: (u32, u32, u32)) -> Vec<[u32; 2]> {
     order
 }
 
-/// The tree over a sorted order: each internal node's children (an internal node's index,
-/// or `LEAF` | a sorted position), node 0 the root; n entries make n - 1 nodes.
-pub fn tree(order: &[[u32; 2]]) -> Vec<[u32; 2]> {
+/// An internal node: its children (an internal node's index, or `LEAF` | a sorted
+/// position), then the first and last sorted positions under it.
+pub type Node = [u32; 4];
+
+/// The tree over a sorted order, node 0 the root; n entries make n - 1 nodes.
+pub fn tree(order: &[[u32; 2]]) -> Vec<Node> {
     let n = order.len();
-    let mut nodes = vec![[0; 2]; n.saturating_sub(1)];
+    let mut nodes = vec![[0; 4]; n.saturating_sub(1)];
     // (key, position): unique, so every range of two or more entries splits.
     let code = |p: usize| (order[p][0] as u64) << 32 | p as u64;
     let mut ranges = vec![(0, n.saturating_sub(1), 0)];
@@ -107,6 +110,8 @@ pub fn tree(order: &[[u32; 2]]) -> Vec<[u32; 2]> {
         nodes[node] = [
             child(first, split, split),
             child(split + 1, last, split + 1),
+            first as u32,
+            last as u32,
         ];
         ranges.push((first, split, split));
         ranges.push((split + 1, last, split + 1));
@@ -115,11 +120,11 @@ pub fn tree(order: &[[u32; 2]]) -> Vec<[u32; 2]> {
 }
 
 /// Each node's parent: the internal nodes' first (the root's 0), then the leaves'.
-pub fn parents(nodes: &[[u32; 2]]) -> Vec<u32> {
+pub fn parents(nodes: &[Node]) -> Vec<u32> {
     let n = nodes.len() + 1;
     let mut parents = vec![0; 2 * n - 1];
-    for (i, children) in nodes.iter().enumerate() {
-        for &c in children {
+    for (i, node) in nodes.iter().enumerate() {
+        for &c in &node[..2] {
             parents[slot(c, n)] = i as u32;
         }
     }
@@ -151,7 +156,7 @@ fn join(a: Bounds, b: Bounds) -> Bounds {
 }
 
 /// Each internal node's bounds: the union of its children's.
-pub fn bounds(order: &[[u32; 2]], nodes: &[[u32; 2]], ranges: &[Range]) -> Vec<Bounds> {
+pub fn bounds(order: &[[u32; 2]], nodes: &[Node], ranges: &[Range]) -> Vec<Bounds> {
     let mut bounds = vec![[EMPTY; 3]; nodes.len()];
     // Children before parents: a node's internal children are visited after it going down,
     // so the reverse of a depth-first order is bottom up.
@@ -160,14 +165,14 @@ pub fn bounds(order: &[[u32; 2]], nodes: &[[u32; 2]], ranges: &[Range]) -> Vec<B
     while let Some(node) = stack.pop() {
         down.push(node);
         stack.extend(
-            nodes[node]
+            nodes[node][..2]
                 .iter()
                 .filter(|&&c| c & LEAF == 0)
                 .map(|&c| c as usize),
         );
     }
     for &node in down.iter().rev() {
-        bounds[node] = nodes[node]
+        bounds[node] = nodes[node][..2]
             .iter()
             .map(|&c| child_bounds(c, order, &bounds, ranges))
             .fold([EMPTY; 3], join);
@@ -186,12 +191,12 @@ fn child_bounds(code: u32, order: &[[u32; 2]], bounds: &[Bounds], ranges: &[Rang
 /// the walks can trust.
 pub fn uncovered(
     order: &[[u32; 2]],
-    nodes: &[[u32; 2]],
+    nodes: &[Node],
     bounds: &[Bounds],
     ranges: &[Range],
 ) -> Option<String> {
     (0..nodes.len()).find_map(|node| {
-        nodes[node].iter().find_map(|&c| {
+        nodes[node][..2].iter().find_map(|&c| {
             let child = child_bounds(c, order, bounds, ranges);
             (join(bounds[node], child) != bounds[node] && child != [EMPTY; 3])
                 .then(|| format!("node {node}: child {c:#x}"))
@@ -212,7 +217,7 @@ pub fn meets(b: Bounds, lo: [u32; 3], hi: [u32; 3]) -> bool {
 /// bounds meet them.
 pub fn walk(
     order: &[[u32; 2]],
-    nodes: &[[u32; 2]],
+    nodes: &[Node],
     bounds: &[Bounds],
     ranges: &[Range],
     (lo, hi): ([u32; 3], [u32; 3]),
@@ -230,7 +235,7 @@ pub fn walk(
                 found.push(i);
             }
         } else if meets(bounds[code as usize], lo, hi) {
-            let [left, right] = nodes[code as usize];
+            let [left, right, ..] = nodes[code as usize];
             stack.extend([right, left]);
         }
     }
@@ -297,8 +302,8 @@ mod tests {
         }
     }
 
-    /// Every node but the root has one parent, and each internal node covers the sorted
-    /// entries between its leftmost and rightmost leaves: a binary tree over the order.
+    /// Every node but the root has one parent, and each internal node spans the sorted
+    /// entries of its two children, end to end: a binary tree over the order.
     #[test]
     fn the_tree_is_a_binary_tree_over_the_order() {
         let grid = (8, 5, 6);
@@ -307,12 +312,26 @@ mod tests {
             let nodes = tree(&order);
             let parents = parents(&nodes);
             let mut seen = vec![0; 2 * count - 1];
-            for children in &nodes {
-                for &c in children {
+            for node in &nodes {
+                for &c in &node[..2] {
                     seen[slot(c, count)] += 1;
                 }
             }
             assert_eq!(seen[0], 0, "{count}: the root has no parent");
+            assert_eq!(
+                nodes[0][2..],
+                [0, count as u32 - 1],
+                "{count}: the root's span"
+            );
+            // Each node's span is its children's, end to end.
+            for node in &nodes {
+                let span = |c: u32| match c & LEAF {
+                    0 => (nodes[c as usize][2], nodes[c as usize][3]),
+                    _ => (c & !LEAF, c & !LEAF),
+                };
+                let ((a, b), (c, d)) = (span(node[0]), span(node[1]));
+                assert_eq!((a, b + 1, d), (node[2], c, node[3]), "{count}: {node:?}");
+            }
             assert!(seen[1..].iter().all(|&s| s == 1), "{count}: {seen:?}");
             assert_eq!(parents.len(), 2 * count - 1);
         }

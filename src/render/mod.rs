@@ -405,6 +405,36 @@ impl<'g> Renderer<'g> {
         Ok(run?.timings)
     }
 
+    /// The light BVH's build alone (its lights' ranges, Morton codes, sort, nodes and
+    /// bounds) for the frame's lights, timed as one pass, ms; None without a light BVH.
+    /// Run after a frame: it rebuilds what that frame built.
+    pub fn time_light_bvh_build(&self) -> Result<Option<f64>, RenderError> {
+        let Some(c) = self.res.clusters.as_ref() else {
+            return Ok(None);
+        };
+        let Some(built) = self.passes.find(ASSIGN, false) else {
+            return Ok(None);
+        };
+        let Pipelines::Compute(p) = &built.pipelines else {
+            return Ok(None);
+        };
+        if c.method != crate::variant::CullingMethod::Bvh {
+            return Ok(None);
+        }
+        const NAME: &str = "bvh_build";
+        let work = culling::ListWork::BuildBvh {
+            lights: self.res.scene.light_count,
+        };
+        let timings = self.gpu.scoped("timing the light BVH's build", || {
+            let mut runner = PassRunner::new(self.gpu, 1);
+            runner.pass(NAME, |encoder, slot| {
+                culling::encode(work, p, None, &built.groups, encoder, slot, c)
+            })?;
+            runner.finish()
+        })??;
+        Ok(Some(timings.get(NAME)))
+    }
+
     /// The names of the passes that shade with the lights (`PassId::is_shading`), as the
     /// frame's timings name them.
     pub fn shading_pass_names(&self) -> Vec<&'static str> {

@@ -15,6 +15,7 @@ use crate::gpu::Gpu;
 use crate::measure::Frames;
 use crate::plot::Plot;
 use crate::reference::ReferenceCache;
+use crate::render::Renderer;
 use crate::run::{CellOptions, run_scene_keeping_renderer};
 use crate::scene::{Scene, SceneParams};
 use crate::table::{Table, sig};
@@ -62,6 +63,9 @@ pub struct ScaleRow {
     pub assignment_ms: f64,
     /// The shading passes (forward, resolve), ms.
     pub shading_ms: f64,
+    /// The light BVH's build alone (`Renderer::time_light_bvh_build`), median of `--frames`
+    /// runs, ms; None for the other methods.
+    pub build_ms: Option<f64>,
     pub evaluations: u64,
     pub useful_evaluations: u64,
     /// Evaluations per useful one (1 for perfect culling).
@@ -118,7 +122,8 @@ impl super::Study for ScaleStudy {
     const NAME: &'static str = "scale";
     const READS: &'static [Reads] = &[Reads::Size, Reads::Lights, Reads::Frames, Reads::Variants];
     const ABOUT: &'static str = "The exact culling methods from 4096 lights to a million on \
-        the atrium (radius scaled with the count): frame, assignment and shading time, \
+        the atrium (radius scaled with the count): frame, assignment (and of it the light \
+        BVH's build) and shading time, \
         evaluations per useful one, the assignment's work, list bytes and exactness; \
         1920x1080, or 640x360 and up to 262144 lights on a software adapter (--size, \
         --lights, --frames; --variants: yours beside them)";
@@ -194,6 +199,7 @@ impl super::Study for ScaleStudy {
         let ms = |name: &str| r.gpu_ms.get(name).and_then(|v| v.as_f64());
         let mut row = named(p);
         row.frame_ms = ms("total").unwrap_or(0.0);
+        row.build_ms = build_ms(&renderer, self.frames)?;
         // `+ 0.0`: a sum of no passes is -0.0 (Rust's float sum starts there), shown "-0.0".
         row.assignment_ms = <crate::compose::ClusterPass as strum::IntoEnumIterator>::iter()
             .filter_map(|p| ms(p.into()))
@@ -253,6 +259,7 @@ fn table(rows: &[ScaleRow]) -> Table {
             "method",
             "frame ms",
             "assignment ms",
+            "of it BVH build",
             "shading ms",
             "evaluations",
             "useful",
@@ -275,6 +282,7 @@ fn table(rows: &[ScaleRow]) -> Table {
             r.method.clone(),
             sig(r.frame_ms, 3),
             sig(r.assignment_ms, 3),
+            r.build_ms.map_or("-".into(), |b| sig(b, 3)),
             sig(r.shading_ms, 3),
             r.evaluations.to_string(),
             r.useful_evaluations.to_string(),
@@ -287,6 +295,19 @@ fn table(rows: &[ScaleRow]) -> Table {
         ]);
     }
     t
+}
+
+/// The light BVH's build time, the median of `runs` (None for another method).
+fn build_ms(renderer: &Renderer, runs: u32) -> Result<Option<f64>, StudyError> {
+    let mut times = Vec::new();
+    for _ in 0..runs.max(1) {
+        match renderer.time_light_bvh_build()? {
+            Some(ms) => times.push(ms),
+            None => return Ok(None),
+        }
+    }
+    times.sort_by(f64::total_cmp);
+    Ok(Some(times[times.len() / 2]))
 }
 
 type Measure = fn(&ScaleRow) -> f64;

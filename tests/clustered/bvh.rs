@@ -14,11 +14,11 @@ fn atrium_with(lights: usize) -> Scene {
 }
 
 /// What a frame left of the tree: the lights' ranges, the sorted order, each internal
-/// node's children and bounds, each node's parent.
+/// node's children, span of sorted positions and bounds, each node's parent.
 struct GpuTree {
     ranges: Vec<bvh::Range>,
     order: Vec<[u32; 2]>,
-    nodes: Vec<[u32; 2]>,
+    nodes: Vec<bvh::Node>,
     bounds: Vec<bvh::Bounds>,
     parents: Vec<u32>,
 }
@@ -38,9 +38,9 @@ fn gpu_tree(r: &Renderer, lights: usize) -> GpuTree {
             .map(|e| [e[0], e[1]])
             .collect(),
         nodes: words(Binding::BvhNodes)
-            .chunks_exact(2)
+            .chunks_exact(4)
             .take(internal)
-            .map(|n| [n[0], n[1]])
+            .map(|n| [n[0], n[1], n[2], n[3]])
             .collect(),
         bounds: words(Binding::BvhBounds)
             .chunks_exact(4)

@@ -2,7 +2,7 @@
 //! time every frame: Morton codes, an LSD radix sort (a count, a scan and a scatter a
 //! pass), Karras's internal nodes, the bounds bottom up; or with `refit` the bounds alone
 //! over the last frame's order. Then a walk per tile of clusters, lists written from the
-//! running total, the long ones by a walk of their own, every list sorted.
+//! running total, every list sorted.
 
 use super::steps::{Clear, Over, Plan, Step, long_lists};
 use crate::cpu::bvh::{RADIX_BITS, RADIX_ITEMS, RADIX_LANES, TILE, radix_passes};
@@ -60,10 +60,8 @@ pub(super) fn plan(c: &ClusterBuffers, lights: u32, refit: bool) -> Plan<'_> {
     clears.extend(Clear::long_lists(c));
     let (x, y, z) = c.grid;
     let tiles = Over::Groups(x.div_ceil(TILE.0), y.div_ceil(TILE.1), z.div_ceil(TILE.2));
-    steps.push(Step::Dispatch("assign_tiles", tiles));
-    steps.extend(long_lists(c, "fill_long_lists"));
     steps.extend([
-        Step::Dispatch("reset_long_lists", Over::Groups(1, 1, 1)),
+        Step::Dispatch("assign_tiles", tiles),
         Step::Dispatch("finish_lists", Over::Threads(c.clusters, 1)),
     ]);
     steps.extend(long_lists(c, "sort_long_lists"));

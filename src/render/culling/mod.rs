@@ -149,6 +149,9 @@ impl ClusterBuffers {
 /// What one light-list pass of a frame does.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ListWork {
+    /// The light BVH's build alone (its lights' ranges, sort, nodes and bounds), timed
+    /// apart from a frame (`Renderer::time_light_bvh_build`).
+    BuildBvh { lights: u32 },
     /// The variant's method builds every list over `lights` lights (the BVH `refit` over
     /// its last order, where the frame refits).
     Assign { lights: u32, refit: bool },
@@ -173,6 +176,7 @@ pub fn encode(
 ) {
     let plan = match work {
         ListWork::Assign { lights, refit } => c.method.plan(c, lights, refit),
+        ListWork::BuildBvh { lights } => bvh::build(c, lights, false),
         ListWork::Moving { moving } => one_level::plan(c, moving),
         ListWork::Patch { moved } => patch::plan(c, moved),
     };
