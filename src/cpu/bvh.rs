@@ -14,7 +14,7 @@ pub const RADIX_LANES: u32 = 32;
 pub const RADIX_ITEMS: u32 = 32;
 /// Clusters across, down and deep of the tile that walks the tree once for all its
 /// clusters.
-pub const TILE: (u32, u32, u32) = (2, 2, 16);
+pub const TILE: (u32, u32, u32) = (4, 4, 4);
 /// Bits of a Morton code an axis holds at most (3 x 10 fit a word).
 const MAX_AXIS_BITS: u32 = 10;
 /// Marks a child that is a leaf (its sorted position) rather than an internal node.

@@ -293,9 +293,8 @@ fn hand_built_scene() -> Scene {
 /// survivors its slice's mask holds, A and B in slice 2's 6 and A in the other 18: 2 + 12 +
 /// 18. The BVH sorts A (Morton code 46: centre (2, 1, 3) in half clusters), B (256) and C
 /// (511, empty): the root splits A from a node over B and C, whose bounds are B's cluster.
-/// Each of the 2 tiles of 2 x 2 x 16 clusters tests the root, then that node (it meets the
-/// first tile and not the second): 2 x 2 nodes; its clusters test A, and B in B's cluster,
-/// once: 24 + 1. Z-binning tests each tile of a light's
+/// The one tile of 4 x 4 x 4 clusters tests the root, then that node: 2 nodes; its clusters
+/// test A, and B in B's cluster, once: 24 + 1. Z-binning tests each tile of a light's
 /// range, 6 + 1, and sets a mask bit for each it touches. The rasterised draw tests each
 /// cluster its proxies cover, the range's, once.
 #[test]
@@ -359,7 +358,7 @@ fn a_hand_built_scene_counts_what_was_worked_out_by_hand() {
             24,
             2,
             7.0 / 6.0,
-            work(24 + 1, 2 * 2, 24 + 1),
+            work(24 + 1, 2, 24 + 1),
         ),
         (
             "rasterised",
