@@ -78,7 +78,7 @@ pub fn order(ranges: &[Range], grid: (u32, u32, u32)) -> Vec<[u32; 2]> {
 }
 
 /// An internal node: its children (an internal node's index, or `LEAF` | a sorted
-/// position), then the first and last sorted positions under it.
+/// position), the count of sorted entries under it, and its parent (the root's 0).
 pub type Node = [u32; 4];
 
 /// The tree over a sorted order, node 0 the root; n entries make n - 1 nodes.
@@ -107,36 +107,29 @@ pub fn tree(order: &[[u32; 2]]) -> Vec<Node> {
             true => LEAF | a as u32,
             false => at as u32,
         };
-        nodes[node] = [
+        let [left, right] = [
             child(first, split, split),
             child(split + 1, last, split + 1),
-            first as u32,
-            last as u32,
         ];
+        nodes[node][..3].copy_from_slice(&[left, right, (last - first + 1) as u32]);
+        for c in [left, right].into_iter().filter(|&c| c & LEAF == 0) {
+            nodes[c as usize][3] = node as u32;
+        }
         ranges.push((first, split, split));
         ranges.push((split + 1, last, split + 1));
     }
     nodes
 }
 
-/// Each node's parent: the internal nodes' first (the root's 0), then the leaves'.
-pub fn parents(nodes: &[Node]) -> Vec<u32> {
-    let n = nodes.len() + 1;
-    let mut parents = vec![0; 2 * n - 1];
+/// Each leaf's parent, by sorted position.
+pub fn leaf_parents(nodes: &[Node]) -> Vec<u32> {
+    let mut parents = vec![0; nodes.len() + 1];
     for (i, node) in nodes.iter().enumerate() {
-        for &c in &node[..2] {
-            parents[slot(c, n)] = i as u32;
+        for &c in node[..2].iter().filter(|&&c| c & LEAF != 0) {
+            parents[(c & !LEAF) as usize] = i as u32;
         }
     }
     parents
-}
-
-/// Where child `code`'s parent is kept, of `n` leaves.
-fn slot(code: u32, n: usize) -> usize {
-    match code & LEAF {
-        0 => code as usize,
-        _ => n - 1 + (code & !LEAF) as usize,
-    }
 }
 
 /// A light's range as bounds.
@@ -302,38 +295,40 @@ mod tests {
         }
     }
 
-    /// Every node but the root has one parent, and each internal node spans the sorted
-    /// entries of its two children, end to end: a binary tree over the order.
+    /// Every node but the root is one node's child, its parent that node, and each internal
+    /// node holds its two children's entries: a binary tree over the order.
     #[test]
     fn the_tree_is_a_binary_tree_over_the_order() {
         let grid = (8, 5, 6);
         for count in [2, 3, 4, 5, 1025] {
             let order = order(&ranges(count, grid), grid);
             let nodes = tree(&order);
-            let parents = parents(&nodes);
+            let leaf_parents = leaf_parents(&nodes);
             let mut seen = vec![0; 2 * count - 1];
-            for node in &nodes {
+            for (i, node) in nodes.iter().enumerate() {
                 for &c in &node[..2] {
-                    seen[slot(c, count)] += 1;
+                    let parent = match c & LEAF {
+                        0 => nodes[c as usize][3],
+                        _ => leaf_parents[(c & !LEAF) as usize],
+                    };
+                    assert_eq!(parent, i as u32, "{count}: {c:#x}");
+                    seen[match c & LEAF {
+                        0 => c as usize,
+                        _ => count - 1 + (c & !LEAF) as usize,
+                    }] += 1;
                 }
+                let size = |c: u32| {
+                    if c & LEAF == 0 {
+                        nodes[c as usize][2]
+                    } else {
+                        1
+                    }
+                };
+                assert_eq!(node[2], size(node[0]) + size(node[1]), "{count}: {node:?}");
             }
             assert_eq!(seen[0], 0, "{count}: the root has no parent");
-            assert_eq!(
-                nodes[0][2..],
-                [0, count as u32 - 1],
-                "{count}: the root's span"
-            );
-            // Each node's span is its children's, end to end.
-            for node in &nodes {
-                let span = |c: u32| match c & LEAF {
-                    0 => (nodes[c as usize][2], nodes[c as usize][3]),
-                    _ => (c & !LEAF, c & !LEAF),
-                };
-                let ((a, b), (c, d)) = (span(node[0]), span(node[1]));
-                assert_eq!((a, b + 1, d), (node[2], c, node[3]), "{count}: {node:?}");
-            }
+            assert_eq!(nodes[0][2], count as u32, "{count}: the root's size");
             assert!(seen[1..].iter().all(|&s| s == 1), "{count}: {seen:?}");
-            assert_eq!(parents.len(), 2 * count - 1);
         }
     }
 

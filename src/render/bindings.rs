@@ -71,10 +71,8 @@ pub enum Binding {
     SortJobs,
     BinRanges,
     TileMasks,
-    SortScratch,
     RadixCounts,
     BvhNodes,
-    BvhParents,
     BvhBounds,
     PatchClusters,
     // The counters of instrumented frames (`shading/light_loop/counters.wesl`).

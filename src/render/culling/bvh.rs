@@ -68,18 +68,17 @@ pub(super) fn plan(c: &ClusterBuffers, lights: u32, refit: bool) -> Plan<'_> {
     Plan { clears, steps }
 }
 
-/// The sort's two sides (a key and a light an entry), its counts, and the tree: children
-/// and bounds per internal node, a parent per node.
+/// The sort's two sides (a key and a light an entry, one buffer), its counts, and the
+/// tree: each internal node's children, size and parent, then each leaf's parent; its
+/// bounds and arrival counts.
 pub(super) fn own_buffers(lights: u32) -> Vec<(Binding, u64)> {
     let n = lights.max(1) as u64;
     let internal = n.saturating_sub(1).max(1);
     let counts = 2 + (1u64 << RADIX_BITS) * radix_tiles(lights).max(1) as u64;
     vec![
-        (Binding::SortedLights, n),
-        (Binding::SortScratch, n),
+        (Binding::SortedLights, 2 * n),
         (Binding::RadixCounts, counts),
-        (Binding::BvhNodes, internal),
-        (Binding::BvhParents, 2 * n - 1),
+        (Binding::BvhNodes, 2 * n - 1),
         // Bounds (3 words) and the arrival count.
         (Binding::BvhBounds, 4 * internal),
     ]
