@@ -23,11 +23,11 @@ pub const LEAF: u32 = 0x8000_0000;
 /// A light's range of clusters as the GPU packs it (`light_range::cluster_span`):
 /// x0 | x1 << 16, y0 | y1 << 16, k0 | k1 << 16, and 1 when the range is not empty.
 pub type Range = [u32; 4];
-/// A node's bounds: the x, y and slice spans, packed as a range's; `EMPTY` spans meet
+/// A node's bounds: the x, y and slice spans, packed as a range's; `EMPTY_SPAN`s meet
 /// nothing.
 pub type Bounds = [u32; 3];
 /// The packed span of no cluster: first 0xffff, last 0.
-pub const EMPTY: u32 = 0xffff;
+pub const EMPTY_SPAN: u32 = 0xffff;
 
 /// How a range's centre becomes a Morton axis: its bits, and the shift that brings the
 /// largest centre (in half clusters, 2 (cells - 1)) to at most MAX_AXIS_BITS bits.
@@ -135,7 +135,7 @@ pub fn leaf_parents(nodes: &[Node]) -> Vec<u32> {
 /// A light's range as bounds.
 pub fn light_bounds(r: Range) -> Bounds {
     match r[3] {
-        0 => [EMPTY; 3],
+        0 => [EMPTY_SPAN; 3],
         _ => [r[0], r[1], r[2]],
     }
 }
@@ -150,7 +150,7 @@ fn join(a: Bounds, b: Bounds) -> Bounds {
 
 /// Each internal node's bounds: the union of its children's.
 pub fn bounds(order: &[[u32; 2]], nodes: &[Node], ranges: &[Range]) -> Vec<Bounds> {
-    let mut bounds = vec![[EMPTY; 3]; nodes.len()];
+    let mut bounds = vec![[EMPTY_SPAN; 3]; nodes.len()];
     // Children before parents: a node's internal children are visited after it going down,
     // so the reverse of a depth-first order is bottom up.
     let mut down = Vec::with_capacity(nodes.len());
@@ -168,7 +168,7 @@ pub fn bounds(order: &[[u32; 2]], nodes: &[Node], ranges: &[Range]) -> Vec<Bound
         bounds[node] = nodes[node][..2]
             .iter()
             .map(|&c| child_bounds(c, order, &bounds, ranges))
-            .fold([EMPTY; 3], join);
+            .fold([EMPTY_SPAN; 3], join);
     }
     bounds
 }
@@ -191,7 +191,7 @@ pub fn uncovered(
     (0..nodes.len()).find_map(|node| {
         nodes[node][..2].iter().find_map(|&c| {
             let child = child_bounds(c, order, bounds, ranges);
-            (join(bounds[node], child) != bounds[node] && child != [EMPTY; 3])
+            (join(bounds[node], child) != bounds[node] && child != [EMPTY_SPAN; 3])
                 .then(|| format!("node {node}: child {c:#x}"))
         })
     })

@@ -24,6 +24,8 @@ pub mod zslice;
 pub const SHARED_U32S: &[(&str, u32)] = &[
     ("DEPTH_CELLS", clusters::DEPTH_CELLS),
     ("RADIX_BITS", bvh::RADIX_BITS),
+    ("LEAF", bvh::LEAF),
+    ("EMPTY_SPAN", bvh::EMPTY_SPAN),
     ("RADIX_LANES", bvh::RADIX_LANES),
     ("RADIX_ITEMS", bvh::RADIX_ITEMS),
     ("TILE_X", bvh::TILE.0),

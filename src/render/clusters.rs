@@ -42,7 +42,7 @@ impl ProxyLayout {
 pub struct AssignmentWork {
     /// Bounds tests of a light against one cluster, tile or big tile.
     pub light_tests: u64,
-    /// Bounds tests of a light BVH node against a cluster.
+    /// Bounds tests of a light BVH node against a tile of clusters (or one cluster).
     pub node_tests: u64,
     /// Light-list entries stored (z-binning: tile-mask bits set).
     pub entries_written: u64,
