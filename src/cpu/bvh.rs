@@ -12,6 +12,8 @@ pub const RADIX_BITS: u32 = 6;
 /// Invocations of a radix-sort workgroup, and the entries each counts and writes in order.
 pub const RADIX_LANES: u32 = 32;
 pub const RADIX_ITEMS: u32 = 32;
+/// Words of the radix sort's counts before the counts (the pass numbers).
+pub const RADIX_HEADER: u32 = 2;
 /// Clusters across, down and deep of the tile that walks the tree once for all its
 /// clusters.
 pub const TILE: (u32, u32, u32) = (4, 4, 4);

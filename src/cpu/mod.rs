@@ -28,6 +28,7 @@ pub const SHARED_U32S: &[(&str, u32)] = &[
     ("EMPTY_SPAN", bvh::EMPTY_SPAN),
     ("RADIX_LANES", bvh::RADIX_LANES),
     ("RADIX_ITEMS", bvh::RADIX_ITEMS),
+    ("RADIX_HEADER", bvh::RADIX_HEADER),
     ("TILE_X", bvh::TILE.0),
     ("TILE_Y", bvh::TILE.1),
     ("TILE_Z", bvh::TILE.2),

@@ -306,8 +306,7 @@ fn build_ms(renderer: &Renderer, runs: u32) -> Result<Option<f64>, StudyError> {
             None => return Ok(None),
         }
     }
-    times.sort_by(f64::total_cmp);
-    Ok(Some(times[times.len() / 2]))
+    Ok(Some(crate::measure::median(times)))
 }
 
 type Measure = fn(&ScaleRow) -> f64;

@@ -5,7 +5,7 @@
 //! running total, every list sorted.
 
 use super::steps::{Clear, Over, Plan, Step, long_lists};
-use crate::cpu::bvh::{RADIX_BITS, RADIX_ITEMS, RADIX_LANES, TILE, radix_passes};
+use crate::cpu::bvh::{RADIX_BITS, RADIX_HEADER, RADIX_ITEMS, RADIX_LANES, TILE, radix_passes};
 use crate::gpu::{Gpu, GpuError};
 use crate::render::bindings::Binding;
 use crate::render::clusters::{ClusterBuffers, WORD_BYTES};
@@ -74,7 +74,7 @@ pub(super) fn plan(c: &ClusterBuffers, lights: u32, refit: bool) -> Plan<'_> {
 pub(super) fn own_buffers(lights: u32) -> Vec<(Binding, u64)> {
     let n = lights.max(1) as u64;
     let internal = n.saturating_sub(1).max(1);
-    let counts = 2 + (1u64 << RADIX_BITS) * radix_tiles(lights).max(1) as u64;
+    let counts = RADIX_HEADER as u64 + (1u64 << RADIX_BITS) * radix_tiles(lights).max(1) as u64;
     vec![
         (Binding::SortedLights, 2 * n),
         (Binding::RadixCounts, counts),
