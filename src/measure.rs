@@ -19,15 +19,15 @@ impl Frames {
     }
 }
 
-/// When a cell has timed enough frames.
+/// How far a cell's timing may go while its verdict is open: the matrix times a group's
+/// cells in interleaved rounds and stops each once its verdict against the leader is
+/// decided (`matrix::verdicts`), or once it has spent `budget_ms` or taken `max_frames`.
 ///
 /// A cell's first frame would pay for first use: software rasterisers compile a pipeline's
 /// shader variants on its first draw, and every new image is touched for the first time.
 /// So a cell first draws one frame without its lights, untimed
 /// (`Renderer::draw_without_lights`), which pays that for about what a frame with nothing
-/// to shade costs, and times frames from its first whole one on: until the median's
-/// interval at [`LEVEL`] ([`median_interval`]) is within +-`precision` of it, the budget is
-/// spent (the frame without lights included), or `max_frames` are taken (`enough`).
+/// to shade costs, and times frames from its first whole one on.
 ///
 /// Measured on lavapipe over the 195 cells of the default matrix that are not naive forward
 /// (`matrix --frames 4 --warmup 0`, the first frame against the median of the other
@@ -38,12 +38,10 @@ impl Frames {
 /// 26 ms.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Budget {
-    /// Relative half-width of the median's interval at [`LEVEL`]: (hi - lo) / 2 over the
-    /// median.
-    pub precision: f64,
-    /// Milliseconds of frames (their summed pass times, the untimed frame without lights
-    /// included) a cell may spend.
+    /// Milliseconds of frames (their summed pass times, the untimed frames included) a
+    /// cell may spend while its verdict is open.
     pub budget_ms: f64,
+    /// The most frames (rounds) a cell takes while its verdict is open.
     pub max_frames: u32,
 }
 
@@ -68,33 +66,74 @@ pub struct Interval {
     pub level: f64,
 }
 
-/// How one time compares with another: told apart only where their intervals separate.
+/// Two times are a tie when their ratio is known (at [`LEVEL`]) to lie within
+/// [1 / (1 + TIE_WITHIN), 1 + TIE_WITHIN]: closer than that, which is faster is not a
+/// difference worth a verdict. 10% because a software adapter's round-to-round ratio of two
+/// copies of one variant spreads about +-15% (quartiles; `docs/measurement.md`, "Verdicts"), so
+/// a tie is decided in about 20 rounds; a narrower margin would need hundreds.
+pub const TIE_WITHIN: f64 = 0.10;
+
+/// How one time compares with another. Faster and slower are told apart only where the
+/// interval of their ratio (or their two intervals) lies wholly on one side of 1; a tie is
+/// decided only where it lies within [`TIE_WITHIN`] of 1; otherwise the measurement has
+/// not decided.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Verdict {
     Faster,
     Slower,
-    /// The intervals overlap, or a time has none: the two cannot be told apart.
+    /// Within [`TIE_WITHIN`] of each other, at [`LEVEL`].
     Tie,
+    /// The interval holds 1 and reaches past the tie margin, or there is none (too few
+    /// rounds): more rounds would decide.
+    Undecided,
 }
 
-impl Interval {
-    /// How a time with interval `this` compares with one with `other` (a time without an
-    /// interval ties with every other).
-    pub fn compare(this: Option<&Interval>, other: Option<&Interval>) -> Verdict {
-        match (this, other) {
-            (Some(a), Some(b)) if a.hi < b.lo => Verdict::Faster,
-            (Some(a), Some(b)) if b.hi < a.lo => Verdict::Slower,
-            _ => Verdict::Tie,
+impl Verdict {
+    /// Whether the measurement decided (faster, slower or a tie).
+    pub fn decided(self) -> bool {
+        self != Verdict::Undecided
+    }
+
+    /// The verdict on `a` against `b` from the interval of the ratio a / b.
+    pub fn of_ratio(ratio: Option<&Interval>) -> Verdict {
+        Self::of_ratio_within(ratio, TIE_WITHIN)
+    }
+
+    /// [`Verdict::of_ratio`] with a tie margin of `margin` (tests break it with 0).
+    pub fn of_ratio_within(ratio: Option<&Interval>, margin: f64) -> Verdict {
+        let tie = 1.0 + margin;
+        match ratio {
+            Some(r) if r.hi < 1.0 => Verdict::Faster,
+            Some(r) if r.lo > 1.0 => Verdict::Slower,
+            Some(r) if r.lo >= 1.0 / tie && r.hi <= tie => Verdict::Tie,
+            _ => Verdict::Undecided,
         }
     }
 
-    /// Half the interval's width over `median`.
-    pub fn relative_half_width(&self, median: f64) -> f64 {
-        if median > 0.0 {
-            (self.hi - self.lo) / 2.0 / median
-        } else {
-            f64::INFINITY
+    pub fn label(self) -> &'static str {
+        match self {
+            Verdict::Faster => "faster",
+            Verdict::Slower => "slower",
+            Verdict::Tie => "tie",
+            Verdict::Undecided => "undecided",
+        }
+    }
+}
+
+impl Interval {
+    /// How a time with interval `this` compares with one with `other`, timed apart (not in
+    /// the same rounds): the ratio of the two medians lies in [this.lo / other.hi,
+    /// this.hi / other.lo] when both intervals hold their medians. Without an interval,
+    /// undecided.
+    pub fn compare(this: Option<&Interval>, other: Option<&Interval>) -> Verdict {
+        match (this, other) {
+            (Some(a), Some(b)) if b.lo > 0.0 && a.lo > 0.0 => Verdict::of_ratio(Some(&Interval {
+                lo: a.lo / b.hi,
+                hi: a.hi / b.lo,
+                level: a.level.min(b.level),
+            })),
+            _ => Verdict::Undecided,
         }
     }
 }
@@ -131,11 +170,57 @@ pub fn median_interval(times: &[f64]) -> Option<Interval> {
     })
 }
 
+/// Two cells timed in the same interleaved rounds, compared round by round: the ratio of
+/// their frames in each round both kept, so that drift of the machine (which moves both
+/// frames of a round alike) cancels. Its median and that median's interval
+/// ([`median_interval`] over the rounds' ratios) decide the verdict.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Paired {
+    /// Median over the shared rounds of a / b.
+    pub ratio: f64,
+    /// The median ratio's interval at [`LEVEL`] (None under [`MIN_FRAMES`] shared rounds).
+    pub interval: Option<Interval>,
+    /// The smallest and largest ratio of any shared round.
+    pub range: [f64; 2],
+    /// Rounds in which both kept a frame.
+    pub rounds: usize,
+    pub verdict: Verdict,
+}
+
+impl Paired {
+    /// `a` against `b`, each a frame time (ms) per round, None where it kept none. None
+    /// when they share no round.
+    pub fn of(a: &[Option<f64>], b: &[Option<f64>]) -> Option<Paired> {
+        let ratios: Vec<f64> = a
+            .iter()
+            .zip(b)
+            .filter_map(|(x, y)| match (x, y) {
+                (Some(x), Some(y)) if *y > 0.0 => Some(x / y),
+                _ => None,
+            })
+            .collect();
+        if ratios.is_empty() {
+            return None;
+        }
+        let interval = median_interval(&ratios);
+        let min = ratios.iter().copied().fold(f64::INFINITY, f64::min);
+        let max = ratios.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        Some(Paired {
+            ratio: median(ratios.clone()),
+            interval,
+            range: [min, max],
+            rounds: ratios.len(),
+            verdict: Verdict::of_ratio(interval.as_ref()),
+        })
+    }
+}
+
 /// Why a cell stopped timing frames.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Stop {
-    /// Its interval came within the precision asked.
+    /// Its interval came within the precision asked (results written before a group's
+    /// verdicts decided its rounds).
     Precise,
     /// It took the most frames allowed first.
     MaxFrames,
@@ -143,6 +228,9 @@ pub enum Stop {
     Budget,
     /// An exact number of frames was asked (`--frames`).
     Count,
+    /// Its verdict against the group's fastest was decided (slower, or a tie), or it is
+    /// the fastest and every other cell's was.
+    Decided,
 }
 
 impl Stop {
@@ -152,6 +240,7 @@ impl Stop {
             Stop::MaxFrames => "max frames",
             Stop::Budget => "budget",
             Stop::Count => "count",
+            Stop::Decided => "decided",
         }
     }
 }
@@ -163,39 +252,28 @@ impl Default for Budget {
 }
 
 impl Budget {
-    /// What the matrix uses unless told otherwise: a precision of 3%, at most 9 frames (9
-    /// and 10 frames give the same trimmed interval, [x(2), x(n-1)]) and 300 ms, which
-    /// gives a cell of up to 43 ms a frame the 6 frames an interval needs ([`MIN_FRAMES`],
-    /// with the two untimed frames first). Naive forward's frames of a second or more are
-    /// timed once, with no interval: they tie with every other time.
-    ///
-    /// Measured on lavapipe over the default matrix (294 cells, its first group at
-    /// 320x180): at 150 ms and 10 frames, 106 cells had an interval (91 were timed once);
-    /// at 400 ms, 258, in 150 s; at 300 ms and 9 frames, by the same cells' frame times,
-    /// 220 in about 8 s less. A cell's time moved about 5% between two runs of the matrix
-    /// (median over its cells; 12-14% at the 90th percentile) with 150 or 300 ms alike, so
-    /// the budget buys intervals, not steadier medians.
+    /// What the matrix uses unless told otherwise (`docs/measurement.md`, "Verdicts"):
+    /// up to 40 rounds, enough for a tie within [`TIE_WITHIN`] at the spread two copies
+    /// of one variant show on lavapipe, and 2000 ms, which gives a cell of up to 300 ms a
+    /// frame the 6 rounds an interval needs. Naive forward's frames of a second or more
+    /// take a round or two: their speed-ups carry the least ratio of any round as a bound.
     pub const DEFAULT: Budget = Budget {
-        precision: 0.03,
-        budget_ms: 300.0,
-        max_frames: 9,
+        budget_ms: 2000.0,
+        max_frames: 40,
     };
 
-    /// Whether the frames timed so far (milliseconds each) are enough, after untimed frames
-    /// of `untimed_ms` (part of the cell's budget too), and why: None while more are needed.
-    pub fn enough(&self, times: &[f64], untimed_ms: f64) -> Option<Stop> {
-        let n = times.len();
-        if n == 0 {
-            return None;
-        }
-        let spent: f64 = untimed_ms + times.iter().sum::<f64>();
-        let precise = median_interval(times)
-            .is_some_and(|i| i.relative_half_width(median(times.to_vec())) <= self.precision);
-        if precise {
-            Some(Stop::Precise)
-        } else if n as u32 >= self.max_frames.max(1) {
+    /// Whether a cell that took `frames` frames of `frame_ms` each (their median) and spent
+    /// `spent_ms` of frames (untimed ones included) has reached its frame cap or its budget,
+    /// and which: None while it may go on (and before its first frame). A cell whose budget
+    /// cannot hold the [`MIN_FRAMES`] an interval needs stops at once: more frames would
+    /// buy no verdict.
+    pub fn spent(&self, frames: usize, frame_ms: f64, spent_ms: f64) -> Option<Stop> {
+        let short = MIN_FRAMES.saturating_sub(frames) as f64 * frame_ms;
+        if frames == 0 {
+            None
+        } else if frames as u32 >= self.max_frames.max(1) {
             Some(Stop::MaxFrames)
-        } else if spent >= self.budget_ms {
+        } else if spent_ms >= self.budget_ms || spent_ms + short > self.budget_ms {
             Some(Stop::Budget)
         } else {
             None
@@ -288,6 +366,13 @@ impl CpuClock {
         None
     }
 
+    /// Milliseconds of CPU time this process used from `self` to `later`, every thread
+    /// included: on a software adapter, the frame's own work, which other processes' load
+    /// does not enter (it slows the frame's wall time, not its work).
+    pub fn own_ms(&self, later: &CpuClock) -> f64 {
+        (later.own_s - self.own_s) * 1e3
+    }
+
     /// The share of the machine's CPU time from `self` to `later` that other processes
     /// (and the host, as steal) used, in [0, 1].
     pub fn others_share(&self, later: &CpuClock) -> Option<f64> {
@@ -313,54 +398,26 @@ mod tests {
     use super::*;
 
     const B: Budget = Budget {
-        precision: 0.03,
         budget_ms: 500.0,
         max_frames: 20,
     };
 
     #[test]
-    fn a_frame_that_spends_the_budget_is_enough() {
-        assert_eq!(B.enough(&[], 0.0), None);
-        assert_eq!(B.enough(&[], 1e9), None, "at least one timed frame");
+    fn a_cell_stops_at_its_budget_or_its_frame_cap() {
+        assert_eq!(B.spent(0, 1e9, 1e9), None, "at least one timed frame");
+        // 1 frame of 10 ms, 50 spent: the 5 more an interval needs fit in 500.
+        assert_eq!(B.spent(1, 10.0, 50.0), None);
+        assert_eq!(B.spent(7, 10.0, 500.0), Some(Stop::Budget));
+        // 1 frame of 100 ms, 150 spent: 5 more would reach 650, past 500.
+        assert_eq!(B.spent(1, 100.0, 150.0), Some(Stop::Budget));
+        // Past 6 frames, only the budget itself stops it.
+        assert_eq!(B.spent(6, 100.0, 450.0), None);
+        assert_eq!(B.spent(19, 10.0, 10.0), None);
+        assert_eq!(B.spent(20, 10.0, 10.0), Some(Stop::MaxFrames));
         assert_eq!(
-            B.enough(&[100.0], 400.0),
-            Some(Stop::Budget),
-            "untimed frames spend the budget too"
-        );
-        assert_eq!(B.enough(&[500.0], 0.0), Some(Stop::Budget));
-        assert_eq!(B.enough(&[499.0], 0.0), None);
-        assert_eq!(B.enough(&[300.0, 200.0], 0.0), Some(Stop::Budget));
-    }
-
-    #[test]
-    fn precision_needs_an_interval_within_it() {
-        // Five frames, however close, have no interval at 95%.
-        assert_eq!(B.enough(&[10.0; 5], 0.0), None);
-        // Six within +-2.5% of their median (10.0): [min, max] = [9.75, 10.25].
-        let six = [10.0, 10.25, 9.75, 10.0, 10.1, 9.9];
-        assert_eq!(B.enough(&six, 0.0), Some(Stop::Precise));
-        // [9.5, 10.5] is +-5%: not within 3%.
-        let wide = [10.0, 10.5, 9.5, 10.0, 10.1, 9.9];
-        assert_eq!(B.enough(&wide, 0.0), None);
-        // Ten: the interval drops the extremes ([x(2), x(9)]), so one outlier on each side
-        // leaves it within 3%.
-        let ten = [5.0, 10.0, 10.1, 10.2, 9.9, 9.8, 10.0, 10.1, 9.9, 20.0];
-        assert_eq!(B.enough(&ten, 0.0), Some(Stop::Precise));
-    }
-
-    #[test]
-    fn noisy_frames_stop_at_the_budget_or_the_frame_cap() {
-        let noisy: Vec<f64> = (0..19)
-            .map(|i| if i % 2 == 0 { 10.0 } else { 20.0 })
-            .collect();
-        assert_eq!(B.enough(&noisy, 0.0), None);
-        let mut capped = noisy.clone();
-        capped.push(10.0);
-        assert_eq!(B.enough(&capped, 0.0), Some(Stop::MaxFrames));
-        assert_eq!(B.enough(&[100.0, 200.0, 100.0], 0.0), None);
-        assert_eq!(
-            B.enough(&[100.0, 200.0, 100.0, 100.0], 0.0),
-            Some(Stop::Budget)
+            B.spent(20, 10.0, 1e9),
+            Some(Stop::MaxFrames),
+            "the cap is named first"
         );
     }
 
@@ -450,12 +507,47 @@ mod tests {
             Interval::compare(i(2.5, 3.0).as_ref(), i(1.0, 2.0).as_ref()),
             Verdict::Slower
         );
+        // Overlapping, and the ratio may be anywhere in [1 / 3, 2.5]: not decided.
         assert_eq!(
             Interval::compare(i(1.0, 2.5).as_ref(), i(2.5, 3.0).as_ref()),
+            Verdict::Undecided
+        );
+        // Both within [10, 10.4]: the ratio lies in [10 / 10.4, 10.4 / 10] = [0.96, 1.04],
+        // within the 10% margin.
+        assert_eq!(
+            Interval::compare(i(10.0, 10.4).as_ref(), i(10.1, 10.3).as_ref()),
             Verdict::Tie
         );
-        assert_eq!(Interval::compare(None, i(2.5, 3.0).as_ref()), Verdict::Tie);
+        // 10.0-11.5 against 10.0-10.2: up to 1.15, past the margin.
+        assert_eq!(
+            Interval::compare(i(10.0, 11.5).as_ref(), i(10.0, 10.2).as_ref()),
+            Verdict::Undecided
+        );
+        assert_eq!(
+            Interval::compare(None, i(2.5, 3.0).as_ref()),
+            Verdict::Undecided
+        );
         assert_eq!(coverage(10, 6), 0.0, "k past the middle brackets nothing");
+    }
+
+    /// A ratio's verdict: apart from 1 on one side, within the margin, or neither.
+    #[test]
+    fn a_ratio_decides_by_its_interval() {
+        let r = |lo, hi| Interval {
+            lo,
+            hi,
+            level: LEVEL,
+        };
+        assert_eq!(Verdict::of_ratio(Some(&r(0.5, 0.99))), Verdict::Faster);
+        assert_eq!(Verdict::of_ratio(Some(&r(1.01, 1.05))), Verdict::Slower);
+        assert_eq!(Verdict::of_ratio(Some(&r(0.95, 1.05))), Verdict::Tie);
+        assert_eq!(Verdict::of_ratio(Some(&r(0.95, 1.2))), Verdict::Undecided);
+        assert_eq!(Verdict::of_ratio(None), Verdict::Undecided);
+        // The margin's edges: 1 / 1.1 and 1.1 themselves are within it.
+        let edge = r(1.0 / (1.0 + TIE_WITHIN), 1.0 + TIE_WITHIN);
+        assert_eq!(Verdict::of_ratio(Some(&edge)), Verdict::Tie);
+        let past = r(edge.lo, edge.hi * 1.001);
+        assert_eq!(Verdict::of_ratio(Some(&past)), Verdict::Undecided);
     }
 
     /// Our own work is not another process's; busy processes on every core are.

@@ -285,31 +285,84 @@ pub fn legend(area: &Area, entries: &[Entry]) -> Option<()> {
     side_legend(&strip, "", entries)
 }
 
-/// A key beside a scatter plot whose points carry numbers instead of names: one line per
-/// entry, `n  name`, in the entry's colour. Names never overlap, however close the points.
+/// The smallest text a plot that must read at its natural size writes, in pixels: 11 px
+/// or more on a page 1024 px wide (`tests/page.rs` measures it in a browser).
+pub const KEY_FONT: u32 = 12;
+/// A key line's height, and the characters a key line holds before it wraps.
+const KEY_LINE: u32 = 16;
+const KEY_WRAP: usize = 44;
+/// About how wide a character of [`KEY_FONT`] is (a sans-serif digit is 0.55 of the size).
+const KEY_CHAR: f64 = 0.6 * KEY_FONT as f64;
+
+/// A key entry's lines: `n  name`, the name wrapped at [`KEY_WRAP`] characters (at a `_`,
+/// `,` or `[` where there is one), never cut.
+fn key_lines(n: usize, name: &str) -> Vec<String> {
+    let mut lines = Vec::new();
+    let mut rest = name;
+    let mut first = true;
+    while !rest.is_empty() {
+        let cut = if rest.chars().count() <= KEY_WRAP {
+            rest.len()
+        } else {
+            let head: String = rest.chars().take(KEY_WRAP).collect();
+            head.rfind(['_', ',', '['])
+                .filter(|&k| k > KEY_WRAP / 2)
+                .map_or(head.len(), |k| k + 1)
+        };
+        let (line, tail) = rest.split_at(cut);
+        lines.push(if first {
+            format!("{n:>2}  {line}")
+        } else {
+            format!("     {line}")
+        });
+        first = false;
+        rest = tail;
+    }
+    lines
+}
+
+/// The size a [`numbered_key`] of `entries` takes: every entry whole, at [`KEY_FONT`].
+pub fn key_size(entries: &[(String, RGBColor)]) -> (u32, u32) {
+    let lines: Vec<String> = entries
+        .iter()
+        .enumerate()
+        .flat_map(|(i, (name, _))| key_lines(i + 1, name))
+        .collect();
+    let widest = lines.iter().map(|l| l.chars().count()).max().unwrap_or(0);
+    let width = 24 + (widest as f64 * KEY_CHAR).ceil() as u32;
+    (width, 44 + KEY_LINE * lines.len() as u32)
+}
+
+/// A key beside a scatter plot whose points carry numbers instead of names: one entry per
+/// point, `n  name` in the entry's colour, long names wrapped, never cut (size the area
+/// with [`key_size`]). Names never overlap, however close the points.
 pub fn numbered_key(area: &Area, title: &str, entries: &[(String, RGBColor)]) -> Option<()> {
-    let line = 15;
     area.draw(&Text::new(
         title.to_string(),
         (4, 18),
-        (FONT, 13).into_font().style(FontStyle::Bold),
+        (FONT, KEY_FONT + 1).into_font().style(FontStyle::Bold),
     ))
     .ok()?;
+    let mut y = 40;
     for (i, (name, color)) in entries.iter().enumerate() {
-        let y = 40 + line * i as i32;
         area.draw(&Circle::new((10, y + 6), 4, color.filled()))
             .ok()?;
-        area.draw(&Text::new(
-            format!("{:>2}  {name}", i + 1),
-            (20, y),
-            (FONT, 11).into_font().color(&RGBColor(40, 40, 40)),
-        ))
-        .ok()?;
+        for line in key_lines(i + 1, name) {
+            area.draw(&Text::new(
+                line,
+                (20, y),
+                (FONT, KEY_FONT).into_font().color(&RGBColor(40, 40, 40)),
+            ))
+            .ok()?;
+            y += KEY_LINE as i32;
+        }
     }
     Some(())
 }
 
-/// Each point's number in a numbered key, drawn above and right of the point, not under it.
+/// Each point's number in a numbered key, drawn above and right of the point, not under it;
+/// a number that would overprint one already placed moves up a line until it does not (a
+/// thin line leads back to its point), so points piled on one spot stay told apart.
 pub fn number_points<'a, X, Y>(
     chart: &mut ChartContext<'a, SVGBackend<'a>, Cartesian2d<X, Y>>,
     points: &[(f64, f64)],
@@ -318,13 +371,196 @@ where
     X: Ranged<ValueType = f64>,
     Y: Ranged<ValueType = f64>,
 {
-    let style = (FONT, 13).into_font().color(&RGBColor(20, 20, 20));
-    chart
-        .draw_series(points.iter().enumerate().map(|(i, &p)| {
-            EmptyElement::at(p) + Text::new(format!("{}", i + 1), (5, -17), style.clone())
-        }))
-        .ok()?;
+    let size = KEY_FONT + 1;
+    let style = (FONT, size).into_font().color(&RGBColor(20, 20, 20));
+    let mut placed: Vec<[i32; 4]> = Vec::new();
+    let mut labels = Vec::new();
+    for (i, &p) in points.iter().enumerate() {
+        let (px, py) = chart.backend_coord(&p);
+        let text = format!("{}", i + 1);
+        let w = (text.len() as f64 * 0.6 * size as f64).ceil() as i32 + 2;
+        let h = size as i32 + 1;
+        let mut dy = -17;
+        let boxed = |dy: i32| [px + 5, py + dy, px + 5 + w, py + dy + h];
+        let overlaps = |b: &[i32; 4], placed: &[[i32; 4]]| {
+            placed
+                .iter()
+                .any(|q| b[0] < q[2] && q[0] < b[2] && b[1] < q[3] && q[1] < b[3])
+        };
+        while overlaps(&boxed(dy), &placed) && dy > -17 - 40 * h {
+            dy -= h;
+        }
+        placed.push(boxed(dy));
+        labels.push((p, text, dy));
+    }
+    for (p, text, dy) in labels {
+        let lead = (dy < -17)
+            .then(|| PathElement::new(vec![(2, -2), (4, dy + 14)], RGBColor(160, 160, 160)));
+        chart
+            .draw_series(std::iter::once(
+                EmptyElement::at(p) + Text::new(text, (5, dy), style.clone()),
+            ))
+            .ok()?;
+        if let Some(lead) = lead {
+            chart
+                .draw_series(std::iter::once(EmptyElement::at(p) + lead))
+                .ok()?;
+        }
+    }
     Some(())
+}
+
+#[cfg(test)]
+mod key_tests {
+    use super::*;
+
+    /// A long name wraps at a separator and keeps every character; a short one is one line.
+    #[test]
+    fn a_key_wraps_long_names_and_cuts_none() {
+        let long = "clustered_deferred_16x16x24_with_a_very_long_suffix[grid=32x18x48]";
+        let lines = key_lines(7, long);
+        assert!(lines.len() >= 2, "{lines:?}");
+        let joined: String = lines
+            .iter()
+            .enumerate()
+            .map(|(k, l)| if k == 0 { &l[4..] } else { &l[5..] })
+            .collect();
+        assert_eq!(joined, long);
+        assert!(lines.iter().all(|l| l.chars().count() <= KEY_WRAP + 5));
+        assert_eq!(key_lines(12, "forward_plus"), ["12  forward_plus"]);
+    }
+}
+
+/// A point of a time-against-error plot ([`time_error`]).
+pub struct TimeErrorPoint {
+    /// The median frame, ms, and its 95% interval where there is one.
+    pub ms: f64,
+    pub interval: Option<[f64; 2]>,
+    /// RMSE in 8-bit LSB (drawn at [`ERROR_FLOOR`] where below it).
+    pub error: f64,
+    /// Its name in the key (with any mark, `* ` for the front).
+    pub name: String,
+    pub color: RGBColor,
+    /// On the decided Pareto front: the staircase joins these.
+    pub on_front: bool,
+}
+
+/// Errors below this show at it on the log axis (an exact image has RMSE 0), inside a
+/// band that says so.
+pub const ERROR_FLOOR: f64 = 1e-3;
+
+/// A time-against-error plot's data area (left of its key), pixels: with the key beside
+/// it, the whole stays under the 960 px a page 1024 px wide gives a figure, so that it
+/// shows at its own size and its text at [`KEY_FONT`] or more.
+const TIME_ERROR_PLOT: (u32, u32) = (500, 460);
+
+/// The key of a time-against-error plot.
+fn time_error_key(points: &[TimeErrorPoint]) -> Vec<(String, RGBColor)> {
+    points.iter().map(|p| (p.name.clone(), p.color)).collect()
+}
+
+/// The height of a legend of `entries` above the key: a title line and a line each.
+fn legend_height(entries: usize) -> u32 {
+    40 + 17 * (entries as u32 + 1)
+}
+
+/// The size of a [`time_error`] plot: its data area and a key that holds every name whole.
+pub fn time_error_size(points: &[TimeErrorPoint], legend: usize) -> (u32, u32) {
+    let (kw, kh) = key_size(&time_error_key(points));
+    let (w, h) = TIME_ERROR_PLOT;
+    (
+        w + kw.max(LEGEND_WIDTH - 80),
+        h.max(legend_height(legend) + kh),
+    )
+}
+
+/// GPU time (each point's 95% interval a bar) against error, both log: exact points sit in
+/// a band at the floor, the decided Pareto front is a staircase, every point is numbered
+/// and the key beside it names each (size the area with [`time_error_size`]). False where
+/// there are under two points.
+pub fn time_error(
+    area: &Area,
+    points: &[TimeErrorPoint],
+    legend: &[Entry],
+    y_desc: &str,
+) -> Result<bool, Box<dyn std::error::Error>> {
+    if points.len() < 2 {
+        return Ok(false);
+    }
+    let (plot_area, key_area) = area.split_horizontally(TIME_ERROR_PLOT.0);
+    let (plot_area, _) = plot_area.split_vertically(TIME_ERROR_PLOT.1);
+    let ends = points.iter().flat_map(|p| {
+        let [lo, hi] = p.interval.unwrap_or([p.ms, p.ms]);
+        [p.ms, lo, hi]
+    });
+    let (lo, hi) = ends.fold((f64::INFINITY, 0f64), |(lo, hi), v| (lo.min(v), hi.max(v)));
+    let (t0, t1) = (lo.max(1e-4) / 1.5, hi.max(1e-3) * 1.5);
+    let floored = |e: f64| e.max(ERROR_FLOOR);
+    let e1 = points.iter().map(|p| floored(p.error)).fold(0.1, f64::max) * 3.0;
+    let font = (FONT, KEY_FONT + 1);
+    let mut chart = ChartBuilder::on(&plot_area)
+        .margin(16)
+        .x_label_area_size(44)
+        .y_label_area_size(64)
+        .build_cartesian_2d(log_axis(t0, t1), log_axis(ERROR_FLOOR / 2.0, e1))?;
+    chart
+        .configure_mesh()
+        .light_line_style(TRANSPARENT)
+        .x_desc("GPU time per frame, ms (log; bars: 95% interval)")
+        .y_desc(y_desc)
+        .x_label_formatter(&tick_label)
+        .y_label_formatter(&tick_label)
+        .label_style(font)
+        .axis_desc_style(font)
+        .draw()?;
+    chart.draw_series(std::iter::once(Rectangle::new(
+        [(t0, ERROR_FLOOR / 2.0), (t1, ERROR_FLOOR * 1.6)],
+        RGBColor(232, 240, 232).filled(),
+    )))?;
+    chart.draw_series(std::iter::once(Text::new(
+        "RMSE 0: exact",
+        (t0 * 1.05, ERROR_FLOOR * 1.5),
+        (FONT, KEY_FONT).into_font().color(&RGBColor(60, 110, 60)),
+    )))?;
+    // The decided front: a staircase from the fastest down to the most faithful.
+    let mut front: Vec<(f64, f64)> = points
+        .iter()
+        .filter(|p| p.on_front)
+        .map(|p| (p.ms, floored(p.error)))
+        .collect();
+    front.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let stairs: Vec<(f64, f64)> = front
+        .windows(2)
+        .flat_map(|w| [w[0], (w[1].0, w[0].1)])
+        .chain(front.last().copied())
+        .collect();
+    chart.draw_series(LineSeries::new(stairs, BLACK.stroke_width(2)))?;
+    chart.draw_series(points.iter().filter_map(|p| {
+        let [lo, hi] = p.interval?;
+        let e = floored(p.error);
+        Some(PathElement::new(
+            vec![(lo, e), (hi, e)],
+            p.color.stroke_width(2),
+        ))
+    }))?;
+    chart.draw_series(
+        points
+            .iter()
+            .map(|p| Circle::new((p.ms, floored(p.error)), 5, p.color.filled())),
+    )?;
+    let at: Vec<(f64, f64)> = points.iter().map(|p| (p.ms, floored(p.error))).collect();
+    number_points(&mut chart, &at).ok_or("the point numbers did not draw")?;
+    let mut entries = vec![("Pareto front (decided)".to_string(), BLACK, None)];
+    entries.extend(legend.iter().cloned());
+    let (legend_area, key_area) = key_area.split_vertically(legend_height(legend.len()));
+    side_legend(&legend_area, "", &entries).ok_or("the legend did not draw")?;
+    numbered_key(
+        &key_area,
+        "* = Pareto front, ? = undecided",
+        &time_error_key(points),
+    )
+    .ok_or("the key did not draw")?;
+    Ok(true)
 }
 
 /// One panel of [`against_lights`]: its label, the values that set its range, and one line

@@ -88,8 +88,10 @@ fn the_debug_view_of_the_timed_frame_is_the_debug_variants_own_frame() {
     }
 }
 
+/// A cell timed alone by budget (no group to decide against): its budget or frame cap
+/// ends it.
 #[test]
-fn frames_by_budget_time_a_long_frame_once_and_short_ones_until_precise() {
+fn frames_by_budget_time_a_long_frame_once_and_short_ones_to_the_cap() {
     use clusterlab::measure::Budget;
     let gpu = gpu();
     let composer = Composer::default();
@@ -113,29 +115,26 @@ fn frames_by_budget_time_a_long_frame_once_and_short_ones_until_precise() {
     };
     // A budget the frame without lights spends alone: still one timed frame, and no warm-up.
     let once = run(Budget {
-        precision: 1e9,
         budget_ms: 1e-6,
         max_frames: 20,
     });
     assert_eq!(once.frames, 1);
     assert_eq!(once.frame_count.warmup, 0);
     assert!(once.frame_count.frame_without_lights);
-    // A budget no frame spends and a precision any frames meet: exactly the 3 frames a
-    // precision is judged on.
-    let precise = run(Budget {
-        precision: 1e9,
-        budget_ms: 1e9,
-        max_frames: 20,
-    });
-    assert_eq!(precise.frames, clusterlab::measure::MIN_FRAMES as u32);
-    assert_eq!(precise.frame_count.warmup, 0);
-    // A precision no frames meet: the frame cap.
+    assert_eq!(
+        once.frame_count.stop,
+        Some(clusterlab::measure::Stop::Budget)
+    );
+    // A budget no frame spends: the frame cap.
     let capped = run(Budget {
-        precision: 1e-12,
         budget_ms: 1e9,
         max_frames: 5,
     });
     assert_eq!(capped.frames, 5);
+    assert_eq!(
+        capped.frame_count.stop,
+        Some(clusterlab::measure::Stop::MaxFrames)
+    );
     let [lo, hi] = [0, 1].map(|i| capped.gpu_ms_spread["total"][i].as_f64().unwrap());
     let median = capped.gpu_ms["total"].as_f64().unwrap();
     assert!(lo <= median && median <= hi, "{lo} {median} {hi}");

@@ -311,3 +311,157 @@ fn the_overlap_check_finds_plotters_own_dense_log_labels() {
     assert!(!overlapping(&draw(false)).is_empty(), "{}", draw(false));
     assert_eq!(overlapping(&draw(true)), Vec::<(String, String)>::new());
 }
+
+/// Every text of an SVG plotters wrote: its content (whitespace as written), x, y, size.
+fn texts(svg: &str) -> Vec<(String, f64, f64, f64)> {
+    svg.split("<text")
+        .skip(1)
+        .filter_map(|t| {
+            let (tag, rest) = t.split_once('>')?;
+            let text = rest.split("</text>").next()?.to_string();
+            Some((
+                text,
+                attr(tag, "x")?.parse().ok()?,
+                attr(tag, "y")?.parse().ok()?,
+                attr(tag, "font-size")?.parse().ok()?,
+            ))
+        })
+        .collect()
+}
+
+/// Why a time-fidelity plot shown at `scale` (page pixels per SVG pixel) does not read, if
+/// it does not: text under 11 px on the page, a key that names fewer entries than the
+/// `points` plotted, or a key line past the plot's edge (cut).
+fn plot_reads(svg: &str, scale: f64, points: usize) -> Result<(), String> {
+    let size = |name: &str| -> f64 {
+        let head = svg.split('>').next().unwrap_or_default();
+        attr(head, name).and_then(|v| v.parse().ok()).unwrap_or(0.0)
+    };
+    let (width, height) = (size("width"), size("height"));
+    let all = texts(svg);
+    let smallest = all.iter().map(|t| t.3).fold(f64::INFINITY, f64::min);
+    if smallest * scale < 11.0 {
+        return Err(format!(
+            "text of {smallest} px at a scale of {scale:.2}: {:.1} px on the page",
+            smallest * scale
+        ));
+    }
+    // A key entry's first line: its number, two spaces, its name.
+    let entries: Vec<_> = all
+        .iter()
+        .filter(|t| {
+            let (n, rest) = t.0.trim_start().split_once("  ").unwrap_or_default();
+            n.parse::<usize>().is_ok() && !rest.is_empty()
+        })
+        .collect();
+    if entries.len() != points {
+        return Err(format!("{} key entries for {points} points", entries.len()));
+    }
+    for (text, x, y, size) in &all {
+        let right = x + 0.6 * size * text.chars().count() as f64;
+        if right > width + 1.0 || *y > height {
+            return Err(format!(
+                "`{text}` runs past the plot ({right:.0} > {width}, {y} > {height})"
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// What the page measures of its time-fidelity plots at 1024 px: each one's shown width
+/// over its own.
+const PLOT_SCALE: &str = r##"<script>
+const plots = [...document.querySelectorAll('img.plot')].filter(i => i.getAttribute('src').includes('time_error'));
+const result = plots.map(i => [i.getAttribute('src'), i.getBoundingClientRect().width / i.naturalWidth]);
+document.body.insertAdjacentHTML('beforeend', '<pre id="meas' + 'ured">' + JSON.stringify(result) + '</pre>');
+</script>"##;
+
+/// The time-fidelity plot reads on a page 1024 px wide: shown at a scale that keeps every
+/// text at 11 px or more, its key naming every point, no key line cut. The breaks: the plot
+/// squeezed into 600 px (text under 11 px), and its key's entries taken out.
+#[test]
+fn the_time_fidelity_plot_reads_at_1024_px() {
+    let Some(browser) = browser() else { return };
+    let dir = scratch("plot-reads");
+    let out = small_matrix(&dir);
+    let results = clusterlab::matrix::Results::load(&out).unwrap();
+    let points = results
+        .cells
+        .iter()
+        .filter(|c| c.ok() && c.total_ms().is_some())
+        .count();
+    let html = std::fs::read_to_string(out.join("index.html")).unwrap();
+    let scales = |html: &str| -> Vec<(String, f64)> {
+        let page = out.join("scaled.html");
+        std::fs::write(
+            &page,
+            html.replace("</body>", &format!("{PLOT_SCALE}</body>")),
+        )
+        .unwrap();
+        let run = Command::new(browser)
+            .args([
+                "--headless",
+                "--no-sandbox",
+                "--disable-gpu",
+                "--window-size=1024,768",
+                "--dump-dom",
+            ])
+            .arg(format!("file://{}", page.display()))
+            .output()
+            .expect("the browser runs");
+        let dom = String::from_utf8_lossy(&run.stdout);
+        let json = dom
+            .split("<pre id=\"measured\">")
+            .nth(1)
+            .and_then(|s| s.split("</pre>").next())
+            .unwrap_or_else(|| panic!("the page measured nothing: {dom:.2000}"));
+        serde_json::from_str(&json.replace("&quot;", "\"")).unwrap()
+    };
+    let shown = scales(&html);
+    assert_eq!(
+        shown.len(),
+        1,
+        "one time-fidelity plot for the one group: {shown:?}"
+    );
+    let (src, scale) = &shown[0];
+    let svg = std::fs::read_to_string(out.join(src)).unwrap();
+    plot_reads(&svg, *scale, points).unwrap();
+    // The breaks.
+    let squeezed = html.replace(
+        "figure img.plot { max-width: 100%;",
+        "figure img.plot { width: 600px; max-width: 100%;",
+    );
+    assert_ne!(
+        squeezed, html,
+        "the page's style changed: break it another way"
+    );
+    let (_, small) = scales(&squeezed)[0].clone();
+    assert!(
+        plot_reads(&svg, small, points).is_err(),
+        "600 px reads at {small}"
+    );
+    let keyless: String = svg
+        .split("<text")
+        .enumerate()
+        .filter(|(k, t)| {
+            *k == 0
+                || !t.split_once('>').is_some_and(|(_, r)| {
+                    r.trim_start()
+                        .split_once("  ")
+                        .is_some_and(|(n, _)| n.parse::<usize>().is_ok())
+                })
+        })
+        .map(|(k, t)| {
+            if k == 0 {
+                t.to_string()
+            } else {
+                format!("<text{t}")
+            }
+        })
+        .collect();
+    assert!(
+        plot_reads(&keyless, *scale, points).is_err(),
+        "a plot without its key"
+    );
+    let _ = std::fs::remove_dir_all(dir);
+}

@@ -37,4 +37,5 @@ mod shards;
 mod skipping;
 mod stress;
 mod study;
+mod verdicts;
 mod view;

@@ -6,15 +6,12 @@
 use crate::common::{self, EditedShaders, gpu, load, small};
 use clusterlab::compose::Composer;
 use clusterlab::metrics::ShadowError;
-use clusterlab::run::{CellOptions, EXACT_LSB, run_scene};
+use clusterlab::run::{CellOptions, EXACT_LSB, MAX_AMBIGUOUS_SHARE, run_scene};
 use clusterlab::scene::{self, Scene};
 use clusterlab::variant::LoadedVariant;
 
 /// The shipped variants with exact shadows: one Forward+, one deferred.
 const SHADOWED: [&str; 2] = ["forward_plus_shadows", "clustered_deferred_shadows"];
-
-/// Most ambiguous pairs a frame may have, as a share of its rays (the 0.1%).
-const MAX_AMBIGUOUS_SHARE: f64 = 1e-3;
 
 /// The shadow figures of `v` on `scene`, shaded by `composer`'s shaders.
 fn shadow_error(composer: &Composer, v: &LoadedVariant, scene: &Scene) -> ShadowError {
@@ -78,6 +75,86 @@ fn a_ray_without_its_offset_shadows_its_own_surface() {
         broken.max_outside_ambiguity_8bit > EXACT_LSB,
         "self-shadowing went unseen: {broken:?}"
     );
+}
+
+/// The far light: range 6 at (1e6, 5e5, -1e6), beside the atrium's own. It lights
+/// no surface, so it leaves every ray's reach (the GPU's error, from the coordinates each
+/// test handles) as it was: the ambiguous share stays under the cap, and a shader with its
+/// occlusion removed fails the exactness check, in-process, in `render` and in `matrix`
+/// (the scene exported to glTF). Before, the scene's largest coordinate was every ray's
+/// reach: every ray was ambiguous and that shader passed (`cpu::occlusion`'s test of
+/// `Reach` holds the break).
+#[test]
+fn a_far_light_leaves_shadows_checkable_and_an_occlusion_free_shader_fails() {
+    let mut scene = built_in("atrium");
+    scene.lights.push(clusterlab::common::Light {
+        position: [1e6, 5e5, -1e6],
+        radius: 6.0,
+        color: [1.0; 3],
+        cos_outer: -1.0,
+        direction: [0.0; 3],
+        cos_inner: -1.0,
+    });
+    let v = load("forward_plus_shadows");
+    let fine = shadow_error(&Composer::default(), &v, &scene);
+    assert!(fine.ambiguous_share <= MAX_AMBIGUOUS_SHARE, "{fine:?}");
+    let no_occlusion = EditedShaders::of(
+        "shading/occlusion.wesl",
+        "no-occlusion",
+        &[("return true;", "return false;")],
+    );
+    let r = run_scene(
+        &gpu(),
+        &no_occlusion.composer,
+        &v,
+        &scene,
+        CellOptions::default(),
+    )
+    .expect("a frame");
+    let why = r.report.failure.expect("an occlusion-free shader fails");
+    assert!(why.contains("LSB against the reference outside"), "{why}");
+    // The same through the commands, on the scene as a glTF file.
+    let dir = common::scratch("far-light");
+    let glb = dir.join("far_light.glb");
+    std::fs::write(&glb, scene::export::to_glb(&scene).expect("export")).expect("write");
+    let file = glb.to_str().unwrap();
+    let shaders = ("CLUSTERLAB_SHADERS", no_occlusion.root().to_str().unwrap());
+    let out = dir.join("out");
+    let out = out.to_str().unwrap();
+    let commands: [&[&str]; 2] = [
+        &[
+            "render",
+            "--variant",
+            "forward_plus_shadows",
+            "--scene",
+            file,
+            "--size",
+            "160x90",
+            "--out",
+            out,
+        ],
+        &[
+            "matrix",
+            "--variants",
+            "forward_plus_shadows",
+            "--scenes",
+            file,
+            "--size",
+            "160x90",
+            "--frames",
+            "1",
+            "--out",
+            out,
+        ],
+    ];
+    for args in commands {
+        let (ok, text) = common::cli(args).envs(&[shaders]).run().succeeded();
+        assert!(
+            !ok && text.contains("LSB against the reference outside"),
+            "{args:?}: {text}"
+        );
+    }
+    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// A scene with no opaque triangle to cast a shadow is refused for a shadowed variant, with

@@ -113,16 +113,6 @@ impl CellArgs {
     }
 }
 
-/// A percentage in (0, 100].
-pub(crate) fn parse_percent(s: &str) -> Result<f64, String> {
-    match s.trim().parse::<f64>() {
-        Ok(p) if p > 0.0 && p <= 100.0 => Ok(p),
-        _ => Err(format!(
-            "`{s}` is not a percentage; give a number in (0, 100], e.g. 3"
-        )),
-    }
-}
-
 /// Milliseconds of a cell's budget: a number in [1, 3600000].
 pub(crate) fn parse_budget_ms(s: &str) -> Result<f64, String> {
     match s.trim().parse::<f64>() {

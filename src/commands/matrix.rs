@@ -1,6 +1,6 @@
 //! `matrix` and `merge`: the variant matrix, its shards and its report.
 
-use super::args::{GpuArgs, parse_budget_ms, parse_fraction, parse_percent, parse_size};
+use super::args::{GpuArgs, parse_budget_ms, parse_fraction, parse_size};
 use clusterlab::compose::Composer;
 use clusterlab::measure::{Budget, Frames};
 use std::path::{Path, PathBuf};
@@ -29,16 +29,14 @@ pub(crate) struct MatrixArgs {
     /// With --frames: untimed frames first (software rasterisers compile on first use).
     #[arg(long, default_value_t = 1, requires = "frames")]
     pub warmup: u32,
-    /// Frames by budget: a cell stops once the 95% interval of its median (6 frames at
-    /// least) lies within +-PERCENT of it (or its budget is spent).
-    #[arg(long, default_value_t = Budget::DEFAULT.precision * 100.0, value_parser = parse_percent, conflicts_with = "frames")]
-    pub precision: f64,
-    /// Frames by budget: milliseconds of frames one cell may spend, counting the untimed
-    /// frame without lights it draws first (which compiles what is new); a first timed
-    /// frame longer than this is the only one.
+    /// Frames by budget: a group's cells are timed in interleaved rounds, each until its
+    /// verdict against the fastest is decided (6 rounds at least), or it has spent this
+    /// many milliseconds of frames (the untimed frame without lights it draws first
+    /// included), or taken --max-frames. A first timed frame longer than this is the only
+    /// one. A group left undecided says which values would decide it.
     #[arg(long, default_value_t = Budget::DEFAULT.budget_ms, value_parser = parse_budget_ms, conflicts_with = "frames")]
     pub budget_ms: f64,
-    /// Frames by budget: most timed frames per cell.
+    /// Frames by budget: most rounds (timed frames) per cell while its verdict is open.
     #[arg(long, default_value_t = Budget::DEFAULT.max_frames, value_parser = clap::value_parser!(u32).range(1..=1000), conflicts_with = "frames")]
     pub max_frames: u32,
     /// Folder for results.json, results.csv, images/, plots/ and index.html.
@@ -67,7 +65,7 @@ pub(crate) struct MatrixArgs {
     /// again: a fraction of the lights moving (`--moving`, or a `moving=` sweep), the
     /// camera on its path or still; each cell's times are of the frames after the first.
     /// A sequence times all its frames: the options that choose frames do not apply.
-    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=clusterlab::sequence::MAX_FRAMES as i64), conflicts_with_all = ["frames", "precision", "budget_ms", "max_frames"])]
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=clusterlab::sequence::MAX_FRAMES as i64), conflicts_with_all = ["frames", "budget_ms", "max_frames"])]
     pub sequence: Option<u32>,
     /// With --sequence: fraction of the lights that move, in 0..=1 (default: all of them,
     /// none of a glTF file's own lights, which cannot move).
@@ -208,7 +206,6 @@ pub(crate) fn matrix(args: &MatrixArgs) -> Result<bool, String> {
     let frames = match args.frames {
         Some(timed) => Frames::exact(args.warmup, timed),
         None => Frames::Budget(Budget {
-            precision: args.precision / 100.0,
             budget_ms: args.budget_ms,
             max_frames: args.max_frames,
         }),

@@ -209,23 +209,37 @@ impl TriangleBvh {
     /// (moving the segment continuously to any other within reach, its crossing could
     /// leave the triangle only through an edge or an end); it cannot block any of them
     /// when the segment passes farther than `reach` from it.
-    pub fn classify(&self, from: DVec3, to: DVec3, reach: f64) -> (Seen, Visits) {
+    ///
+    /// The reach of each test is the GPU's error for the coordinates that test handles
+    /// (`Reach::at`): the segment's ends and the triangle's corners (or the node's box),
+    /// never the scene's largest coordinate, so that a far light or a vast floor widens
+    /// only the rays whose arithmetic meets it.
+    pub fn classify(&self, from: DVec3, to: DVec3, reach: Reach) -> (Seen, Visits) {
         let inverse = (to - from).recip();
+        let ends = largest(from).max(largest(to));
         let mut near = Vec::new();
+        let mut widest: f64 = 0.0;
         let mut blocked = false;
         let visits = self.walk(
             // A segment within reach of a triangle meets its node's box grown by reach.
-            |node| box_meets(node.min - reach, node.max + reach, from, inverse, 0.0),
-            |triangle| match triangle_seen(from, to, triangle, reach) {
-                Seen::Blocked => {
-                    blocked = true;
-                    ControlFlow::Break(())
+            |node| {
+                let r = reach.at(ends.max(largest(node.min)).max(largest(node.max)));
+                box_meets(node.min - r, node.max + r, from, inverse, 0.0)
+            },
+            |triangle| {
+                let r = reach.at(triangle.iter().fold(ends, |m, &v| m.max(largest(v))));
+                match triangle_seen(from, to, triangle, r) {
+                    Seen::Blocked => {
+                        blocked = true;
+                        ControlFlow::Break(())
+                    }
+                    Seen::Ambiguous => {
+                        near.push(triangle);
+                        widest = widest.max(r);
+                        ControlFlow::Continue(())
+                    }
+                    Seen::Open => ControlFlow::Continue(()),
                 }
-                Seen::Ambiguous => {
-                    near.push(triangle);
-                    ControlFlow::Continue(())
-                }
-                Seen::Open => ControlFlow::Continue(()),
             },
         );
         if blocked {
@@ -233,7 +247,7 @@ impl TriangleBvh {
         }
         let seen = match near.is_empty() {
             true => Seen::Open,
-            false => patch_seen(from, to, &near, reach),
+            false => patch_seen(from, to, &near, widest),
         };
         (seen, visits)
     }
@@ -275,6 +289,35 @@ impl TriangleBvh {
             }
         })
     }
+}
+
+/// How far the GPU's segment may lie from the reference's in a test: a part the test's
+/// coordinates do not change (the shading position's and normal's errors, the lift's) and
+/// a part per unit of the largest coordinate it handles (f32 rounding in the traversal).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Reach {
+    pub fixed: f64,
+    pub per_coordinate: f64,
+}
+
+impl Reach {
+    /// The same reach for every test (`per_coordinate` 0).
+    pub const fn fixed(reach: f64) -> Reach {
+        Reach {
+            fixed: reach,
+            per_coordinate: 0.0,
+        }
+    }
+
+    /// The reach of a test whose largest coordinate is `largest`.
+    pub fn at(&self, largest: f64) -> f64 {
+        self.fixed + self.per_coordinate * largest
+    }
+}
+
+/// The largest absolute coordinate of `v`.
+fn largest(v: DVec3) -> f64 {
+    v.abs().max_element()
 }
 
 /// Whether the segment `from + t dir`, `t_min <= t <= 1`, meets the box (slab test; a
@@ -723,6 +766,30 @@ mod tests {
         assert!(!agree(&bvh), "a shrunk box lost no hit");
     }
 
+    /// The reach of a test follows the coordinates it handles: a segment through a unit
+    /// square is blocked at the traversal's rounding for coordinates near 1, and so it stays
+    /// with a light far away elsewhere in the scene; the deliberate break, the scene's
+    /// largest coordinate (1e6) as every test's reach, makes it ambiguous.
+    #[test]
+    fn a_tests_reach_is_its_own_coordinates_not_the_scenes() {
+        use crate::cpu::shadows::TRAVERSAL_ROUNDING;
+        let corners: [[f32; 3]; 4] = [
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [1.0, 1.0, 0.0],
+            [0.0, 1.0, 0.0],
+        ];
+        let square = TriangleBvh::build(&corners, &[0, 1, 2, 0, 2, 3]);
+        let (from, to) = (DVec3::new(0.3, 0.6, 1.0), DVec3::new(0.3, 0.6, -1.0));
+        let own = Reach {
+            fixed: 1e-6,
+            per_coordinate: TRAVERSAL_ROUNDING,
+        };
+        assert_eq!(square.classify(from, to, own).0, Seen::Blocked);
+        let scene_wide = Reach::fixed(own.at(1e6));
+        assert_eq!(square.classify(from, to, scene_wide).0, Seen::Ambiguous);
+    }
+
     /// A unit square of two triangles at z = 0, within `reach` = 1e-3: a segment through
     /// their shared diagonal is blocked (the patch decides what neither triangle does
     /// alone, the deliberate break), one within reach of the outer edge or ending within
@@ -737,7 +804,7 @@ mod tests {
         ];
         let square = TriangleBvh::build(&corners, &[0, 1, 2, 0, 2, 3]);
         let half = TriangleBvh::build(&corners, &[0, 1, 2]);
-        let reach = 1e-3;
+        let reach = Reach::fixed(1e-3);
         let down = |x: f64, y: f64, end: f64| {
             square
                 .classify(DVec3::new(x, y, 1.0), DVec3::new(x, y, end), reach)

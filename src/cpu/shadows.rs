@@ -12,15 +12,18 @@
 //! - the normal, by its interpolation or its codec's angular error, times the lift;
 //! - f32 arithmetic in the traversal: the watertight test decides exactly for the corners
 //!   translated and sheared in f32, each coordinate at most 3 roundings of terms up to
-//!   2 x `reach` (the largest coordinate of the scene, its lights and origins), and its
-//!   edge functions round once more: under 32 epsilon x `reach` of movement in all.
+//!   2 x the largest coordinate the test handles (the ray's origin and light, the
+//!   triangle's corners: `occlusion::Reach`), and its edge functions round once more:
+//!   under 32 epsilon x that coordinate of movement in all.
 //!
-//! Every point of the GPU's segment then lies within `reach` of the reference's.
+//! Every point of the GPU's segment then lies within that reach of the reference's, for
+//! the triangle (or node) at hand: a far light or a vast floor widens only the tests that
+//! handle its coordinates.
 
 use glam::{DMat4, DVec3};
 
 use super::clusters::{INTERPOLATION_PRECISION, stored_depth_error};
-use super::occlusion::{Seen, TriangleBvh, Visits};
+use super::occlusion::{Reach, Seen, TriangleBvh, Visits};
 use crate::common::NormalCodec;
 
 /// How far a shadow ray's origin is lifted off its surface, as a share of the point's
@@ -84,8 +87,6 @@ pub struct ShadowRays<'a> {
     pub view: DMat4,
     pub near: f64,
     pub source: ShadowSource,
-    /// The largest coordinate of the scene's vertices and lights.
-    pub reach: f64,
 }
 
 impl ShadowRays<'_> {
@@ -116,10 +117,11 @@ impl ShadowRays<'_> {
     pub fn trace(&self, p: DVec3, n: DVec3, light: DVec3) -> (Seen, Visits) {
         let lift = SHADOW_OFFSET * scale(p, self.eye);
         let origin = ray_origin(p, n, self.eye);
-        let error = self.position_error(p)
-            + lift * self.normal_angle()
-            + TRAVERSAL_ROUNDING * self.reach.max(origin.abs().max_element());
-        self.bvh.classify(origin, light, error)
+        let reach = Reach {
+            fixed: self.position_error(p) + lift * self.normal_angle(),
+            per_coordinate: TRAVERSAL_ROUNDING,
+        };
+        self.bvh.classify(origin, light, reach)
     }
 
     /// Whether the reference's own ray, in f64, is blocked (what it shades an ambiguous

@@ -117,7 +117,8 @@ fn compare_verdicts(new: &Results, old: &BTreeMap<Key, &CellRecord>, out: &mut R
             );
             out.pairs_tied.0 += usize::from(now == Verdict::Tie);
             out.pairs_tied.1 += usize::from(then == Verdict::Tie);
-            if now != Verdict::Tie && then != Verdict::Tie {
+            let apart = |v: Verdict| matches!(v, Verdict::Faster | Verdict::Slower);
+            if apart(now) && apart(then) {
                 out.pairs_apart_in_both += 1;
                 if now != then {
                     out.pairs_flipped

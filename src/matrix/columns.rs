@@ -20,13 +20,16 @@ pub struct Measured<'a> {
     pub interval_level: Option<f64>,
     pub speedup_vs_naive: Option<f64>,
     pub speedup_interval: Option<[f64; 2]>,
-    pub pareto: bool,
+    pub speedup_least: Option<(f64, usize)>,
+    pub front: Option<super::Front>,
     pub rank: Option<super::Rank>,
+    pub against_leader: Option<&'a super::AgainstLeader>,
     /// The earlier run a reused cell was taken from.
     pub reused_from: Option<&'a str>,
     /// Depths moved by this many units in the last place (a test mode; 0: stock).
     pub perturbed_depth_ulps: u32,
     pub error: Option<&'a ErrorMetrics>,
+    pub fidelity: Option<&'a super::Fidelity>,
     pub stats: Option<&'a FrameStats>,
     pub efficiency: Option<&'a crate::efficiency::Efficiency>,
     pub skipped_passes: &'a [String],
@@ -58,13 +61,22 @@ impl Measured<'_> {
             .as_f64()
     }
 
-    /// The speed-up over naive forward: "tie" where its range holds 1, "?" where a time has
-    /// no interval (too few frames) to give it a range.
+    /// The speed-up over naive forward, round by round: its interval where there is one
+    /// ("no gain" where it holds 1), else the least speed-up of any round measured, as a
+    /// bound ("x12.3, >= 11.0 each of 1 round").
     pub(crate) fn speedup_text(&self) -> String {
-        or_dash(self.speedup_vs_naive, |x| match self.speedup_interval {
-            None => format!("{x:.1}x ?"),
-            Some([lo, hi]) if lo <= 1.0 && 1.0 <= hi => format!("{x:.1}x tie"),
-            Some(_) => format!("{x:.1}x"),
+        or_dash(self.speedup_vs_naive, |x| {
+            match (self.speedup_interval, self.speedup_least) {
+                // Naive forward against itself.
+                (Some([1.0, 1.0]), _) => format!("{x:.1}x"),
+                (Some([lo, hi]), _) if lo <= 1.0 && 1.0 <= hi => format!("{x:.1}x no gain"),
+                (Some([lo, hi]), _) => format!("{x:.1}x ({lo:.1}-{hi:.1})"),
+                (None, Some((least, n))) => {
+                    let rounds = if n == 1 { "round" } else { "rounds" };
+                    format!("{x:.1}x (>= {least:.1} each of {n} {rounds})")
+                }
+                (None, None) => format!("{x:.1}x ?"),
+            }
         })
     }
 }
@@ -78,11 +90,14 @@ impl CellRecord {
             interval_level: self.interval_level,
             speedup_vs_naive: self.speedup_vs_naive,
             speedup_interval: self.speedup_interval,
-            pareto: self.pareto,
+            speedup_least: self.speedup_least,
+            front: self.front,
             rank: self.rank,
+            against_leader: self.against_leader.as_ref(),
             reused_from: self.reused_from.as_deref(),
             perturbed_depth_ulps: self.perturbed_depth_ulps,
             error: self.error.as_ref(),
+            fidelity: self.fidelity.as_ref(),
             stats: self.stats.as_ref(),
             efficiency: self.efficiency.as_ref(),
             skipped_passes: &self.skipped_passes,
@@ -107,11 +122,14 @@ impl RenderReport {
             interval_level: self.interval_level,
             speedup_vs_naive: None,
             speedup_interval: None,
-            pareto: false,
+            speedup_least: None,
+            front: None,
             rank: None,
+            against_leader: None,
             reused_from: None,
             perturbed_depth_ulps: crate::compose::perturbed_depth_ulps(),
             error: self.error.as_ref(),
+            fidelity: None,
             stats: self.stats.as_ref(),
             efficiency: self.efficiency.as_ref(),
             skipped_passes: &self.skipped_passes,
@@ -294,10 +312,57 @@ pub const COLUMNS: &[Column] = &[
     Column {
         key: "rank",
         heading: "vs fastest",
-        meaning: "where the cell's time stands in its group: `fastest` (the lowest median with an interval), `tie` (its interval overlaps the fastest's: they cannot be told apart), `slower` (its interval lies wholly above) or `few frames` (timed under 6 times, so no interval: compared with none)",
+        meaning: "where the cell's time stands in its group, from its frame over the leader's (the lowest time) in each round both were timed in, so that drift of the machine cancels: `fastest` (the leader, every other cell decided), `leads` (the leader, some cell undecided), `tie` (the 95% interval of the ratio within 10% of 1), `slower` (the interval above 1), `slower each round` (too slow for an interval in its budget, slower by over 10% in each round it took: a bound, not a 95% verdict), `undecided` (the interval holds 1 and reaches past 10%, or under 6 shared rounds) or `other run` (timed in another run or batch: not compared)",
         shown: EVERYWHERE,
         value: |m| m.rank.map(|r| r.label().to_string()).into(),
         text: |m| or_dash(m.rank, |r| r.label().to_string()),
+    },
+    Column {
+        key: "vs_leader",
+        heading: "x leader",
+        meaning: "the cell's frame over the leader's, the median over the rounds both took, with its 95% interval (absent under 6 shared rounds)",
+        shown: EVERYWHERE,
+        value: |m| m.against_leader.map(|a| a.paired.ratio).into(),
+        text: |m| {
+            or_dash(m.against_leader, |a| match a.paired.interval {
+                Some(i) => format!("{:.2} ({:.2}-{:.2})", a.paired.ratio, i.lo, i.hi),
+                None => format!("{:.2} ({} rounds)", a.paired.ratio, a.paired.rounds),
+            })
+        },
+    },
+    Column {
+        key: "vs_leader_lo",
+        heading: "x leader lo",
+        meaning: "the low end of that ratio's 95% interval",
+        shown: CSV_ONLY,
+        value: |m| {
+            m.against_leader
+                .and_then(|a| a.paired.interval)
+                .map(|i| i.lo)
+                .into()
+        },
+        text: |m| {
+            or_dash(m.against_leader.and_then(|a| a.paired.interval), |i| {
+                format!("{:.3}", i.lo)
+            })
+        },
+    },
+    Column {
+        key: "vs_leader_hi",
+        heading: "x leader hi",
+        meaning: "the high end of that ratio's 95% interval",
+        shown: CSV_ONLY,
+        value: |m| {
+            m.against_leader
+                .and_then(|a| a.paired.interval)
+                .map(|i| i.hi)
+                .into()
+        },
+        text: |m| {
+            or_dash(m.against_leader.and_then(|a| a.paired.interval), |i| {
+                format!("{:.3}", i.hi)
+            })
+        },
     },
     Column {
         key: "gpu_ms_min",
@@ -329,7 +394,7 @@ pub const COLUMNS: &[Column] = &[
     Column {
         key: "frames",
         heading: "frames",
-        meaning: "timed frames (untimed ones first as U+T), why timing stopped (`precise`, `budget`, `max frames`, `count`), and how many frames were set aside as disturbed: frames of 250 ms or more during which other processes took over 25% of the machine's CPU time (software GPUs only), each replaced by another",
+        meaning: "timed frames (untimed ones first as U+T), why timing stopped (`decided`: its verdict against the leader, `budget`, `max frames`, `count`, `precise` outside the matrix), and how many frames were set aside as disturbed: frames of 250 ms or more during which other processes took over 25% of the machine's CPU time (software GPUs only), each replaced by another",
         shown: CSV_AND_HTML,
         value: |m| m.frames.map(|f| f.timed).into(),
         text: |m| {
@@ -349,7 +414,7 @@ pub const COLUMNS: &[Column] = &[
     Column {
         key: "speedup_vs_naive",
         heading: "x naive",
-        meaning: "naive forward's median over the cell's, same scene and parameters, same adapter and timing source; `tie` where the range from the two intervals holds 1, `?` where either time has no interval (naive forward's frames of a second or more are timed once)",
+        meaning: "naive forward's frame over the cell's, the median over the rounds both were timed in, with its 95% interval; `no gain` where the interval holds 1; where naive forward took too few rounds for an interval (frames of a second or more), the least speed-up of any round as a bound (`>= X each of N rounds`)",
         shown: EVERYWHERE,
         value: |m| m.speedup_vs_naive.into(),
         text: |m| m.speedup_text(),
@@ -357,7 +422,7 @@ pub const COLUMNS: &[Column] = &[
     Column {
         key: "speedup_lo",
         heading: "x naive lo",
-        meaning: "the low end of the speed-up's range: naive forward's interval low over the cell's high",
+        meaning: "the low end of the speed-up's 95% interval (round by round)",
         shown: CSV_ONLY,
         value: |m| m.speedup_interval.map(|r| r[0]).into(),
         text: |m| or_dash(m.speedup_interval, |r| format!("{:.2}", r[0])),
@@ -365,7 +430,7 @@ pub const COLUMNS: &[Column] = &[
     Column {
         key: "speedup_hi",
         heading: "x naive hi",
-        meaning: "the high end of the speed-up's range: naive forward's interval high over the cell's low",
+        meaning: "the high end of the speed-up's 95% interval (round by round)",
         shown: CSV_ONLY,
         value: |m| m.speedup_interval.map(|r| r[1]).into(),
         text: |m| or_dash(m.speedup_interval, |r| format!("{:.2}", r[1])),
@@ -435,15 +500,15 @@ pub const COLUMNS: &[Column] = &[
     Column {
         key: "pareto",
         heading: "Pareto",
-        meaning: "on the time-error (RMSE) Pareto front of its group: no other cell is faster (their intervals apart) and at least as accurate",
+        meaning: "the time-fidelity front of its group (GPU time against truth RMSE8): `*` on it (no cell decided faster and at least as accurate, or tied and more accurate, and none at least as accurate undecided against it), `?` undecided (not dominated, but a cell at least as accurate is undecided against it), empty: dominated",
         shown: CSV_ONLY,
-        value: |m| m.pareto.into(),
-        text: |m| if m.pareto { "*" } else { "" }.into(),
+        value: |m| m.front.map(|f| f.label().to_string()).into(),
+        text: |m| m.front.map_or("", |f| f.label()).into(),
     },
     Column {
         key: "max_abs_8bit",
         heading: "max8",
-        meaning: "max8: the largest 8-bit difference from the CPU f64 reference, in LSB (an exact variant is within 1)",
+        meaning: "max8: the largest 8-bit difference from the cell's own CPU f64 reference, in LSB (an exact variant is within 1: correctness)",
         shown: EVERYWHERE,
         value: |m| m.error.map(|e| e.max_abs_8bit).into(),
         text: |m| or_dash(m.error, |e| e.max_abs_8bit.to_string()),
@@ -451,10 +516,34 @@ pub const COLUMNS: &[Column] = &[
     Column {
         key: "rmse_8bit",
         heading: "RMSE8",
-        meaning: "RMSE8: root mean square 8-bit difference from the reference, LSB",
+        meaning: "RMSE8: root mean square 8-bit difference from the cell's own reference (what its variant computes, in f64: correctness), LSB",
         shown: CSV_AND_HTML,
         value: |m| m.error.map(|e| e.rmse_8bit).into(),
         text: |m| or_dash(m.error, |e| format!("{:.3}", e.rmse_8bit)),
+    },
+    Column {
+        key: "fidelity_rmse_8bit",
+        heading: "truth RMSE8",
+        meaning: "fidelity: root mean square 8-bit difference from the group's truth, the f64 reference of the most complete lighting any cell of the group computes (exact shadows where any cell traces shadow rays), LSB; what the time-error front and `most accurate` read",
+        shown: EVERYWHERE,
+        value: |m| m.fidelity.map(|f| f.rmse_8bit).into(),
+        text: |m| or_dash(m.fidelity, |f| format!("{:.3}", f.rmse_8bit)),
+    },
+    Column {
+        key: "fidelity_max_8bit",
+        heading: "truth max8",
+        meaning: "fidelity: the largest 8-bit difference from the group's truth (outside the range ambiguous shadow rays allow, where the truth is shadowed), LSB; `fastest exact` is within 1",
+        shown: EVERYWHERE,
+        value: |m| m.fidelity.map(|f| f.max_8bit).into(),
+        text: |m| or_dash(m.fidelity, |f| f.max_8bit.to_string()),
+    },
+    Column {
+        key: "fidelity_truth",
+        heading: "truth",
+        meaning: "which truth fidelity is measured against: `its own reference` (the group's truth is what the cell computes) or `exact shadows` (the cell traces no shadow ray, another cell of its group does)",
+        shown: CSV_AND_HTML,
+        value: |m| m.fidelity.map(|f| f.truth.clone()).into(),
+        text: |m| or_dash(m.fidelity, |f| f.truth.clone()),
     },
     Column {
         key: "pixels_over_1lsb",

@@ -5,8 +5,8 @@ use std::fmt::Write as _;
 
 use super::columns::{self, Measured};
 use super::record::{grouped, label};
-use super::{CellRecord, Results};
-use crate::measure::{Interval, Verdict};
+use super::verdicts;
+use super::{CellRecord, Fidelity, Results};
 use crate::plot::Plot;
 
 fn esc(s: &str) -> String {
@@ -33,7 +33,7 @@ tr.failed td { background: #fdecec; color: #900; }
 .meta td { text-align: left; }
 .plots { display: flex; flex-wrap: wrap; gap: 16px; }
 figure { margin: 0; }
-figure img.plot { width: 880px; max-width: 100%; border: 1px solid #ddd; }
+figure img.plot { max-width: 100%; border: 1px solid #ddd; }
 figcaption { font-size: 13px; color: #555; max-width: 880px; }
 .scale { font-size: 10px; color: #444; margin: 2px 0 4px; }
 .scale .bar { height: 8px; border: 1px solid #aaa; }
@@ -61,13 +61,20 @@ pub fn page(results: &Results, plots: &[Plot]) -> String {
     let _ = write!(
         h,
         "<h1>clusterlab variant matrix</h1><p>{}. Times are medians over \
-         the timed frames, each with its 95% confidence interval; a group's cells were timed \
-         in interleaved rounds. Two times whose intervals overlap are a <b>tie</b>: neither is \
-         called faster. Speed-up is naive forward's time over the cell's, on the same scene \
-         and parameters; error is against the CPU f64 reference. Highlighted rows are on the \
-         time-error (RMSE) Pareto front of their group. The glossary below says what each \
-         column holds.</p>",
-        results.tally()
+         the timed frames, each with its 95% confidence interval. A group's cells are timed \
+         in interleaved rounds and compared <b>round by round</b> (a cell's frame over the \
+         leader's in each round both took, so that drift of the machine cancels): \
+         <b>slower</b> where the 95% interval of that ratio lies above 1, a <b>tie</b> where \
+         it lies within {:.0}% of 1, <b>undecided</b> otherwise (and the verdict says which \
+         flags would decide it); a cell stops once its verdict is decided. Speed-up is naive \
+         forward's frame over the cell's, round by round. <b>max8</b> is against the cell's \
+         own f64 reference (correctness: does the GPU compute what the variant claims); \
+         <b>truth</b> figures are against the group's truth, the f64 reference of the most \
+         complete lighting any cell of the group computes (fidelity). Highlighted rows are on \
+         the time-fidelity Pareto front of their group, decided. The glossary below says what \
+         each column holds.</p>",
+        results.tally(),
+        crate::measure::TIE_WITHIN * 100.0
     );
     at_a_glance(&mut h, results);
     if !plots.is_empty() {
@@ -183,62 +190,26 @@ fn provenance(h: &mut String, results: &Results) {
     }
 }
 
-/// Per scene and parameters: the fastest exact variant and its speed-up, the most
-/// efficient exact one (nearest its perfect-culling bound, `efficiency`), the most accurate
-/// lossy one, and what failed.
+/// Per scene and parameters: the group's verdict (decided by the rounds themselves, or what
+/// would decide it), the fastest exact variant, the most efficient exact one (nearest its
+/// perfect-culling bound, `efficiency`), the most accurate lossy one, and what failed.
 fn at_a_glance(h: &mut String, results: &Results) {
     let _ = write!(
         h,
         "<h2>At a glance</h2><table class=\"meta\"><tr><th class=\"name\">scene</th>\
-         <th class=\"name\">fastest exact (within 1 LSB, no light dropped)</th>\
+         <th class=\"name\">verdict (round by round, 95%)</th>\
+         <th class=\"name\">fastest exact (within 1 LSB of the group's truth, no light dropped)</th>\
          <th class=\"name\">most efficient exact (bound over frame)</th>\
          <th class=\"name\">most accurate lossy</th><th class=\"name\">failed</th></tr>"
     );
     for (group, cells) in grouped(results) {
         let shown = |c: &CellRecord| c.ok() && !c.spec.debug_view;
-        let exact = |c: &CellRecord| {
-            c.error.as_ref().is_some_and(|e| e.max_abs_8bit <= 1)
-                && c.stats.as_ref().is_none_or(|s| s.dropped_lights == 0)
-        };
-        // Groups are fastest first. The fastest exact cell with an interval, the cells whose
-        // intervals overlap its (a tie), and those without one (compared with none).
-        let (compared, few): (Vec<&&CellRecord>, Vec<&&CellRecord>) = cells
-            .iter()
-            .filter(|c| shown(c) && exact(c))
-            .partition(|c| c.total_interval().is_some());
-        let fastest = compared.first().map_or("-".into(), |c| {
-            let interval = c.total_interval();
-            let tied: Vec<String> = compared[1..]
-                .iter()
-                .filter(|o| {
-                    Interval::compare(o.total_interval().as_ref(), interval.as_ref())
-                        == Verdict::Tie
-                })
-                .map(|o| label(o))
-                .collect();
-            let m = c.measured();
-            let i = interval.expect("an interval");
-            format!(
-                "{} ({:.2} ms, 95% CI {:.2}-{:.2}{}){}",
-                label(c),
-                c.total_ms().unwrap_or(f64::NAN),
-                i.lo,
-                i.hi,
-                c.speedup_vs_naive
-                    .map_or(String::new(), |_| format!(", {} naive", m.speedup_text())),
-                match tied.len() {
-                    0 => String::new(),
-                    n => format!("; tied with it ({n}): {}", tied.join(", ")),
-                }
-            )
-        });
-        let few: Vec<String> = few.iter().map(|c| label(c)).collect();
-        let fastest = match few.len() {
-            0 => fastest,
-            n => format!(
-                "{fastest}; too few frames for an interval, compared with none ({n}): {}",
-                few.join(", ")
-            ),
+        let exact = |c: &CellRecord| c.exact_to_truth();
+        let verdict = verdicts::group_verdict(&cells);
+        let fastest = verdicts::fastest_among(&cells, |c| shown(c) && exact(c));
+        let truth = match cells.iter().find_map(|c| c.fidelity.as_ref()) {
+            Some(f) if f.truth == Fidelity::SHADOWED => " (truth: exact shadows)",
+            _ => "",
         };
         let efficient = cells
             .iter()
@@ -262,7 +233,7 @@ fn at_a_glance(h: &mut String, results: &Results) {
         let lossy = cells
             .iter()
             .filter(|c| shown(c) && !exact(c))
-            .filter_map(|c| Some((c.error.as_ref()?.rmse_8bit, c)))
+            .filter_map(|c| Some((c.fidelity_rmse()?, c)))
             .min_by(|a, b| a.0.total_cmp(&b.0))
             .map_or("-".into(), |(rmse, c)| {
                 format!("{} (RMSE {rmse:.3} LSB)", label(c))
@@ -275,8 +246,9 @@ fn at_a_glance(h: &mut String, results: &Results) {
         };
         let _ = write!(
             h,
-            "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
-            esc(&group),
+            "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
+            esc(&format!("{group}{truth}")),
+            esc(&verdict),
             esc(&fastest),
             esc(&efficient),
             esc(&lossy),
@@ -330,7 +302,7 @@ fn summary(h: &mut String, results: &Results) {
             // A frame that rendered and means nothing: its figures, then why it failed.
             let class = if c.failure.is_some() {
                 " class=\"failed\""
-            } else if c.pareto {
+            } else if c.on_front() {
                 " class=\"pareto\""
             } else {
                 ""

@@ -11,6 +11,7 @@ mod record;
 mod report;
 mod reuse;
 mod validate;
+mod verdicts;
 
 pub use baseline::{RunComparison, compare_runs};
 pub use columns::{COLUMNS, Cell, Column, Measured, Shown, count};
@@ -20,8 +21,8 @@ pub use plan::{
     parse_sweep, shard,
 };
 pub use record::{
-    BaselineChange, CellRecord, Images, Provenance, Rank, Results, RunCost, VariantFile, grouped,
-    label,
+    AgainstLeader, BaselineChange, CellRecord, Fidelity, Front, Images, Provenance, Rank, Results,
+    RunCost, VariantFile, grouped, label,
 };
 pub use report::{table, write_report};
 pub use reuse::{FILE as REUSE_FILE, Previous, ReuseIndex, reuse_summary};
@@ -36,9 +37,9 @@ use sha2::{Digest, Sha256};
 use std::sync::Arc;
 
 use crate::compose::{Composer, Composition};
-use crate::gpu::{AdapterSummary, Gpu, PipelineStats};
-use crate::measure::{Frames, Interval, Stop, Verdict};
-use crate::reference::ReferenceCache;
+use crate::gpu::{Gpu, PipelineStats};
+use crate::measure::{Budget, Frames, Paired, Stop, Verdict};
+use crate::reference::{ReferenceCache, ReferenceJob};
 use crate::run::{CellCost, CellOptions, GpuHalf, RunError, finish_cell, write_images, write_png};
 use crate::scene::SCENES;
 use crate::variant::DebugView;
@@ -107,6 +108,8 @@ pub fn run(
     let mut recomposed = std::collections::HashMap::new();
     let mut reused: Vec<String> = Vec::new();
     let mut records: Vec<Option<CellRecord>> = vec![None; cells.len()];
+    // Batches timed so far: each one's cells compare with each other only.
+    let mut batches_run = 0;
     std::thread::scope(|scope| {
         // With overlap, the cells' CPU halves run on one thread of their own, in order, while
         // the next cells' GPU halves run here; a bounded queue keeps at most two waiting.
@@ -174,7 +177,11 @@ pub fn run(
                         .collect(),
                     again: Vec::new(),
                 },
-                None => run_batch(gpu, composer, cells, &ids, options, references, &bar),
+                None => {
+                    batches_run += 1;
+                    let batch = (batches_run, &ids[..]);
+                    run_batch(gpu, composer, cells, batch, options, references, &bar)
+                }
             };
             // The failure that ended the batch is its last.
             let culprit = ended
@@ -223,6 +230,7 @@ pub fn run(
                 });
                 records[i] = Some(record);
             }
+            bar.checkpoint();
         }
         drop(to_worker);
         if let Some(worker) = worker {
@@ -361,6 +369,8 @@ struct Live<'g> {
     scene: crate::scene::Scene,
     timing: crate::run::Timing<'g>,
     compositions: Vec<Arc<Composition>>,
+    /// Its frame's total in each round of the batch (None where it took none).
+    rounds: Vec<Option<f64>>,
 }
 
 /// Run the cells `batch` of one group: each set up, then timed one frame each in turn
@@ -371,7 +381,7 @@ fn run_batch(
     gpu: &Gpu,
     composer: &Composer,
     cells: &[PlannedCell],
-    batch: &[usize],
+    (batch_id, batch): (usize, &[usize]),
     options: &MatrixOptions,
     references: &ReferenceCache,
     bar: &crate::progress::Bar,
@@ -411,6 +421,7 @@ fn run_batch(
                     scene,
                     timing,
                     compositions,
+                    rounds: Vec::new(),
                 })
             }
             Started::Done(done) => {
@@ -439,11 +450,18 @@ fn run_batch(
             order.reverse();
         }
         let mut failed_now: Vec<(usize, CellRecord)> = Vec::new();
+        for l in &mut live {
+            l.rounds.push(None);
+        }
         for k in order {
             gpu.begin_cell();
             let timing = &mut live[k].timing;
             let why = match catch_unwind(AssertUnwindSafe(|| timing.next_frame())) {
-                Ok(Ok(())) => continue,
+                Ok(Ok(())) => {
+                    let ms = live[k].timing.last_frame_ms();
+                    *live[k].rounds.last_mut().expect("pushed above") = ms;
+                    continue;
+                }
                 Ok(Err(e)) => {
                     CellRecord::not_run(cells[live[k].i].spec.clone(), &RunError::from(e))
                 }
@@ -455,6 +473,9 @@ fn run_batch(
             }
         }
         if failed_now.is_empty() {
+            if let Frames::Budget(budget) = options.frames {
+                stop_decided(&mut live, &budget);
+            }
             continue;
         }
         // Out of the rounds, in the order they failed (the last is the one a broken device
@@ -470,23 +491,40 @@ fn run_batch(
         if gpu.check_health().is_err() {
             return stop_here(ran, &live, &[]);
         }
+        if let Frames::Budget(budget) = options.frames {
+            stop_decided(&mut live, &budget);
+        }
     }
+    // Groups in which some cell traces shadow rays: their truth is shadowed.
+    let shadowed_groups: std::collections::HashSet<String> = cells
+        .iter()
+        .filter(|c| {
+            c.variant
+                .as_ref()
+                .is_ok_and(|v| v.variant.shading.shadows.traced())
+        })
+        .map(|c| c.spec.group())
+        .collect();
     let mut unfinished = live.into_iter();
     while let Some(Live {
         i,
         scene,
         timing,
         mut compositions,
+        rounds,
     }) = unfinished.next()
     {
         let cell = &cells[i];
         bar.status(format!("counting {}", cell.spec.id));
         gpu.begin_cell();
         let mark = composer.log_mark();
+        let shadowed_group = shadowed_groups.contains(&cell.spec.group());
         let done = catch_unwind(AssertUnwindSafe(|| {
-            finish_gpu(timing, composer, cell, scene, options, references)
+            let with = (options, shadowed_group);
+            finish_gpu(timing, composer, cell, scene, with, references)
         }))
-        .unwrap_or_else(|panic| Ran::done(failed(i, panicked(panic))));
+        .unwrap_or_else(|panic| Ran::done(failed(i, panicked(panic))))
+        .timed_in(batch_id, rounds);
         compositions.extend(composer.logged_since(mark));
         let broke = done.failed();
         ran.push((i, done, compositions));
@@ -498,6 +536,42 @@ fn run_batch(
     BatchEnd {
         ran,
         again: Vec::new(),
+    }
+}
+
+/// After a round of a batch timed by budget: stop each cell whose verdict against the
+/// leader is decided (`verdicts::decided_after_round`), and each that spent its budget or
+/// took its most frames with its verdict still open; time again a cell stopped as decided
+/// whose verdict a new leader opened.
+fn stop_decided(live: &mut [Live], budget: &Budget) {
+    // Cells that may still time: all but those past their budget or frame cap.
+    let capped = |l: &Live| l.timing.spent(budget);
+    let open: Vec<bool> = live.iter().map(|l| capped(l).is_none()).collect();
+    let rounds: Vec<&[Option<f64>]> = live.iter().map(|l| &l.rounds[..]).collect();
+    let mut decided = verdicts::decided_after_round(&rounds, &open);
+    // A leader with fewer than an interval's frames of its own goes on.
+    for (k, l) in live.iter().enumerate() {
+        if l.rounds.iter().flatten().count() < crate::measure::MIN_FRAMES {
+            decided[k] = false;
+        }
+    }
+    // A leader past its cap takes no more rounds: what is open against it stays open, so
+    // the others stop with it, for its reason.
+    let lead_cap = verdicts::leader(&rounds).and_then(|k| capped(&live[k]));
+    for (k, l) in live.iter_mut().enumerate() {
+        let stopped = l.timing.stop();
+        let capped = capped(l).or(lead_cap);
+        if decided[k] {
+            if stopped.is_none() {
+                l.timing.end(Stop::Decided);
+            }
+        } else if let Some(stop) = capped {
+            if stopped.is_none() {
+                l.timing.end(stop);
+            }
+        } else if stopped == Some(Stop::Decided) {
+            l.timing.resume();
+        }
     }
 }
 
@@ -539,15 +613,40 @@ fn start_cell<'g>(
     }
 }
 
+/// The variant whose reference is the truth of a cell of `loaded` in a group where some
+/// cell traces shadow rays (`shadowed_group`): `loaded` with exact shadows, where it has
+/// none (None where its own reference is the truth; an error where that variant is not
+/// one the reference can shade).
+fn truth_variant(
+    loaded: &crate::variant::LoadedVariant,
+    shadowed_group: bool,
+) -> Option<Result<crate::variant::LoadedVariant, String>> {
+    use crate::variant::Shadows;
+    if !shadowed_group || loaded.variant.shading.shadows != Shadows::None {
+        return None;
+    }
+    let mut truth = loaded.clone();
+    truth.variant.shading.shadows = Shadows::Exact;
+    let problems = crate::variant::check(&truth.variant);
+    Some(match problems.first() {
+        None => Ok(truth),
+        Some(p) => Err(format!(
+            "no shadowed truth for {}: {}",
+            loaded.name, p.message
+        )),
+    })
+}
+
 /// After a cell's timed frames: its debug view, counters and raster truth.
 fn finish_gpu(
     timing: crate::run::Timing<'_>,
     composer: &Composer,
     cell: &PlannedCell,
     scene: crate::scene::Scene,
-    options: &MatrixOptions,
+    (options, shadowed_group): (&MatrixOptions, bool),
     references: &ReferenceCache,
 ) -> Ran {
+    let gpu = timing.gpu();
     let spec = cell.spec.clone();
     let loaded = match &cell.variant {
         Ok(v) => v,
@@ -566,12 +665,24 @@ fn finish_gpu(
         debug_view,
     };
     match timing.finish(composer, loaded, &scene, cell_options, references) {
-        Ok((half, _)) => Ran::Pending(Box::new(Pending {
-            spec,
-            loaded: loaded.clone(),
-            scene,
-            half,
-        })),
+        Ok((half, _)) => {
+            // Begun after the cell's own reference, so finished after it (`finish`).
+            let truth = truth_variant(loaded, shadowed_group).map(|t| {
+                let t = t?;
+                let job = references
+                    .begin(gpu, composer, &t, &scene)
+                    .map_err(|e| format!("the group's truth: {e}"))?;
+                Ok((t, job))
+            });
+            Ran::Pending(Box::new(Pending {
+                spec,
+                loaded: loaded.clone(),
+                scene,
+                half,
+                rounds: None,
+                truth,
+            }))
+        }
         Err(e) => Ran::done(CellRecord::not_run(spec, &e)),
     }
 }
@@ -588,6 +699,17 @@ impl Ran {
         Ran::Done(Box::new(record))
     }
 
+    /// A pending cell's rounds: its frame times in batch `batch`'s interleaved rounds.
+    fn timed_in(self, batch: usize, rounds: Vec<Option<f64>>) -> Self {
+        match self {
+            Ran::Pending(mut p) => {
+                p.rounds = Some((batch, rounds));
+                Ran::Pending(p)
+            }
+            done => done,
+        }
+    }
+
     fn failed(&self) -> bool {
         matches!(self, Ran::Done(r) if r.failure.is_some())
     }
@@ -599,6 +721,11 @@ struct Pending {
     loaded: crate::variant::LoadedVariant,
     scene: crate::scene::Scene,
     half: GpuHalf,
+    /// The batch it was timed in, and its frame time in each of the batch's rounds.
+    rounds: Option<(usize, Vec<Option<f64>>)>,
+    /// Its group's truth where its own reference is not it: the variant that truth is
+    /// shaded for and its reference job, or why there is none.
+    truth: Option<Result<(crate::variant::LoadedVariant, ReferenceJob), String>>,
 }
 
 /// After a failed cell: keep the device if it still works, else open a new one (or record in
@@ -650,10 +777,37 @@ fn finish(pending: Pending, options: &MatrixOptions, references: &ReferenceCache
         loaded,
         scene,
         half,
+        rounds,
+        truth,
     } = pending;
-    let mut c = match finish_cell(half, references, &loaded, &scene, None) {
+    let (batch, round_ms) = rounds.map_or((None, Vec::new()), |(b, r)| (Some(b), r));
+    let finished = finish_cell(half, references, &loaded, &scene, None);
+    // The truth's job is finished whatever became of the cell: cells after it may share it.
+    let truth = truth.map(|t| {
+        let (variant, job) = t?;
+        let (frame, _) = references
+            .finish(job, &variant, &scene)
+            .map_err(|e| format!("the group's truth: {e}"))?;
+        Ok::<_, String>(frame)
+    });
+    let mut c = match finished {
         Ok(c) => c,
         Err(e) => return CellRecord::not_run(spec, &e),
+    };
+    let fidelity = match truth {
+        None => c
+            .report
+            .error
+            .as_ref()
+            .map(|e| Fidelity::of(e, Fidelity::OWN)),
+        Some(Ok(truth)) => Some(Fidelity::of(
+            &crate::metrics::compare(&c.frame, &truth),
+            Fidelity::SHADOWED,
+        )),
+        Some(Err(why)) => {
+            c.report.scene_notes.push(why);
+            None
+        }
     };
     let images = options.out.join("images");
     let start = std::time::Instant::now();
@@ -698,10 +852,11 @@ fn finish(pending: Pending, options: &MatrixOptions, references: &ReferenceCache
         error: r.error,
         stats: r.stats,
         efficiency: r.efficiency,
+        fidelity,
         images: files,
         speedup_vs_naive: None,
         speedup_interval: None,
-        pareto: false,
+        speedup_least: None,
         rank: None,
         run: 0,
         reused_from: None,
@@ -715,6 +870,10 @@ fn finish(pending: Pending, options: &MatrixOptions, references: &ReferenceCache
         disturbed_frames: r.frame_count.disturbed,
         cost_ms: Some(r.cost_ms),
         sequence_summary: None,
+        front: None,
+        batch,
+        round_ms,
+        against_leader: None,
     }
 }
 
@@ -809,10 +968,11 @@ fn run_sequence(
         error,
         stats: r.stats,
         efficiency: None,
+        fidelity: None,
         images: files,
         speedup_vs_naive: None,
         speedup_interval: None,
-        pareto: false,
+        speedup_least: None,
         rank: None,
         run: 0,
         reused_from: None,
@@ -836,100 +996,154 @@ fn run_sequence(
             images: images_started.elapsed().as_secs_f64() * 1e3,
         }),
         sequence_summary: Some(r.summary),
+        front: None,
+        batch: None,
+        round_ms: Vec::new(),
+        against_leader: None,
     }
 }
 
-/// Fill in speed-ups against naive forward, each cell's rank in its group and the Pareto
-/// front (per group of scene and parameters), and the change against a baseline run. Times
-/// are compared only where their intervals separate, and only between cells timed on one
-/// adapter with one timing source (`provenance` of each cell's `run`).
-pub fn derive(cells: &mut [CellRecord], provenance: &[Provenance], baseline: Option<&Results>) {
-    let groups: Vec<String> = cells.iter().map(|c| c.spec.group()).collect();
-    let clocks: Vec<(Option<&AdapterSummary>, Option<String>)> = cells
-        .iter()
-        .map(|c| {
-            let adapter = provenance.get(c.run).map(|p| &p.adapter);
-            (adapter, c.timing_source.clone())
-        })
-        .collect();
+/// Fill in speed-ups against naive forward, each cell's rank in its group, the time-error
+/// front (per group of scene and parameters) and the change against a baseline run. A
+/// group's cells are compared round by round (`measure::Paired`) among those timed in one
+/// batch of one run, the batch with the most of them (this run's first where two tie);
+/// the rest are not compared (`Rank::NotCompared`).
+pub fn derive(cells: &mut [CellRecord], _provenance: &[Provenance], baseline: Option<&Results>) {
     let timed = |c: &CellRecord| c.ok() && !c.spec.debug_view && c.total_ms().is_some();
-    let mut derived = Vec::with_capacity(cells.len());
-    for i in 0..cells.len() {
-        let peer = |j: usize| groups[j] == groups[i] && clocks[j] == clocks[i] && cells[j].ok();
-        let naive = (0..cells.len())
-            .filter(|&j| peer(j) && cells[j].spec.is_naive_baseline())
-            // The variant named naive_forward first, then any plain naive one.
-            .min_by_key(|&j| cells[j].spec.variant != "naive_forward");
-        let (speedup, speedup_interval) = match (naive, cells[i].total_ms()) {
-            (Some(n), Some(t)) if t > 0.0 && cells[i].ok() => {
-                let ratio = cells[n].total_ms().map(|n| round3(n / t));
-                let range = cells[n]
-                    .total_interval()
-                    .zip(cells[i].total_interval())
-                    .filter(|(_, c)| c.lo > 0.0)
-                    .map(|(n, c)| [round3(n.lo / c.hi), round3(n.hi / c.lo)]);
-                (ratio, range)
+    let mut groups: BTreeMap<String, Vec<usize>> = BTreeMap::new();
+    for (i, c) in cells.iter().enumerate() {
+        if timed(c) {
+            groups.entry(c.spec.group()).or_default().push(i);
+        }
+    }
+    let mut derived: Vec<Derived> = vec![Derived::default(); cells.len()];
+    for members in groups.values() {
+        let mut sizes: BTreeMap<(usize, usize), usize> = BTreeMap::new();
+        for &i in members {
+            if let Some(b) = cells[i].batch.filter(|_| !cells[i].round_ms.is_empty()) {
+                *sizes.entry((cells[i].run, b)).or_default() += 1;
             }
-            _ => (None, None),
-        };
-        // Pareto: no other cell of the group is faster (intervals apart) and at least as
-        // accurate. Debug views show no scene and take no part.
-        let point = |j: usize| -> Option<(Option<Interval>, f64)> {
-            let c = &cells[j];
-            if !timed(c) {
-                return None;
-            }
-            Some((c.total_interval(), c.error.as_ref()?.rmse_8bit))
-        };
-        let pareto = point(i).is_some_and(|(t, e)| {
-            !(0..cells.len()).any(|j| {
-                j != i
-                    && peer(j)
-                    && point(j).is_some_and(|(tj, ej)| {
-                        Interval::compare(tj.as_ref(), t.as_ref()) == Verdict::Faster && ej <= e
-                    })
-            })
+        }
+        let best = sizes
+            .iter()
+            .max_by(|a, b| a.1.cmp(b.1).then(b.0.cmp(a.0)))
+            .map(|(k, _)| *k);
+        let (compared, apart): (Vec<usize>, Vec<usize>) = members.iter().partition(|&&i| {
+            best.is_some_and(|k| cells[i].batch == Some(k.1) && cells[i].run == k.0)
         });
-        let with_interval = |j: usize| cells[j].total_interval().is_some();
-        let fastest = (0..cells.len())
-            .filter(|&j| peer(j) && timed(&cells[j]) && with_interval(j))
-            .min_by(|&a, &b| {
-                let t = |j: usize| cells[j].total_ms().unwrap_or(f64::INFINITY);
-                t(a).total_cmp(&t(b)).then(a.cmp(&b))
+        for i in apart {
+            derived[i].rank = Some(Rank::NotCompared);
+        }
+        let rounds: Vec<&[Option<f64>]> =
+            compared.iter().map(|&i| &cells[i].round_ms[..]).collect();
+        let Some(lead) = verdicts::leader(&rounds) else {
+            continue;
+        };
+        let paired = |a: usize, b: usize| Paired::of(rounds[a], rounds[b]);
+        for (k, &i) in compared.iter().enumerate() {
+            if k == lead {
+                continue;
+            }
+            let p = paired(k, lead);
+            let over_budget = cells[i].timing_stop == Some(Stop::Budget);
+            derived[i].rank = Some(match p {
+                Some(p) if p.verdict == Verdict::Slower => Rank::Slower,
+                Some(p) if p.verdict == Verdict::Tie => Rank::TiedWithFastest,
+                Some(p)
+                    if over_budget
+                        && p.rounds < crate::measure::MIN_FRAMES
+                        && p.range[0] > 1.0 + crate::measure::TIE_WITHIN =>
+                {
+                    Rank::SlowerEachRound
+                }
+                _ => Rank::Undecided,
             });
-        let rank = timed(&cells[i]).then(|| {
-            let this = cells[i].total_interval();
-            let Some(f) = fastest.filter(|_| this.is_some()) else {
-                return Rank::TooFewFrames;
-            };
-            match Interval::compare(this.as_ref(), cells[f].total_interval().as_ref()) {
-                _ if f == i => Rank::Fastest,
-                Verdict::Slower => Rank::Slower,
-                _ => Rank::TiedWithFastest,
-            }
+            derived[i].against_leader = p.map(|paired| AgainstLeader {
+                paired,
+                rounds_to_decide: (!paired.verdict.decided())
+                    .then(|| verdicts::rounds_to_decide(&paired)),
+            });
+        }
+        let all_decided = compared.iter().enumerate().all(|(k, &i)| {
+            k == lead
+                || matches!(
+                    derived[i].rank,
+                    Some(Rank::Slower | Rank::TiedWithFastest | Rank::SlowerEachRound)
+                )
         });
-        let vs_baseline = baseline.and_then(|b| {
+        derived[compared[lead]].rank = Some(if all_decided {
+            Rank::Fastest
+        } else {
+            Rank::Leads
+        });
+        // Speed-ups: naive forward's frame over each cell's, round by round.
+        let naive = (0..compared.len())
+            .filter(|&k| cells[compared[k]].spec.is_naive_baseline())
+            // The variant named naive_forward first, then any plain naive one.
+            .min_by_key(|&k| cells[compared[k]].spec.variant != "naive_forward");
+        if let Some(n) = naive {
+            for (k, &i) in compared.iter().enumerate() {
+                if let Some(p) = paired(n, k) {
+                    derived[i].speedup = Some(round3(p.ratio));
+                    derived[i].speedup_interval = p.interval.map(|r| [round3(r.lo), round3(r.hi)]);
+                    derived[i].speedup_least = Some((round3(p.range[0]), p.rounds));
+                }
+            }
+        }
+        // The front, by fidelity: dominated by a cell decided faster and at least as
+        // faithful, or tied and more faithful; undecided where a cell at least as faithful
+        // is undecided against it.
+        let error = |k: usize| cells[compared[k]].fidelity_rmse();
+        for (k, &i) in compared.iter().enumerate() {
+            let Some(e) = error(k) else { continue };
+            let mut front = Front::On;
+            for j in (0..compared.len()).filter(|&j| j != k) {
+                let Some(ej) = error(j) else { continue };
+                let v = paired(j, k).map_or(Verdict::Undecided, |p| p.verdict);
+                if (v == Verdict::Faster && ej <= e) || (v == Verdict::Tie && ej < e) {
+                    front = Front::Dominated;
+                    break;
+                }
+                if v == Verdict::Undecided && ej <= e {
+                    front = Front::Undecided;
+                }
+            }
+            derived[i].front = Some(front);
+        }
+    }
+    for (i, c) in cells.iter_mut().enumerate() {
+        let d = &derived[i];
+        c.speedup_vs_naive = d.speedup;
+        c.speedup_interval = d.speedup_interval;
+        c.speedup_least = d.speedup_least;
+        c.front = d.front;
+        c.rank = d.rank;
+        c.against_leader = d.against_leader;
+        c.vs_baseline = baseline.and_then(|b| {
             let old = b
                 .cells
                 .iter()
-                .find(|o| baseline::key(o) == baseline::key(&cells[i]))?;
-            let (t_new, t_old) = (cells[i].total_ms()?, old.total_ms()?);
-            let (e_new, e_old) = (cells[i].error.as_ref()?, old.error.as_ref()?);
+                .find(|o| baseline::key(o) == baseline::key(c))?;
+            let (t_new, t_old) = (c.total_ms()?, old.total_ms()?);
+            let (e_new, e_old) = (c.error.as_ref()?, old.error.as_ref()?);
             Some(BaselineChange {
                 time_ratio: round3(t_new / t_old.max(1e-9)),
                 max_abs_8bit_change: e_new.max_abs_8bit as i64 - e_old.max_abs_8bit as i64,
                 rmse_8bit_change: e_new.rmse_8bit - e_old.rmse_8bit,
             })
         });
-        derived.push((speedup, speedup_interval, pareto, rank, vs_baseline));
     }
-    for (c, (speedup, range, pareto, rank, vs_baseline)) in cells.iter_mut().zip(derived) {
-        c.speedup_vs_naive = speedup;
-        c.speedup_interval = range;
-        c.pareto = pareto;
-        c.rank = rank;
-        c.vs_baseline = vs_baseline;
-    }
+}
+
+/// What `derive` works out for one cell.
+#[derive(Clone, Default)]
+struct Derived {
+    speedup: Option<f64>,
+    speedup_interval: Option<[f64; 2]>,
+    speedup_least: Option<(f64, usize)>,
+    front: Option<Front>,
+    rank: Option<Rank>,
+    against_leader: Option<AgainstLeader>,
 }
 
 /// Combine result folders into one: cells by id (a later folder's cell replaces an earlier
@@ -1159,8 +1373,8 @@ fn provenance(gpu: &Gpu, composer: &Composer, options: &MatrixOptions) -> Proven
                 format!("exact: {warmup} untimed then {timed} timed per cell")
             }
             Frames::Budget(b) => format!(
-                "by budget, a group's cells in interleaved rounds: a frame without lights (untimed), then until the median's 95% interval lies within +-{}% of it, {} ms of frames are spent (the untimed ones included), or {} frames",
-                b.precision * 100.0,
+                "by budget, a group's cells in interleaved rounds: a frame without lights (untimed), then rounds until the cell's verdict against the leader is decided (round by round, 95%, a tie within {}%), {} ms of frames are spent (the untimed ones included), or {} frames",
+                crate::measure::TIE_WITHIN * 100.0,
                 b.budget_ms,
                 b.max_frames
             ),

@@ -1,9 +1,10 @@
-//! The report's plots, as SVG (plotters): time against error with the Pareto front, time
-//! against light count per pipeline, time against cluster count, and time per pass.
+//! The report's plots, as SVG (plotters): time against fidelity with the Pareto front and
+//! interval bars, time against light count per pipeline, time against cluster count, and
+//! time per pass.
 
 use plotters::prelude::*;
 
-use super::record::{grouped, label};
+use super::record::{Front, grouped, label};
 use super::{CellRecord, Results};
 use crate::plot::{self, Area, FONT, Plot, log_axis, numbered_key, series_color, tick_label};
 
@@ -36,20 +37,22 @@ pub fn all(results: &Results) -> Vec<Plot> {
         if shown.len() < 4 {
             continue;
         }
-        let mut add = |kind: &str, title: String, draw: &dyn Fn(&Area) -> Drawn| {
+        let mut add = |kind: &str, title: String, size, draw: &dyn Fn(&Area) -> Drawn| {
             let file = format!("{kind}_{n}.svg");
-            if let Some(p) = plot::svg(&file, &title, SIZE, |a| drawn(draw(a))) {
+            if let Some(p) = plot::svg(&file, &title, size, |a| drawn(draw(a))) {
                 plots.push(p);
             }
         };
         add(
             "time_error",
-            format!("GPU time against error: {group}"),
+            format!("GPU time against fidelity (RMSE against the group's truth): {group}"),
+            time_error_size(&shown),
             &|a| time_error(a, &shown),
         );
         add(
             "time_clusters",
             format!("GPU time against cluster count: {group}"),
+            time_clusters_size(&shown),
             &|a| time_clusters(a, &shown),
         );
         // Naive forward's light loop would flatten every other bar; the table has it.
@@ -61,6 +64,7 @@ pub fn all(results: &Results) -> Vec<Plot> {
         add(
             "passes",
             format!("GPU time per pass (naive forward left out): {group}"),
+            SIZE,
             &|a| passes(a, &fast),
         );
     }
@@ -86,94 +90,99 @@ fn log_range(values: impl Iterator<Item = f64>) -> (f64, f64) {
     (lo.max(1e-4) / 1.5, hi.max(1e-3) * 1.5)
 }
 
-/// Errors below this show at it on the log axis (an exact image has RMSE 0).
-const ERROR_FLOOR: f64 = 1e-3;
-
-fn time_error(area: &Area, cells: &[&CellRecord]) -> Drawn {
-    let points: Vec<(f64, f64, &CellRecord)> = cells
+/// The cells the time-fidelity plot shows, as its points: each cell's median and
+/// interval, its fidelity RMSE, its name with its front mark, its pipeline's colour.
+fn time_error_points(cells: &[&CellRecord]) -> Vec<plot::TimeErrorPoint> {
+    cells
         .iter()
         .filter_map(|c| {
-            let e = c.error.as_ref()?.rmse_8bit.max(ERROR_FLOOR);
-            Some((c.total_ms()?, e, *c))
+            let mark = match c.front {
+                Some(Front::On) => "* ",
+                Some(Front::Undecided) => "? ",
+                _ => "",
+            };
+            Some(plot::TimeErrorPoint {
+                ms: c.total_ms()?,
+                interval: c.total_interval().map(|i| [i.lo, i.hi]),
+                error: c.fidelity_rmse()?,
+                name: format!("{mark}{}", label(c)),
+                color: pipeline_color(c),
+                on_front: c.on_front(),
+            })
         })
-        .collect();
-    if points.len() < 2 {
-        return Ok(false);
-    }
-    // Points carry numbers; the key beside the plot names them.
-    let (plot_area, key_area) = area.split_horizontally(KEY_SPLIT);
-    let (t0, t1) = log_range(points.iter().map(|p| p.0));
-    let e1 = points.iter().map(|p| p.1).fold(0.0, f64::max).max(0.1) * 3.0;
-    let mut chart = ChartBuilder::on(&plot_area)
-        .margin(16)
-        .x_label_area_size(44)
-        .y_label_area_size(64)
-        .build_cartesian_2d(log_axis(t0, t1), log_axis(ERROR_FLOOR / 2.0, e1))?;
-    chart
-        .configure_mesh()
-        .light_line_style(TRANSPARENT)
-        .x_desc("GPU time per frame, ms (log)")
-        .y_desc("RMSE against the reference, 8-bit LSB (log; 0.001 = exact)")
-        .x_label_formatter(&tick_label)
-        .y_label_formatter(&tick_label)
-        .label_style((FONT, 13))
-        .draw()?;
-    let mut front: Vec<(f64, f64)> = points
-        .iter()
-        .filter(|p| p.2.pareto)
-        .map(|p| (p.0, p.1))
-        .collect();
-    front.sort_by(|a, b| a.0.total_cmp(&b.0));
-    chart.draw_series(LineSeries::new(front, BLACK.stroke_width(2)))?;
-    let mut legend = vec![("Pareto front".to_string(), BLACK, None)];
-    for (name, pipeline) in [
+        .collect()
+}
+
+/// The pipelines the cells hold, as a legend.
+fn pipeline_legend(cells: &[&CellRecord]) -> Vec<plot::Entry> {
+    [
         ("naive forward", "NaiveForward"),
         ("clustered forward", "ClusteredForward"),
         ("clustered deferred", "ClusteredDeferred"),
         ("scissor deferred", "DeferredScissor"),
-    ] {
-        let mine: Vec<_> = points
+    ]
+    .into_iter()
+    .filter_map(|(name, pipeline)| {
+        let c = cells
             .iter()
-            .filter(|p| p.2.spec.pipeline.as_deref() == Some(pipeline))
-            .collect();
-        if mine.is_empty() {
-            continue;
-        }
-        let color = pipeline_color(mine[0].2);
-        chart.draw_series(
-            mine.iter()
-                .map(|p| Circle::new((p.0, p.1), 5, color.filled())),
-        )?;
-        legend.push((name.to_string(), color, Some(0)));
-    }
-    let at: Vec<(f64, f64)> = points.iter().map(|p| (p.0, p.1)).collect();
-    plot::number_points(&mut chart, &at).ok_or("the point numbers did not draw")?;
-    let key: Vec<(String, RGBColor)> = points
-        .iter()
-        .map(|p| {
-            let mark = if p.2.pareto { "* " } else { "" };
-            (format!("{mark}{}", label(p.2)), pipeline_color(p.2))
-        })
-        .collect();
-    let (legend_area, key_area) = key_area.split_vertically(40 + 17 * legend.len() as u32);
-    plot::side_legend(&legend_area, "pipeline", &legend);
-    numbered_key(&key_area, "* = Pareto front", &key);
-    Ok(true)
+            .find(|c| c.spec.pipeline.as_deref() == Some(pipeline))?;
+        Some((name.to_string(), pipeline_color(c), Some(0)))
+    })
+    .collect()
 }
 
-fn time_clusters(area: &Area, cells: &[&CellRecord]) -> Drawn {
-    let points: Vec<(f64, f64, &CellRecord)> = cells
+fn time_error_size(cells: &[&CellRecord]) -> (u32, u32) {
+    plot::time_error_size(&time_error_points(cells), pipeline_legend(cells).len())
+}
+
+/// GPU time against fidelity (RMSE against the group's truth): `plot::time_error`.
+fn time_error(area: &Area, cells: &[&CellRecord]) -> Drawn {
+    plot::time_error(
+        area,
+        &time_error_points(cells),
+        &pipeline_legend(cells),
+        "RMSE against the group's truth, 8-bit LSB (log)",
+    )
+}
+
+/// The cells the time-cluster plot shows: (clusters, median ms, the cell).
+fn time_clusters_points<'a>(cells: &[&'a CellRecord]) -> Vec<(f64, f64, &'a CellRecord)> {
+    cells
         .iter()
         .filter(|c| !c.spec.post)
         .filter_map(|c| {
             let g = c.spec.grid?;
             Some(((g[0] * g[1] * g[2]) as f64, c.total_ms()?, *c))
         })
-        .collect();
+        .collect()
+}
+
+fn time_clusters_key(points: &[(f64, f64, &CellRecord)]) -> Vec<(String, RGBColor)> {
+    points
+        .iter()
+        .map(|p| {
+            let g = p.2.spec.grid.unwrap_or_default();
+            (
+                format!("{} ({}x{}x{})", label(p.2), g[0], g[1], g[2]),
+                pipeline_color(p.2),
+            )
+        })
+        .collect()
+}
+
+/// The time-cluster plot's size: its data area and a key that holds every name whole.
+fn time_clusters_size(cells: &[&CellRecord]) -> (u32, u32) {
+    let (kw, kh) = plot::key_size(&time_clusters_key(&time_clusters_points(cells)));
+    (KEY_SPLIT + kw, SIZE.1.max(kh))
+}
+
+fn time_clusters(area: &Area, cells: &[&CellRecord]) -> Drawn {
+    let points = time_clusters_points(cells);
     if points.len() < 2 {
         return Ok(false);
     }
     let (plot_area, key_area) = area.split_horizontally(KEY_SPLIT);
+    let (plot_area, _) = plot_area.split_vertically(SIZE.1);
     let c1 = points.iter().map(|p| p.0).fold(0.0, f64::max) * 1.25;
     let t1 = points.iter().map(|p| p.1).fold(0.0, f64::max) * 1.15;
     let mut chart = ChartBuilder::on(&plot_area)
@@ -197,17 +206,7 @@ fn time_clusters(area: &Area, cells: &[&CellRecord]) -> Drawn {
     )?;
     let at: Vec<(f64, f64)> = points.iter().map(|p| (p.0, p.1)).collect();
     plot::number_points(&mut chart, &at).ok_or("the point numbers did not draw")?;
-    let key: Vec<(String, RGBColor)> = points
-        .iter()
-        .map(|p| {
-            let g = p.2.spec.grid.unwrap_or_default();
-            (
-                format!("{} ({}x{}x{})", label(p.2), g[0], g[1], g[2]),
-                pipeline_color(p.2),
-            )
-        })
-        .collect();
-    numbered_key(&key_area, "variant (grid)", &key);
+    numbered_key(&key_area, "variant (grid)", &time_clusters_key(&points));
     Ok(true)
 }
 

@@ -8,7 +8,7 @@ use serde::{Deserialize, Serialize};
 use serde_json::{Map, Value};
 
 use crate::gpu::{AdapterSummary, PipelineStats};
-use crate::measure::{Interval, Stop};
+use crate::measure::{Interval, Paired, Stop};
 use crate::metrics::ErrorMetrics;
 use crate::render::FrameStats;
 use crate::run::{CellCost, RunError};
@@ -50,20 +50,44 @@ pub struct CellRecord {
     /// Distance from perfect culling (`efficiency`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub efficiency: Option<crate::efficiency::Efficiency>,
+    /// Its image against its group's truth (`Fidelity`): what the time-error front and
+    /// "most accurate" read. `error` is against its own reference: what its claim is
+    /// checked by.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub fidelity: Option<Fidelity>,
     /// Image files, relative to the results folder.
     pub images: Images,
-    /// Naive forward's total time over this cell's, on the same scene and parameters.
+    /// Naive forward's frame over this cell's, the median over the rounds both were timed
+    /// in (same scene and parameters, same batch).
     pub speedup_vs_naive: Option<f64>,
-    /// [lo, hi] of that speed-up, from the two times' intervals (absent where either has
-    /// none); a range holding 1 is a tie.
+    /// [lo, hi]: that median's interval at `interval_level` (absent under 6 shared
+    /// rounds); a range holding 1 is no speed-up.
     #[serde(default)]
     pub speedup_interval: Option<[f64; 2]>,
-    /// On the time-error Pareto front of its scene and parameters: no other cell is both
-    /// faster (their intervals separate) and at least as accurate.
-    pub pareto: bool,
-    /// Where its time stands in its group: the fastest, tied with it, or slower.
+    /// The smallest speed-up of any shared round, and how many rounds there were: a bound
+    /// that holds for every round measured, where there are too few for an interval.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub speedup_least: Option<(f64, usize)>,
+    /// Where it stands on its group's time-error front (absent when not timed).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub front: Option<Front>,
+    /// Where its time stands in its group: the fastest, tied with it, slower, undecided,
+    /// or not compared.
     #[serde(default)]
     pub rank: Option<Rank>,
+    /// The batch of its run it was timed in: cells compare only with cells of the same run
+    /// and batch (timed in the same interleaved rounds).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub batch: Option<usize>,
+    /// What its frame cost in each round of its batch, milliseconds (null where it took
+    /// none): on a software adapter the CPU time this process spent on it, every thread
+    /// included (the frame's own work: other processes' load slows its wall time, not
+    /// that), elsewhere its total. Verdicts and speed-ups compare these round by round.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub round_ms: Vec<Option<f64>>,
+    /// Its frame over the group leader's, round by round (absent for the leader itself).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub against_leader: Option<AgainstLeader>,
     /// The run that made this record: its index in `provenance` (0 for this run's own
     /// cells; a reused or merged cell keeps its own run's).
     #[serde(default)]
@@ -107,29 +131,105 @@ pub struct CellRecord {
     pub sequence_summary: Option<SequenceSummary>,
 }
 
-/// Where a cell's time stands in its group (scene and parameters), told apart only where
-/// the intervals separate (`measure::Interval::compare`).
+/// Where a cell's time stands in its group (scene and parameters), against the group's
+/// leader round by round (`measure::Paired`, `verdicts::leader`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Rank {
-    /// The lowest median of the group's cells with an interval.
+    /// The leader, and every other cell compared is decided against it (slower or tied).
     Fastest,
-    /// Its interval overlaps the fastest's: they cannot be told apart.
+    /// The lowest time, with some other cell still undecided against it.
+    Leads,
+    /// Within the tie margin of the leader (`measure::TIE_WITHIN`), at 95%.
     TiedWithFastest,
-    /// Its interval lies wholly above the fastest's.
+    /// Slower than the leader, at 95%.
     Slower,
-    /// Timed too few times for an interval (a frame of a second or more is timed once):
-    /// it is compared with no other.
-    TooFewFrames,
+    /// Too slow for an interval within its budget (naive forward's frames of a second or
+    /// more), and slower than the leader by more than the tie margin in each round it
+    /// took: a bound on the rounds measured, not a 95% verdict.
+    SlowerEachRound,
+    /// Not decided: too few shared rounds for an interval, or one that holds 1 and reaches
+    /// past the tie margin (the leader too, while any other is undecided).
+    #[serde(alias = "too_few_frames")]
+    Undecided,
+    /// Timed in another run or batch than the group's compared cells (reused, merged,
+    /// or more cells than one batch holds): its times are not compared with theirs.
+    NotCompared,
 }
 
 impl Rank {
     pub fn label(self) -> &'static str {
         match self {
             Rank::Fastest => "fastest",
+            Rank::Leads => "leads",
             Rank::TiedWithFastest => "tie",
             Rank::Slower => "slower",
-            Rank::TooFewFrames => "few frames",
+            Rank::SlowerEachRound => "slower each round",
+            Rank::Undecided => "undecided",
+            Rank::NotCompared => "other run",
+        }
+    }
+}
+
+/// A cell's standing against its group's leader.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct AgainstLeader {
+    /// This cell's frame time over the leader's, round by round.
+    pub paired: Paired,
+    /// Rounds that would decide it, where it is undecided (`verdicts::rounds_to_decide`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rounds_to_decide: Option<usize>,
+}
+
+/// How far a cell's image is from its group's truth: the f64 reference of the most
+/// complete lighting any cell of the group computes (with exact shadows where any cell
+/// traces shadow rays), shaded on the cell's own raster truth. A cell whose own reference
+/// is that truth has its own error here.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Fidelity {
+    /// Which truth: `its own reference`, or `exact shadows` (the group's).
+    pub truth: String,
+    pub rmse_8bit: f64,
+    /// The largest 8-bit difference; against a shadowed truth, outside the range its
+    /// ambiguous shadow rays allow (`metrics::ShadowError`).
+    pub max_8bit: u32,
+}
+
+impl Fidelity {
+    pub const OWN: &str = "its own reference";
+    pub const SHADOWED: &str = "exact shadows";
+
+    pub fn of(e: &crate::metrics::ErrorMetrics, truth: &str) -> Fidelity {
+        Fidelity {
+            truth: truth.into(),
+            rmse_8bit: e.rmse_8bit,
+            max_8bit: e
+                .shadows
+                .as_ref()
+                .map_or(e.max_abs_8bit, |s| s.max_outside_ambiguity_8bit),
+        }
+    }
+}
+
+/// Where a cell stands on its group's time-error front.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Front {
+    /// No other cell dominates it, and every cell at least as faithful is decided against
+    /// it.
+    On,
+    /// Another cell is decided faster and at least as faithful, or tied and more faithful.
+    Dominated,
+    /// Not dominated, but a cell at least as faithful is undecided against it: it may be.
+    Undecided,
+}
+
+impl Front {
+    pub fn label(self) -> &'static str {
+        match self {
+            Front::On => "*",
+            Front::Dominated => "",
+            Front::Undecided => "?",
         }
     }
 }
@@ -159,6 +259,33 @@ pub struct BaselineChange {
 impl CellRecord {
     pub fn ok(&self) -> bool {
         self.failure.is_none()
+    }
+
+    /// On its group's time-error front, decided.
+    pub fn on_front(&self) -> bool {
+        self.front == Some(Front::On)
+    }
+
+    /// Its RMSE against its group's truth (against its own reference in results written
+    /// before fidelity was recorded).
+    pub fn fidelity_rmse(&self) -> Option<f64> {
+        match &self.fidelity {
+            Some(f) => Some(f.rmse_8bit),
+            None => self.error.as_ref().map(|e| e.rmse_8bit),
+        }
+    }
+
+    /// Exact against its group's truth: it passed, within 1 LSB of that truth (outside
+    /// ambiguous shadow rays) and dropped no light.
+    pub fn exact_to_truth(&self) -> bool {
+        let within = match &self.fidelity {
+            Some(f) => f.max_8bit <= crate::run::EXACT_LSB,
+            None => self
+                .error
+                .as_ref()
+                .is_some_and(|e| e.max_abs_8bit <= crate::run::EXACT_LSB),
+        };
+        self.ok() && within && self.stats.as_ref().is_none_or(|s| s.dropped_lights == 0)
     }
 
     /// Median total GPU milliseconds.
@@ -200,11 +327,16 @@ impl CellRecord {
             error: None,
             stats: None,
             efficiency: None,
+            fidelity: None,
             images: Images::default(),
             speedup_vs_naive: None,
             speedup_interval: None,
-            pareto: false,
+            speedup_least: None,
+            front: None,
             rank: None,
+            batch: None,
+            round_ms: Vec::new(),
+            against_leader: None,
             run: 0,
             reused_from: None,
             exact_claim: false,

@@ -41,8 +41,8 @@ pub fn table(results: &Results) -> String {
     let mut out = String::new();
     for (group, cells) in grouped(results) {
         let mut t = Table::new(&group, &headings).left_aligned(2);
-        for c in cells {
-            let mark = if c.pareto { "*" } else { "" };
+        for &c in &cells {
+            let mark = c.front.map_or("", |f| f.label());
             let names = vec![mark.to_string(), label(c)];
             let failed = c
                 .failure
@@ -65,10 +65,11 @@ pub fn table(results: &Results) -> String {
             }
         }
         let _ = write!(out, "\n{}", t.terminal());
+        let _ = writeln!(out, "verdict: {}", super::verdicts::group_verdict(&cells));
     }
     let _ = writeln!(
         out,
-        "\n{}; * = on the time-error (RMSE) Pareto front of its group",
+        "\n{}; * = on the time-fidelity (truth RMSE8) Pareto front of its group, ? = undecided (a cell at least as faithful is undecided against it)",
         results.tally()
     );
     out

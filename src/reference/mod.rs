@@ -259,7 +259,6 @@ fn shade(
         view: scene.camera.view(),
         near: scene.camera.near,
         source,
-        reach: o.reach,
     });
     shade_reference(
         truth,

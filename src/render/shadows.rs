@@ -16,8 +16,6 @@ use super::error::RenderError;
 #[derive(Clone, Debug)]
 pub struct Occluders {
     pub bvh: TriangleBvh,
-    /// The largest coordinate of the scene's vertices and lights.
-    pub reach: f64,
 }
 
 impl Occluders {
@@ -34,16 +32,8 @@ impl Occluders {
             .flatten()
             .copied()
             .collect();
-        let largest = |p: [f32; 3]| p.iter().fold(0f64, |m, &x| m.max((x as f64).abs()));
-        let reach = positions
-            .iter()
-            .copied()
-            .chain(scene.lights.iter().map(|l| l.position))
-            .map(largest)
-            .fold(0.0, f64::max);
         Occluders {
             bvh: TriangleBvh::build(&positions, &opaque),
-            reach,
         }
     }
 

@@ -1,6 +1,6 @@
 //! `clusterlab study shadows`: every shadow method on the atrium at several light counts,
 //! Forward+ and deferred: exact shadows beside their unshadowed twins (what shadows cost,
-//! which pipeline wins with them), and the sampled estimators at several ray budgets (time
+//! which pipeline is faster with them, where the intervals decide it), and the sampled estimators at several ray budgets (time
 //! against error, both against the shadowed f64 reference); rays traced, blocked, ms per
 //! ray and BVH nodes per ray from the instrumented frame.
 
@@ -9,7 +9,7 @@ use serde::Serialize;
 use super::{Reads, StudyError, StudyOptions};
 use crate::compose::Composer;
 use crate::gpu::Gpu;
-use crate::measure::Frames;
+use crate::measure::{Frames, Interval, Verdict};
 use crate::plot::Plot;
 use crate::run::{CellOptions, EXACT_LSB, run_scene};
 use crate::scene::Scene;
@@ -262,8 +262,24 @@ fn table(rows: &[ShadowRow]) -> Table {
     t
 }
 
-/// The study's answers, per light count: which pipeline wins with exact shadows, and where
-/// the first sampled method at 1 ray overtakes exact in time and in error.
+/// A row's frame interval, where enough frames were timed for one.
+fn interval(r: &ShadowRow) -> Option<Interval> {
+    Some(Interval {
+        lo: r.frame_ms_lo?,
+        hi: r.frame_ms_hi?,
+        level: crate::measure::LEVEL,
+    })
+}
+
+/// How `a`'s frame compares with `b`'s, by their intervals (`Interval::compare`: apart,
+/// a tie within the margin, or undecided).
+fn verdict(a: &ShadowRow, b: &ShadowRow) -> Verdict {
+    Interval::compare(interval(a).as_ref(), interval(b).as_ref())
+}
+
+/// The study's answers, per light count: which pipeline is faster with exact shadows, and
+/// how the first sampled method at 1 ray compares with exact in time and in error. A word
+/// of speed (faster, slower, fastest) is written only where the intervals decide it.
 fn findings(rows: &[ShadowRow]) -> Vec<String> {
     let ok = |variant: &str, lights: u32| {
         rows.iter()
@@ -272,18 +288,20 @@ fn findings(rows: &[ShadowRow]) -> Vec<String> {
     let mut counts: Vec<u32> = rows.iter().map(|r| r.lights).collect();
     counts.dedup();
     let mut notes = Vec::new();
+    let within = (crate::measure::TIE_WITHIN * 100.0).round();
     for n in counts {
         if let (Some(f), Some(d)) = (
             ok("forward_plus_shadows", n),
             ok("clustered_deferred_shadows", n),
         ) {
-            let (winner, ratio) = if d.frame_ms < f.frame_ms {
-                ("deferred", f.frame_ms / d.frame_ms)
-            } else {
-                ("Forward+", d.frame_ms / f.frame_ms)
+            let said = match verdict(d, f) {
+                Verdict::Faster => format!("deferred is faster, Forward+ takes {:.2} of its frame", f.frame_ms / d.frame_ms),
+                Verdict::Slower => format!("Forward+ is faster, deferred takes {:.2} of its frame", d.frame_ms / f.frame_ms),
+                Verdict::Tie => format!("a tie (within {within}%)"),
+                Verdict::Undecided => "undecided (their intervals overlap past the tie margin, or one has none: more --frames would decide)".into(),
             };
             notes.push(format!(
-                "{n} lights, exact shadows: {winner} wins, the other takes {ratio:.2} of its frame ({} ms Forward+, {} ms deferred; x unshadowed {} and {})",
+                "{n} lights, exact shadows: {said} ({} ms Forward+, {} ms deferred; x unshadowed {} and {})",
                 sig(f.frame_ms),
                 sig(d.frame_ms),
                 f.over_unshadowed.map_or("-".into(), |x| format!("{x:.2}")),
@@ -294,30 +312,46 @@ fn findings(rows: &[ShadowRow]) -> Vec<String> {
             ok("forward_plus_shadows", n),
             ok("forward_plus_shadows_importance_1", n),
         ) {
-            let faster = s.frame_ms < exact.frame_ms;
             let as_good = s.rmse_8bit <= exact.rmse_8bit;
             notes.push(format!(
                 "{n} lights, importance-sampled at 1 ray against exact (Forward+): {} ms against {} ms ({}), RMSE {:.3} against {:.3} LSB ({})",
                 sig(s.frame_ms),
                 sig(exact.frame_ms),
-                if faster { "faster" } else { "slower" },
+                verdict(s, exact).label(),
                 s.rmse_8bit,
                 exact.rmse_8bit,
                 if as_good { "as good" } else { "worse: one ray a pixel is noisy where its lights disagree" },
             ));
         }
-        let within = rows
+        let candidates: Vec<&ShadowRow> = rows
             .iter()
             .filter(|r| r.lights == n && r.error.is_none() && r.method.contains("ray"))
             .filter(|r| r.rmse_8bit <= SAMPLED_RMSE)
+            .collect();
+        let lowest = candidates
+            .iter()
             .min_by(|a, b| a.frame_ms.total_cmp(&b.frame_ms));
-        if let (Some(s), Some(exact)) = (within, ok("forward_plus_shadows", n)) {
+        if let (Some(s), Some(exact)) = (lowest, ok("forward_plus_shadows", n)) {
+            let open: Vec<&str> = candidates
+                .iter()
+                .filter(|o| o.variant != s.variant && verdict(o, s) != Verdict::Slower)
+                .map(|o| o.variant.as_str())
+                .collect();
+            let head = if open.is_empty() {
+                format!("the fastest sampled run within {SAMPLED_RMSE} LSB RMSE")
+            } else {
+                format!(
+                    "the lowest median of the sampled runs within {SAMPLED_RMSE} LSB RMSE (not decided against {})",
+                    open.join(", ")
+                )
+            };
             notes.push(format!(
-                "{n} lights, the fastest sampled run within {SAMPLED_RMSE} LSB RMSE: {} ({}), {} ms, {:.2} of exact Forward+'s frame",
+                "{n} lights, {head}: {} ({}), {} ms, {:.2} of exact Forward+'s frame ({} against it)",
                 s.variant,
                 s.method,
                 sig(s.frame_ms),
-                s.frame_ms / exact.frame_ms
+                s.frame_ms / exact.frame_ms,
+                verdict(s, exact).label()
             ));
         }
     }
@@ -328,47 +362,106 @@ fn findings(rows: &[ShadowRow]) -> Vec<String> {
 /// the notes: one step of the display.
 const SAMPLED_RMSE: f64 = 1.0;
 
-/// Time against error per light count: each method a series (its ray budgets a line).
+/// Time against error per light count, one plot under another: every shadow method and
+/// ray budget a numbered point (the unshadowed twins are the cost's baseline, not a
+/// method), its frame's interval a bar, the front of the points decided by their
+/// intervals (`verdict`).
 fn plot(rows: &[ShadowRow]) -> Option<Plot> {
-    use crate::plot::{Panel, against_lights};
-    let ok: Vec<&ShadowRow> = rows.iter().filter(|r| r.error.is_none()).collect();
-    let lights = (
-        ok.iter().map(|r| r.lights).min()?,
-        ok.iter().map(|r| r.lights).max()?,
-    );
-    let shipped: Vec<&str> = VARIANTS.iter().map(|(v, _)| *v).collect();
-    let series = |value: fn(&ShadowRow) -> f64| -> Vec<(&str, Vec<(f64, f64)>)> {
-        shipped
-            .iter()
-            .map(|&name| {
-                let points = ok
-                    .iter()
-                    .filter(|r| r.variant == name)
-                    .map(|r| (r.lights as f64, value(r)))
-                    .filter(|&(_, v)| v > 0.0)
-                    .collect();
-                (name, points)
-            })
-            .collect()
+    use crate::plot::{TimeErrorPoint, series_color, time_error, time_error_size};
+    let shadowed: Vec<&ShadowRow> = rows
+        .iter()
+        .filter(|r| r.error.is_none() && r.method != Shadows::None.label())
+        .collect();
+    let mut counts: Vec<u32> = shadowed.iter().map(|r| r.lights).collect();
+    counts.sort_unstable();
+    counts.dedup();
+    let methods: Vec<String> = {
+        let mut m: Vec<String> = shadowed.iter().map(|r| family(r)).collect();
+        m.sort();
+        m.dedup();
+        m
     };
-    let values = |value: fn(&ShadowRow) -> f64| ok.iter().map(|r| value(r)).collect();
-    let frame = |r: &ShadowRow| r.frame_ms;
-    let rmse = |r: &ShadowRow| r.rmse_8bit.max(1e-3);
-    against_lights(
+    let color =
+        |r: &ShadowRow| series_color(methods.iter().position(|m| *m == family(r)).unwrap_or(0));
+    let legend: Vec<crate::plot::Entry> = methods
+        .iter()
+        .enumerate()
+        .map(|(i, m)| (m.clone(), series_color(i), Some(0)))
+        .collect();
+    let panels: Vec<Vec<TimeErrorPoint>> = counts
+        .iter()
+        .map(|&n| {
+            let here: Vec<&ShadowRow> =
+                shadowed.iter().copied().filter(|r| r.lights == n).collect();
+            here.iter()
+                .map(|r| {
+                    let front = front_of(r, &here);
+                    let mark = match front {
+                        Some(true) => "* ",
+                        None => "? ",
+                        Some(false) => "",
+                    };
+                    TimeErrorPoint {
+                        ms: r.frame_ms,
+                        interval: r.frame_ms_lo.zip(r.frame_ms_hi).map(|(lo, hi)| [lo, hi]),
+                        error: r.rmse_8bit,
+                        name: format!("{mark}{n} lights: {}", r.variant),
+                        color: color(r),
+                        on_front: front == Some(true),
+                    }
+                })
+                .collect()
+        })
+        .collect();
+    let sizes: Vec<(u32, u32)> = panels
+        .iter()
+        .map(|p| time_error_size(p, legend.len()))
+        .collect();
+    let width = sizes.iter().map(|s| s.0).max()?;
+    let height: u32 = sizes.iter().map(|s| s.1).sum();
+    crate::plot::svg(
         "shadows.svg",
-        "Shadows on the atrium: frame time and error (1 ray a pixel for the sampled ones)",
-        lights,
-        &[
-            Panel {
-                label: "frame ms",
-                values: values(frame),
-                series: series(frame),
-            },
-            Panel {
-                label: "RMSE (8-bit LSB)",
-                values: values(rmse),
-                series: series(rmse),
-            },
-        ],
+        "Shadows on the atrium: frame time against error per light count, every method and ray budget",
+        (width, height),
+        |area| {
+            let mut rest = area.clone();
+            for (points, size) in panels.iter().zip(&sizes) {
+                let (this, below) = rest.split_vertically(size.1);
+                time_error(
+                    &this,
+                    points,
+                    &legend,
+                    "RMSE against the shadowed reference, 8-bit LSB (log)",
+                )
+                .ok()
+                .filter(|&drawn| drawn)?;
+                rest = below;
+            }
+            Some(())
+        },
     )
+}
+
+/// A row's method family: exact (with its pipeline) or the estimator.
+fn family(r: &ShadowRow) -> String {
+    let name = r.variant.split('@').next().unwrap_or(&r.variant);
+    name.strip_prefix("forward_plus_shadows_")
+        .map(|e| e.trim_end_matches("_1").to_string())
+        .unwrap_or_else(|| name.to_string())
+}
+
+/// Whether `r` is on the time-error front of `rows` (one light count): Some(false) where a
+/// row decided faster and at least as accurate (or tied and more accurate) dominates it,
+/// None where a row at least as accurate is undecided against it, Some(true) otherwise.
+fn front_of(r: &ShadowRow, rows: &[&ShadowRow]) -> Option<bool> {
+    let mut open = false;
+    for o in rows.iter().filter(|o| o.variant != r.variant) {
+        match verdict(o, r) {
+            Verdict::Faster if o.rmse_8bit <= r.rmse_8bit => return Some(false),
+            Verdict::Tie if o.rmse_8bit < r.rmse_8bit => return Some(false),
+            Verdict::Undecided if o.rmse_8bit <= r.rmse_8bit => open = true,
+            _ => {}
+        }
+    }
+    (!open).then_some(true)
 }
