@@ -13,6 +13,9 @@ pub struct Plot {
     pub file: String,
     pub title: String,
     pub svg: String,
+    /// Its own size, pixels: a page lays it out at this size (or narrower) before the
+    /// file loads.
+    pub size: (u32, u32),
 }
 
 pub type Area<'a> = DrawingArea<SVGBackend<'a>, Shift>;
@@ -38,6 +41,7 @@ pub fn svg(
         file: file.into(),
         title: title.into(),
         svg,
+        size,
     })
 }
 
@@ -181,7 +185,7 @@ pub fn side_legend(area: &Area, title: &str, entries: &[Entry]) -> Option<()> {
     area.draw(&Text::new(
         title.to_string(),
         (6, 16),
-        (FONT, 13).into_font().style(FontStyle::Bold),
+        (FONT, KEY_FONT + 1).into_font().style(FontStyle::Bold),
     ))
     .ok()?;
     for (k, (name, color, i)) in entries.iter().enumerate() {
@@ -198,7 +202,7 @@ pub fn side_legend(area: &Area, title: &str, entries: &[Entry]) -> Option<()> {
         area.draw(&Text::new(
             name.clone(),
             (12 + LEGEND_SWATCH, y - 7),
-            (FONT, 12).into_font().color(&RGBColor(30, 30, 30)),
+            (FONT, KEY_FONT).into_font().color(&RGBColor(30, 30, 30)),
         ))
         .ok()?;
     }
@@ -285,11 +289,12 @@ pub fn legend(area: &Area, entries: &[Entry]) -> Option<()> {
     side_legend(&strip, "", entries)
 }
 
-/// The smallest text a plot that must read at its natural size writes, in pixels: 11 px
-/// or more on a page 1024 px wide (`tests/page.rs` measures it in a browser).
-pub const KEY_FONT: u32 = 12;
+/// The smallest text a plot that must read at its natural size asks for: plotters' SVG
+/// writes a font of size s as s / 1.24 px, so 14 shows at 11.3 px, 11 px or more on a page
+/// 1024 px wide (`tests/page.rs` measures it in a browser).
+pub const KEY_FONT: u32 = 14;
 /// A key line's height, and the characters a key line holds before it wraps.
-const KEY_LINE: u32 = 16;
+const KEY_LINE: u32 = 17;
 const KEY_WRAP: usize = 44;
 /// About how wide a character of [`KEY_FONT`] is (a sans-serif digit is 0.55 of the size).
 const KEY_CHAR: f64 = 0.6 * KEY_FONT as f64;

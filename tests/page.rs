@@ -369,10 +369,10 @@ fn plot_reads(svg: &str, scale: f64, points: usize) -> Result<(), String> {
 }
 
 /// What the page measures of its time-fidelity plots at 1024 px: each one's shown width
-/// over its own.
+/// over its own (the `width` the page gives it, the SVG's: checked).
 const PLOT_SCALE: &str = r##"<script>
 const plots = [...document.querySelectorAll('img.plot')].filter(i => i.getAttribute('src').includes('time_error'));
-const result = plots.map(i => [i.getAttribute('src'), i.getBoundingClientRect().width / i.naturalWidth]);
+const result = plots.map(i => [i.getAttribute('src'), i.getBoundingClientRect().width / Number(i.getAttribute('width'))]);
 document.body.insertAdjacentHTML('beforeend', '<pre id="meas' + 'ured">' + JSON.stringify(result) + '</pre>');
 </script>"##;
 
@@ -404,6 +404,7 @@ fn the_time_fidelity_plot_reads_at_1024_px() {
                 "--no-sandbox",
                 "--disable-gpu",
                 "--window-size=1024,768",
+                "--virtual-time-budget=5000",
                 "--dump-dom",
             ])
             .arg(format!("file://{}", page.display()))
@@ -425,11 +426,16 @@ fn the_time_fidelity_plot_reads_at_1024_px() {
     );
     let (src, scale) = &shown[0];
     let svg = std::fs::read_to_string(out.join(src)).unwrap();
+    let own = attr(svg.split('>').next().unwrap(), "width").unwrap();
+    assert!(
+        html.contains(&format!("src=\"{src}\" alt=")) && html.contains(&format!("width=\"{own}\"")),
+        "the page gives the plot its own width, {own}"
+    );
     plot_reads(&svg, *scale, points).unwrap();
     // The breaks.
     let squeezed = html.replace(
         "figure img.plot { max-width: 100%;",
-        "figure img.plot { width: 600px; max-width: 100%;",
+        "figure img.plot { width: 600px !important; max-width: 100%;",
     );
     assert_ne!(
         squeezed, html,

@@ -119,8 +119,8 @@ fn a_far_light_leaves_shadows_checkable_and_an_occlusion_free_shader_fails() {
     std::fs::write(&glb, scene::export::to_glb(&scene).expect("export")).expect("write");
     let file = glb.to_str().unwrap();
     let shaders = ("CLUSTERLAB_SHADERS", no_occlusion.root().to_str().unwrap());
-    let out = dir.join("out");
-    let out = out.to_str().unwrap();
+    let (render_out, matrix_out) = (dir.join("render"), dir.join("matrix"));
+    let (render_out, matrix_out) = (render_out.to_str().unwrap(), matrix_out.to_str().unwrap());
     let commands: [&[&str]; 2] = [
         &[
             "render",
@@ -131,7 +131,7 @@ fn a_far_light_leaves_shadows_checkable_and_an_occlusion_free_shader_fails() {
             "--size",
             "160x90",
             "--out",
-            out,
+            render_out,
         ],
         &[
             "matrix",
@@ -144,7 +144,7 @@ fn a_far_light_leaves_shadows_checkable_and_an_occlusion_free_shader_fails() {
             "--frames",
             "1",
             "--out",
-            out,
+            matrix_out,
         ],
     ];
     for args in commands {

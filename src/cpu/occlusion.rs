@@ -767,12 +767,12 @@ mod tests {
     }
 
     /// The reach of a test follows the coordinates it handles: a segment through a unit
-    /// square is blocked at the traversal's rounding for coordinates near 1, and so it stays
-    /// with a light far away elsewhere in the scene; the deliberate break, the scene's
-    /// largest coordinate (1e6) as every test's reach, makes it ambiguous.
+    /// square is blocked at a rounding of 2e-6 a unit of coordinate (about the traversal's,
+    /// 32 x 2^-24) for coordinates near 1, and so it stays with a light far away elsewhere
+    /// in the scene; the deliberate break, the scene's largest coordinate (1e6) as every
+    /// test's reach, makes it ambiguous.
     #[test]
     fn a_tests_reach_is_its_own_coordinates_not_the_scenes() {
-        use crate::cpu::shadows::TRAVERSAL_ROUNDING;
         let corners: [[f32; 3]; 4] = [
             [0.0, 0.0, 0.0],
             [1.0, 0.0, 0.0],
@@ -783,7 +783,7 @@ mod tests {
         let (from, to) = (DVec3::new(0.3, 0.6, 1.0), DVec3::new(0.3, 0.6, -1.0));
         let own = Reach {
             fixed: 1e-6,
-            per_coordinate: TRAVERSAL_ROUNDING,
+            per_coordinate: 2e-6,
         };
         assert_eq!(square.classify(from, to, own).0, Seen::Blocked);
         let scene_wide = Reach::fixed(own.at(1e6));

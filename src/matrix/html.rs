@@ -33,7 +33,7 @@ tr.failed td { background: #fdecec; color: #900; }
 .meta td { text-align: left; }
 .plots { display: flex; flex-wrap: wrap; gap: 16px; }
 figure { margin: 0; }
-figure img.plot { max-width: 100%; border: 1px solid #ddd; }
+figure img.plot { max-width: 100%; height: auto; border: 1px solid #ddd; }
 figcaption { font-size: 13px; color: #555; max-width: 880px; }
 .scale { font-size: 10px; color: #444; margin: 2px 0 4px; }
 .scale .bar { height: 8px; border: 1px solid #aaa; }
@@ -82,9 +82,11 @@ pub fn page(results: &Results, plots: &[Plot]) -> String {
         for p in plots {
             let _ = write!(
                 h,
-                "<figure><a href=\"plots/{0}\"><img class=\"plot\" src=\"plots/{0}\" alt=\"{1}\"></a><figcaption>{1}</figcaption></figure>",
+                "<figure><a href=\"plots/{0}\"><img class=\"plot\" src=\"plots/{0}\" alt=\"{1}\" width=\"{2}\" height=\"{3}\"></a><figcaption>{1}</figcaption></figure>",
                 esc(&p.file),
-                esc(&p.title)
+                esc(&p.title),
+                p.size.0,
+                p.size.1
             );
         }
         let _ = write!(h, "</div>");
