@@ -266,25 +266,19 @@ impl CellRecord {
         self.front == Some(Front::On)
     }
 
-    /// Its RMSE against its group's truth (against its own reference in results written
-    /// before fidelity was recorded).
+    /// Its RMSE against its group's truth; None where it has none (a variant the truth
+    /// cannot be shaded for, a sequence, results written before fidelity was recorded).
     pub fn fidelity_rmse(&self) -> Option<f64> {
-        match &self.fidelity {
-            Some(f) => Some(f.rmse_8bit),
-            None => self.error.as_ref().map(|e| e.rmse_8bit),
-        }
+        self.fidelity.as_ref().map(|f| f.rmse_8bit)
     }
 
     /// Exact against its group's truth: it passed, within 1 LSB of that truth (outside
-    /// ambiguous shadow rays) and dropped no light.
+    /// ambiguous shadow rays) and dropped no light. A cell without a truth is not.
     pub fn exact_to_truth(&self) -> bool {
-        let within = match &self.fidelity {
-            Some(f) => f.max_8bit <= crate::run::EXACT_LSB,
-            None => self
-                .error
-                .as_ref()
-                .is_some_and(|e| e.max_abs_8bit <= crate::run::EXACT_LSB),
-        };
+        let within = self
+            .fidelity
+            .as_ref()
+            .is_some_and(|f| f.max_8bit <= crate::run::EXACT_LSB);
         self.ok() && within && self.stats.as_ref().is_none_or(|s| s.dropped_lights == 0)
     }
 

@@ -455,7 +455,7 @@ fn table(rows: &[CullingRow]) -> Table {
                 .map(|r| format!("; next {}, {} ms", r.method, sig(r.frame_ms, 3)))
                 .unwrap_or_default();
             t.notes.push(format!(
-                "{scene}, {lights} lights, spots {spots}: fastest frame {} ({} ms{next}); \
+                "{scene}, {lights} lights, spots {spots}: lowest median frame {} ({} ms{next}; points timed apart, no verdict); \
                  fewest evaluations {} ({} useful); smallest lists {} ({} bytes).",
                 b.fastest.method,
                 sig(b.fastest.frame_ms, 3),
