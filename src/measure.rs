@@ -215,6 +215,14 @@ impl Paired {
     }
 }
 
+/// "1 round", "6 rounds".
+pub fn rounds(n: usize) -> String {
+    match n {
+        1 => "1 round".into(),
+        n => format!("{n} rounds"),
+    }
+}
+
 /// Why a cell stopped timing frames.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]

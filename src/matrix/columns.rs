@@ -72,8 +72,10 @@ impl Measured<'_> {
                 (Some([lo, hi]), _) if lo <= 1.0 && 1.0 <= hi => format!("{x:.1}x no gain"),
                 (Some([lo, hi]), _) => format!("{x:.1}x ({lo:.1}-{hi:.1})"),
                 (None, Some((least, n))) => {
-                    let rounds = if n == 1 { "round" } else { "rounds" };
-                    format!("{x:.1}x (>= {least:.1} each of {n} {rounds})")
+                    format!(
+                        "{x:.1}x (>= {least:.1} each of {})",
+                        crate::measure::rounds(n)
+                    )
                 }
                 (None, None) => format!("{x:.1}x ?"),
             }
@@ -326,7 +328,11 @@ pub const COLUMNS: &[Column] = &[
         text: |m| {
             or_dash(m.against_leader, |a| match a.paired.interval {
                 Some(i) => format!("{:.2} ({:.2}-{:.2})", a.paired.ratio, i.lo, i.hi),
-                None => format!("{:.2} ({} rounds)", a.paired.ratio, a.paired.rounds),
+                None => format!(
+                    "{:.2} ({})",
+                    a.paired.ratio,
+                    crate::measure::rounds(a.paired.rounds)
+                ),
             })
         },
     },

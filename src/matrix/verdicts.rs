@@ -128,13 +128,13 @@ pub fn group_verdict(cells: &[&CellRecord]) -> String {
             .map(|c| match c.against_leader.as_ref().map(|a| a.paired) {
                 Some(p) => match p.interval {
                     Some(i) => format!(
-                        "{} (x{:.2}-{:.2} over {} rounds)",
+                        "{} (x{:.2}-{:.2} over {})",
                         label(c),
                         i.lo,
                         i.hi,
-                        p.rounds
+                        crate::measure::rounds(p.rounds)
                     ),
-                    None => format!("{} ({} shared rounds)", label(c), p.rounds),
+                    None => format!("{} ({} shared)", label(c), crate::measure::rounds(p.rounds)),
                 },
                 None => format!("{} (no shared round)", label(c)),
             })
