@@ -766,6 +766,14 @@ mod tests {
         assert!(!agree(&bvh), "a shrunk box lost no hit");
     }
 
+    /// The corners of a unit square at z = 0.
+    const UNIT_SQUARE: [[f32; 3]; 4] = [
+        [0.0, 0.0, 0.0],
+        [1.0, 0.0, 0.0],
+        [1.0, 1.0, 0.0],
+        [0.0, 1.0, 0.0],
+    ];
+
     /// The reach of a test follows the coordinates it handles: a segment through a unit
     /// square is blocked at a rounding of 2e-6 a unit of coordinate (about the traversal's,
     /// 32 x 2^-24) for coordinates near 1, and so it stays with a light far away elsewhere
@@ -773,13 +781,7 @@ mod tests {
     /// test's reach, makes it ambiguous.
     #[test]
     fn a_tests_reach_is_its_own_coordinates_not_the_scenes() {
-        let corners: [[f32; 3]; 4] = [
-            [0.0, 0.0, 0.0],
-            [1.0, 0.0, 0.0],
-            [1.0, 1.0, 0.0],
-            [0.0, 1.0, 0.0],
-        ];
-        let square = TriangleBvh::build(&corners, &[0, 1, 2, 0, 2, 3]);
+        let square = TriangleBvh::build(&UNIT_SQUARE, &[0, 1, 2, 0, 2, 3]);
         let (from, to) = (DVec3::new(0.3, 0.6, 1.0), DVec3::new(0.3, 0.6, -1.0));
         let own = Reach {
             fixed: 1e-6,
@@ -796,14 +798,8 @@ mod tests {
     /// reach of the face is ambiguous, one beyond reach of the square is open.
     #[test]
     fn a_patch_decides_what_no_triangle_alone_does() {
-        let corners: [[f32; 3]; 4] = [
-            [0.0, 0.0, 0.0],
-            [1.0, 0.0, 0.0],
-            [1.0, 1.0, 0.0],
-            [0.0, 1.0, 0.0],
-        ];
-        let square = TriangleBvh::build(&corners, &[0, 1, 2, 0, 2, 3]);
-        let half = TriangleBvh::build(&corners, &[0, 1, 2]);
+        let square = TriangleBvh::build(&UNIT_SQUARE, &[0, 1, 2, 0, 2, 3]);
+        let half = TriangleBvh::build(&UNIT_SQUARE, &[0, 1, 2]);
         let reach = Reach::fixed(1e-3);
         let down = |x: f64, y: f64, end: f64| {
             square
