@@ -374,13 +374,6 @@ impl CpuClock {
         None
     }
 
-    /// Milliseconds of CPU time this process used from `self` to `later`, every thread
-    /// included: on a software adapter, the frame's own work, which other processes' load
-    /// does not enter (it slows the frame's wall time, not its work).
-    pub fn own_ms(&self, later: &CpuClock) -> f64 {
-        (later.own_s - self.own_s) * 1e3
-    }
-
     /// The share of the machine's CPU time from `self` to `later` that other processes
     /// (and the host, as steal) used, in [0, 1].
     pub fn others_share(&self, later: &CpuClock) -> Option<f64> {

@@ -275,7 +275,7 @@ pub struct Timing<'g> {
     without_lights: Timings,
     untimed_ms: f64,
     cost: CellCost,
-    /// What the last frame taken cost, kept or set aside (`last_frame_ms`).
+    /// The total of the last frame taken, kept or set aside.
     last_ms: Option<f64>,
 }
 
@@ -347,10 +347,8 @@ impl<'g> Timing<'g> {
         self.count.stop = None;
     }
 
-    /// What the last frame cost, whether kept or set aside as disturbed (a round's frames
-    /// are compared with each other): on a software adapter the CPU time this process
-    /// spent on it, every thread included, which other processes' load does not enter;
-    /// elsewhere its total milliseconds.
+    /// The last frame's total milliseconds, whether kept or set aside as disturbed: a
+    /// round's frames are compared with each other, so a load that slows them all cancels.
     pub fn last_frame_ms(&self) -> Option<f64> {
         self.last_ms
     }
@@ -397,14 +395,9 @@ impl<'g> Timing<'g> {
             return Ok(());
         }
         let clock = Instant::now();
-        let (frame, disturbed, own_ms) = judged_frame(&mut self.renderer, self.gpu.software)?;
+        let (frame, disturbed) = judged_frame(&mut self.renderer, self.gpu.software)?;
         self.cost.frames += clock.elapsed().as_secs_f64() * 1e3;
-        // A software adapter's frame is this process's CPU work: other processes' load
-        // slows its wall time and timestamps, not that work.
-        self.last_ms = match own_ms {
-            Some(ms) if self.gpu.software && ms > 0.0 => Some(ms),
-            _ => Some(frame.timings.total_ms()),
-        };
+        self.last_ms = Some(frame.timings.total_ms());
         let retries = DISTURBED_RETRIES as usize;
         match self.policy {
             Frames::Exact { timed, .. } => {
@@ -793,16 +786,16 @@ pub fn exact_claim(variant: &Variant, gpu: &Gpu) -> bool {
 fn judged_frame(
     renderer: &mut Renderer<'_>,
     software: bool,
-) -> Result<(FrameOutput, bool, Option<f64>), RenderError> {
+) -> Result<(FrameOutput, bool), RenderError> {
     let before = CpuClock::now();
     let frame = renderer.render()?;
-    let clocks = before.zip(CpuClock::now());
-    let others = clocks.and_then(|(a, b)| a.others_share(&b));
+    let others = before
+        .zip(CpuClock::now())
+        .and_then(|(a, b)| a.others_share(&b));
     let disturbed = software
         && frame.timings.total_ms() >= JUDGED_FRAME_MS
         && others.is_some_and(|s| s > DISTURBED_SHARE);
-    let own_ms = clocks.map(|(a, b)| a.own_ms(&b));
-    Ok((frame, disturbed, own_ms))
+    Ok((frame, disturbed))
 }
 
 /// `text` as a file name: characters other than letters, digits and `_-.@=` become `_`

@@ -400,7 +400,7 @@ pub const COLUMNS: &[Column] = &[
     Column {
         key: "frames",
         heading: "frames",
-        meaning: "timed frames (untimed ones first as U+T), why timing stopped (`decided`: its verdict against the leader, `budget`, `max frames`, `count`, `precise` outside the matrix), and how many frames were set aside as disturbed: frames of 250 ms or more during which other processes took over 25% of the machine's CPU time (software GPUs only), each replaced by another",
+        meaning: "timed frames (untimed ones first as U+T), why timing stopped (`decided`: its verdict against the leader, `budget`, `max frames`, `count`; `precise` in results written before verdicts decided the rounds), and how many frames were set aside as disturbed: frames of 250 ms or more during which other processes took over 25% of the machine's CPU time (software GPUs only), each replaced by another",
         shown: CSV_AND_HTML,
         value: |m| m.frames.map(|f| f.timed).into(),
         text: |m| {

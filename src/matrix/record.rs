@@ -79,10 +79,8 @@ pub struct CellRecord {
     /// and batch (timed in the same interleaved rounds).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub batch: Option<usize>,
-    /// What its frame cost in each round of its batch, milliseconds (null where it took
-    /// none): on a software adapter the CPU time this process spent on it, every thread
-    /// included (the frame's own work: other processes' load slows its wall time, not
-    /// that), elsewhere its total. Verdicts and speed-ups compare these round by round.
+    /// Its frame's total milliseconds in each round of its batch (null where it took none:
+    /// not yet started, or stopped). Verdicts and speed-ups compare these round by round.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub round_ms: Vec<Option<f64>>,
     /// Its frame over the group leader's, round by round (absent for the leader itself).
