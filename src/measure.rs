@@ -170,6 +170,54 @@ pub fn median_interval(times: &[f64]) -> Option<Interval> {
     })
 }
 
+/// Where a point stands on the time-error front of the points it is compared with.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Front {
+    /// No other point dominates it, and every point at least as accurate is decided
+    /// against it.
+    On,
+    /// Another point is decided faster and at least as accurate, or tied and more
+    /// accurate.
+    Dominated,
+    /// Not dominated, but a point at least as accurate is undecided against it: it may be.
+    Undecided,
+}
+
+impl Front {
+    pub fn label(self) -> &'static str {
+        match self {
+            Front::On => "*",
+            Front::Dominated => "",
+            Front::Undecided => "?",
+        }
+    }
+}
+
+/// Where point `k` of `n` stands on their time-error front: `error(j)` is point j's error
+/// (None: it takes no part), `verdict(j, k)` how j's time compares with k's. The one rule
+/// of the matrix and the studies.
+pub fn front(
+    k: usize,
+    n: usize,
+    error: impl Fn(usize) -> Option<f64>,
+    verdict: impl Fn(usize, usize) -> Verdict,
+) -> Option<Front> {
+    let e = error(k)?;
+    let mut standing = Front::On;
+    for j in (0..n).filter(|&j| j != k) {
+        let Some(ej) = error(j) else { continue };
+        let v = verdict(j, k);
+        if (v == Verdict::Faster && ej <= e) || (v == Verdict::Tie && ej < e) {
+            return Some(Front::Dominated);
+        }
+        if v == Verdict::Undecided && ej <= e {
+            standing = Front::Undecided;
+        }
+    }
+    Some(standing)
+}
+
 /// Two cells timed in the same interleaved rounds, compared round by round: the ratio of
 /// their frames in each round both kept, so that drift of the machine (which moves both
 /// frames of a round alike) cancels. Its median and that median's interval

@@ -231,7 +231,7 @@ pub(crate) fn matrix(args: &MatrixArgs) -> Result<bool, String> {
         eprintln!("warning: the pipeline cache was not saved: {e}");
     }
     if let Some(old) = &baseline {
-        matrix::derive(&mut results.cells, &results.provenance, Some(old));
+        matrix::derive(&mut results.cells, Some(old));
     }
     matrix::write_report(&folder.staging, &results)?;
     folder.commit()?;

@@ -13,6 +13,7 @@ mod reuse;
 mod validate;
 mod verdicts;
 
+pub use crate::measure::Front;
 pub use baseline::{RunComparison, compare_runs};
 pub use columns::{COLUMNS, Cell, Column, Measured, Shown, count};
 pub use plan::{
@@ -21,7 +22,7 @@ pub use plan::{
     parse_sweep, shard,
 };
 pub use record::{
-    AgainstLeader, BaselineChange, CellRecord, Fidelity, Front, Images, Provenance, Rank, Results,
+    AgainstLeader, BaselineChange, CellRecord, Fidelity, Images, Provenance, Rank, Results,
     RunCost, VariantFile, grouped, label,
 };
 pub use report::{table, write_report};
@@ -323,7 +324,7 @@ pub fn run(
     if let Some(previous) = &options.reuse {
         previous.mark_reused(&mut results);
     }
-    derive(&mut results.cells, &results.provenance, None);
+    derive(&mut results.cells, None);
     results
 }
 
@@ -560,12 +561,12 @@ fn stop_decided(live: &mut [Live], budget: &Budget) {
     let lead_cap = verdicts::leader(&rounds).and_then(|k| capped(&live[k]));
     for (k, l) in live.iter_mut().enumerate() {
         let stopped = l.timing.stop();
-        let capped = capped(l).or(lead_cap);
+        let cap = capped(l).or(lead_cap);
         if decided[k] {
             if stopped.is_none() {
                 l.timing.end(Stop::Decided);
             }
-        } else if let Some(stop) = capped {
+        } else if let Some(stop) = cap {
             if stopped.is_none() {
                 l.timing.end(stop);
             }
@@ -1008,7 +1009,7 @@ fn run_sequence(
 /// group's cells are compared round by round (`measure::Paired`) among those timed in one
 /// batch of one run, the batch with the most of them (this run's first where two tie);
 /// the rest are not compared (`Rank::NotCompared`).
-pub fn derive(cells: &mut [CellRecord], _provenance: &[Provenance], baseline: Option<&Results>) {
+pub fn derive(cells: &mut [CellRecord], baseline: Option<&Results>) {
     let timed = |c: &CellRecord| c.ok() && !c.spec.debug_view && c.total_ms().is_some();
     let mut groups: BTreeMap<String, Vec<usize>> = BTreeMap::new();
     for (i, c) in cells.iter().enumerate() {
@@ -1090,25 +1091,11 @@ pub fn derive(cells: &mut [CellRecord], _provenance: &[Provenance], baseline: Op
                 }
             }
         }
-        // The front, by fidelity: dominated by a cell decided faster and at least as
-        // faithful, or tied and more faithful; undecided where a cell at least as faithful
-        // is undecided against it.
+        // The front, by fidelity (`measure::front`).
         let error = |k: usize| cells[compared[k]].fidelity_rmse();
+        let verdict = |j: usize, k: usize| paired(j, k).map_or(Verdict::Undecided, |p| p.verdict);
         for (k, &i) in compared.iter().enumerate() {
-            let Some(e) = error(k) else { continue };
-            let mut front = Front::On;
-            for j in (0..compared.len()).filter(|&j| j != k) {
-                let Some(ej) = error(j) else { continue };
-                let v = paired(j, k).map_or(Verdict::Undecided, |p| p.verdict);
-                if (v == Verdict::Faster && ej <= e) || (v == Verdict::Tie && ej < e) {
-                    front = Front::Dominated;
-                    break;
-                }
-                if v == Verdict::Undecided && ej <= e {
-                    front = Front::Undecided;
-                }
-            }
-            derived[i].front = Some(front);
+            derived[i].front = crate::measure::front(k, compared.len(), error, verdict);
         }
     }
     for (i, c) in cells.iter_mut().enumerate() {
@@ -1203,7 +1190,7 @@ pub fn merge(
             merged.cells.push(cell);
         }
     }
-    derive(&mut merged.cells, &merged.provenance, None);
+    derive(&mut merged.cells, None);
     Ok(merged)
 }
 

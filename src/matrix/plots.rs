@@ -4,8 +4,9 @@
 
 use plotters::prelude::*;
 
-use super::record::{Front, grouped, label};
+use super::record::{grouped, label};
 use super::{CellRecord, Results};
+use crate::measure::Front;
 use crate::plot::{self, Area, FONT, Plot, log_axis, numbered_key, series_color, tick_label};
 
 const SIZE: (u32, u32) = (880 + plot::LEGEND_WIDTH, 520);

@@ -8,7 +8,7 @@ use serde::{Deserialize, Serialize};
 use serde_json::{Map, Value};
 
 use crate::gpu::{AdapterSummary, PipelineStats};
-use crate::measure::{Interval, Paired, Stop};
+use crate::measure::{Front, Interval, Paired, Stop};
 use crate::metrics::ErrorMetrics;
 use crate::render::FrameStats;
 use crate::run::{CellCost, RunError};
@@ -205,29 +205,6 @@ impl Fidelity {
                 .shadows
                 .as_ref()
                 .map_or(e.max_abs_8bit, |s| s.max_outside_ambiguity_8bit),
-        }
-    }
-}
-
-/// Where a cell stands on its group's time-error front.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Front {
-    /// No other cell dominates it, and every cell at least as faithful is decided against
-    /// it.
-    On,
-    /// Another cell is decided faster and at least as faithful, or tied and more faithful.
-    Dominated,
-    /// Not dominated, but a cell at least as faithful is undecided against it: it may be.
-    Undecided,
-}
-
-impl Front {
-    pub fn label(self) -> &'static str {
-        match self {
-            Front::On => "*",
-            Front::Dominated => "",
-            Front::Undecided => "?",
         }
     }
 }

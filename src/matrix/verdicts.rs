@@ -177,8 +177,10 @@ fn what_would_decide(lead: &CellRecord, open: &[&CellRecord]) -> String {
     }
     let ms = |c: &CellRecord| c.total_ms().unwrap_or(0.0);
     let slowest = open.iter().map(|c| ms(c)).fold(ms(lead), f64::max);
-    // A cell's budget counts its untimed frame without lights too: a fifth more.
-    let budget_ms = (needed as f64 * slowest * 1.2 / 100.0).ceil() * 100.0;
+    // A cell's budget counts its untimed frame without lights too: a fifth more; never
+    // below the default, which a suggestion must not lower.
+    let budget_ms = ((needed as f64 * slowest * 1.2 / 100.0).ceil() * 100.0)
+        .max(crate::measure::Budget::DEFAULT.budget_ms);
     let taken = lead.frames as usize;
     let more_s: f64 = std::iter::once(lead)
         .chain(open.iter().copied())

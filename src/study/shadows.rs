@@ -9,7 +9,7 @@ use serde::Serialize;
 use super::{Reads, StudyError, StudyOptions};
 use crate::compose::Composer;
 use crate::gpu::Gpu;
-use crate::measure::{Frames, Interval, Verdict};
+use crate::measure::{Frames, Front, Interval, Verdict};
 use crate::plot::Plot;
 use crate::run::{CellOptions, EXACT_LSB, run_scene};
 use crate::scene::Scene;
@@ -393,13 +393,16 @@ fn plot(rows: &[ShadowRow]) -> Option<Plot> {
         .map(|&n| {
             let here: Vec<&ShadowRow> =
                 shadowed.iter().copied().filter(|r| r.lights == n).collect();
+            let error = |j: usize| Some(here[j].rmse_8bit);
+            let compare = |j: usize, k: usize| verdict(here[j], here[k]);
             here.iter()
-                .map(|r| {
-                    let front = front_of(r, &here);
+                .enumerate()
+                .map(|(k, r)| {
+                    let front = crate::measure::front(k, here.len(), error, compare);
                     let mark = match front {
-                        Some(true) => "* ",
-                        None => "? ",
-                        Some(false) => "",
+                        Some(Front::On) => "* ",
+                        Some(Front::Undecided) => "? ",
+                        _ => "",
                     };
                     TimeErrorPoint {
                         ms: r.frame_ms,
@@ -407,7 +410,7 @@ fn plot(rows: &[ShadowRow]) -> Option<Plot> {
                         error: r.rmse_8bit,
                         name: format!("{mark}{n} lights: {}", r.variant),
                         color: color(r),
-                        on_front: front == Some(true),
+                        on_front: front == Some(Front::On),
                     }
                 })
                 .collect()
@@ -448,20 +451,4 @@ fn family(r: &ShadowRow) -> String {
     name.strip_prefix("forward_plus_shadows_")
         .map(|e| e.trim_end_matches("_1").to_string())
         .unwrap_or_else(|| name.to_string())
-}
-
-/// Whether `r` is on the time-error front of `rows` (one light count): Some(false) where a
-/// row decided faster and at least as accurate (or tied and more accurate) dominates it,
-/// None where a row at least as accurate is undecided against it, Some(true) otherwise.
-fn front_of(r: &ShadowRow, rows: &[&ShadowRow]) -> Option<bool> {
-    let mut open = false;
-    for o in rows.iter().filter(|o| o.variant != r.variant) {
-        match verdict(o, r) {
-            Verdict::Faster if o.rmse_8bit <= r.rmse_8bit => return Some(false),
-            Verdict::Tie if o.rmse_8bit < r.rmse_8bit => return Some(false),
-            Verdict::Undecided if o.rmse_8bit <= r.rmse_8bit => open = true,
-            _ => {}
-        }
-    }
-    (!open).then_some(true)
 }
